@@ -1,0 +1,81 @@
+#pragma once
+/// Convergence metrics of a formation, shared by the simulator and the supervisor.
+/// Undefined values (too few agents, all agents on one point) are std::nullopt, never 0 or NaN.
+#include <optional>
+#include <vector>
+
+#include "command.hpp"
+
+namespace shapeform::core {
+
+struct Metrics {
+  int agents = 0;
+  std::optional<double> shape_error_mean;  ///< mean |x_i - x_T(x_i)|
+  std::optional<double> shape_error_max;   ///< max |x_i - x_T(x_i)|
+  std::optional<double> gap_cv;            ///< std/mean of gaps between consecutive agents
+  std::optional<double> nn_cv;             ///< std/mean of nearest-neighbour distances
+  std::optional<double> min_separation;    ///< smallest pairwise distance
+  std::optional<int> clusters;             ///< single-linkage clusters at cluster_link
+  std::optional<double> extent;            ///< largest pairwise distance
+  std::optional<double> centroid_error;    ///< tracking: |mean(x) - C(t)|
+  std::optional<double> ring_error;        ///< tracking: mean | |x_i - C(t)| - r0 |
+};
+
+/// Single-linkage distance under which agents count as one cluster.
+inline constexpr double kClusterLink = 0.05;
+
+/// std/mean of values (population std); nullopt when fewer than 2 values or the mean is 0
+/// (below 1e-12: every value zero up to rounding).
+std::optional<double> coefficient_of_variation(const std::vector<double>& v);
+
+/// Gaps between consecutive agents along the shape: closed shapes ordered by angle about their centre
+/// (with wrap-around, N gaps), the line ordered along its direction (N - 1 gaps).
+std::vector<double> consecutive_gaps(const ShapeSpec& shape, const std::vector<Vec2>& x);
+
+/// Number of single-linkage clusters at distance `link`.
+int count_clusters(const std::vector<Vec2>& x, double link = kClusterLink);
+
+/// All metrics of positions x under the command at model time t. With pairwise = false only the
+/// O(N log N) ones (shape error, gap CV, tracking errors) are computed; the O(N^2) ones stay null.
+Metrics compute_metrics(const Command& cmd, const std::vector<Vec2>& x, double t, bool pairwise = true);
+
+/// Settling: the first index k such that for every sample j >= k the shape error is within
+/// max(band_abs, band_rel * plateau) of the plateau (the last sample) and gap CV <= gap_cv_max.
+struct SettleParams {
+  double band_abs = 0.02;
+  double band_rel = 0.1;
+  double gap_cv_max = 0.15;
+};
+std::optional<int> settle_index(const std::vector<double>& shape_error,
+                                const std::vector<std::optional<double>>& gap_cv,
+                                const SettleParams& p = {});
+
+/// Online convergence for a live swarm: converged when, over the last `hold` span of model time,
+/// the shape error stayed within a band (max - min <= max(band_abs, band_rel * mean)) and gap CV
+/// stayed <= gap_cv_max. Suits the paper's law, whose plateau is off the shape and chatters.
+struct ConvergenceParams {
+  double band_abs = 0.02;
+  double band_rel = 0.1;
+  double gap_cv_max = 0.15;
+  double hold = 50.0;  ///< model time units the conditions must hold
+};
+
+class ConvergenceDetector {
+ public:
+  using Params = ConvergenceParams;
+  explicit ConvergenceDetector(Params p = Params()) : p_(p) {}
+  /// Feeds one sample; a sample with an undefined error or gap CV resets the window.
+  void add(double t, const std::optional<double>& shape_error, const std::optional<double>& gap_cv);
+  bool converged() const { return converged_; }
+  void reset();
+
+ private:
+  struct Sample {
+    double t, err, cv;
+  };
+  Params p_;
+  std::vector<Sample> window_;
+  bool converged_ = false;
+};
+
+}  // namespace shapeform::core

@@ -1,0 +1,38 @@
+#include "swarm.hpp"
+
+#include <random>
+#include <utility>
+
+namespace shapeform::core {
+
+std::vector<Vec2> uniform_start(int n, std::uint64_t seed, double half_width) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-half_width, half_width);
+  std::vector<Vec2> x(static_cast<std::size_t>(std::max(n, 0)));
+  for (Vec2& xi : x) {
+    const double x1 = u(rng);
+    const double x2 = u(rng);
+    xi = Vec2(x1, x2);
+  }
+  return x;
+}
+
+Swarm::Swarm(Command cmd, std::vector<Vec2> start)
+    : cmd_(std::move(cmd)), x_(std::move(start)), next_(x_.size()) {
+  nbrs_.reserve(x_.size());
+}
+
+void Swarm::step() {
+  const int n = static_cast<int>(x_.size());
+  for (int i = 0; i < n; ++i) {
+    nbrs_.clear();
+    for (int j = 0; j < n; ++j)
+      if (j != i) nbrs_.push_back({j, x_[j]});
+    next_[i] = agent_step(cmd_, i, x_[i], nbrs_, t_).x;
+  }
+  std::swap(x_, next_);
+  t_ += cmd_.dt;
+  ++steps_;
+}
+
+}  // namespace shapeform::core

@@ -1,0 +1,33 @@
+#pragma once
+/// An in-process swarm: N agents stepped synchronously with agent_step (the headless simulator).
+#include <cstdint>
+#include <vector>
+
+#include "command.hpp"
+
+namespace shapeform::core {
+
+/// Seeded uniform start in [-half_width, half_width]^2 (std::mt19937_64, same seed = same start).
+std::vector<Vec2> uniform_start(int n, std::uint64_t seed, double half_width = 5.0);
+
+class Swarm {
+ public:
+  Swarm(Command cmd, std::vector<Vec2> start);
+  /// Advances every agent by one step from the same snapshot (synchronous update).
+  void step();
+  void set_command(const Command& cmd) { cmd_ = cmd; }
+  const Command& command() const { return cmd_; }
+  const std::vector<Vec2>& positions() const { return x_; }
+  double time() const { return t_; }
+  long steps() const { return steps_; }
+
+ private:
+  Command cmd_;
+  std::vector<Vec2> x_;
+  std::vector<Vec2> next_;
+  std::vector<Neighbour> nbrs_;
+  double t_ = 0.0;
+  long steps_ = 0;
+};
+
+}  // namespace shapeform::core

@@ -1,0 +1,18 @@
+#pragma once
+/// Basic types of the pure core. The core includes only Eigen and the standard library.
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+namespace shapeform::core {
+
+/// A point or vector in the plane, in shape units (the paper's x1, x2).
+using Vec2 = Eigen::Vector2d;
+
+/// Another agent as one agent sees it: its id and its last known position.
+struct Neighbour {
+  std::int32_t id = 0;
+  Vec2 x = Vec2::Zero();
+};
+
+}  // namespace shapeform::core

@@ -1,0 +1,125 @@
+#include "simulation.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <ostream>
+#include <sstream>
+#include <stdexcept>
+
+namespace shapeform::sim {
+
+namespace {
+std::string fmt(double v) {
+  std::ostringstream s;
+  s.precision(10);
+  s << v;
+  return s.str();
+}
+std::string opt_str(const std::optional<double>& v) { return v ? fmt(*v) : std::string(); }
+std::string opt_str(const std::optional<int>& v) { return v ? std::to_string(*v) : std::string(); }
+template <class T>
+nlohmann::json opt_json(const std::optional<T>& v) {
+  return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
+}
+}  // namespace
+
+const std::vector<std::string>& metric_columns() {
+  static const std::vector<std::string> cols = {
+      "shape_error_mean", "shape_error_max", "gap_cv", "nn_cv",          "min_separation",
+      "clusters",         "extent",          "centroid_error", "ring_error"};
+  return cols;
+}
+
+std::string metric_csv_values(const core::Metrics& m) {
+  return opt_str(m.shape_error_mean) + "," + opt_str(m.shape_error_max) + "," + opt_str(m.gap_cv) + "," +
+         opt_str(m.nn_cv) + "," + opt_str(m.min_separation) + "," + opt_str(m.clusters) + "," +
+         opt_str(m.extent) + "," + opt_str(m.centroid_error) + "," + opt_str(m.ring_error);
+}
+
+nlohmann::json metrics_json(const core::Metrics& m) {
+  nlohmann::json j;
+  j["agents"] = m.agents;
+  j["shape_error_mean"] = opt_json(m.shape_error_mean);
+  j["shape_error_max"] = opt_json(m.shape_error_max);
+  j["gap_cv"] = opt_json(m.gap_cv);
+  j["nn_cv"] = opt_json(m.nn_cv);
+  j["min_separation"] = opt_json(m.min_separation);
+  j["clusters"] = opt_json(m.clusters);
+  j["extent"] = opt_json(m.extent);
+  j["centroid_error"] = opt_json(m.centroid_error);
+  j["ring_error"] = opt_json(m.ring_error);
+  return j;
+}
+
+SimResult run_simulation(const core::Command& cmd, std::vector<core::Vec2> start, long steps,
+                         const SimOptions& opt) {
+  core::Swarm swarm(cmd, std::move(start));
+  std::vector<double> err;
+  std::vector<std::optional<double>> gap;
+  err.reserve(static_cast<std::size_t>(steps) + 1);
+  gap.reserve(static_cast<std::size_t>(steps) + 1);
+  if (opt.metrics_csv) {
+    *opt.metrics_csv << "step,model_time";
+    for (const auto& c : metric_columns()) *opt.metrics_csv << ',' << c;
+    *opt.metrics_csv << '\n';
+  }
+  if (opt.positions_csv) *opt.positions_csv << "step,agent,x1,x2\n";
+  for (long k = 0;; ++k) {
+    const auto& x = swarm.positions();
+    // The O(N^2) metrics are only needed per step when a metrics CSV is written.
+    const core::Metrics m = core::compute_metrics(cmd, x, swarm.time(), opt.metrics_csv != nullptr);
+    err.push_back(m.shape_error_mean.value_or(0.0));
+    gap.push_back(m.gap_cv);
+    if (opt.metrics_csv) *opt.metrics_csv << k << ',' << fmt(swarm.time()) << ',' << metric_csv_values(m) << '\n';
+    if (opt.positions_csv)
+      for (std::size_t i = 0; i < x.size(); ++i)
+        *opt.positions_csv << k << ',' << i << ',' << fmt(x[i].x()) << ',' << fmt(x[i].y()) << '\n';
+    if (k == steps) break;
+    swarm.step();
+  }
+  SimResult r;
+  r.metrics = core::compute_metrics(cmd, swarm.positions(), swarm.time());
+  r.settle_step = core::settle_index(err, gap, opt.settle);
+  r.final_positions = swarm.positions();
+  r.steps = swarm.steps();
+  r.model_time = swarm.time();
+  return r;
+}
+
+std::vector<core::Vec2> read_positions_csv(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("init file '" + path + "': cannot open");
+  std::vector<core::Vec2> out;
+  std::string line;
+  int lineno = 0;
+  while (std::getline(in, line)) {
+    ++lineno;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.find_first_not_of(" \t") == std::string::npos || line[line.find_first_not_of(" \t")] == '#') continue;
+    const auto comma = line.find(',');
+    const auto where = "init file '" + path + "' line " + std::to_string(lineno) + ": ";
+    if (comma == std::string::npos || line.find(',', comma + 1) != std::string::npos)
+      throw std::runtime_error(where + "expected two comma-separated numbers x1,x2, got '" + line + "'");
+    double v[2];
+    const std::string parts[2] = {line.substr(0, comma), line.substr(comma + 1)};
+    bool numeric = true;
+    for (int k = 0; k < 2; ++k) {
+      const char* s = parts[k].c_str();
+      char* end = nullptr;
+      v[k] = std::strtod(s, &end);
+      while (end && (*end == ' ' || *end == '\t')) ++end;
+      if (end == s || *end != '\0') numeric = false;
+      else if (!std::isfinite(v[k]))
+        throw std::runtime_error(where + "non-finite coordinate '" + parts[k] + "'");
+    }
+    if (!numeric) {
+      if (out.empty() && lineno == 1) continue;  // header row
+      throw std::runtime_error(where + "not a number in '" + line + "'");
+    }
+    out.emplace_back(v[0], v[1]);
+  }
+  if (out.empty()) throw std::runtime_error("init file '" + path + "': no positions");
+  return out;
+}
+
+}  // namespace shapeform::sim

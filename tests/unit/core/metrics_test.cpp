@@ -1,0 +1,168 @@
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "core/metrics.hpp"
+
+using namespace shapeform::core;
+
+namespace {
+Command circle_cmd(double r0 = 4.0) {
+  Command c;
+  c.shape.kind = ShapeKind::Circle;
+  c.shape.r0 = r0;
+  return c;
+}
+std::vector<Vec2> ring(int n, double radius, Vec2 centre = Vec2::Zero(), double phase = 0.3) {
+  std::vector<Vec2> x;
+  for (int i = 0; i < n; ++i) {
+    const double a = phase + 2 * M_PI * i / n;
+    x.push_back(centre + radius * Vec2(std::cos(a), std::sin(a)));
+  }
+  return x;
+}
+}  // namespace
+
+TEST_CASE("an evenly spaced ring on the circle: zero error, gap CV 0", "[metrics]") {
+  const Metrics m = compute_metrics(circle_cmd(), ring(12, 4.0), 0);
+  REQUIRE(m.shape_error_mean);
+  CHECK(*m.shape_error_mean < 1e-12);
+  CHECK(*m.shape_error_max < 1e-12);
+  CHECK(*m.gap_cv < 1e-12);
+  CHECK(*m.nn_cv < 1e-12);
+  CHECK(*m.min_separation == Approx(2 * 4.0 * std::sin(M_PI / 12)));
+  CHECK(*m.extent == Approx(8.0));
+  CHECK(*m.clusters == 12);
+  CHECK_FALSE(m.centroid_error);  // not tracking
+}
+
+TEST_CASE("a ring of radius 3.83 on r0 = 4 has shape error 0.17", "[metrics]") {
+  const Metrics m = compute_metrics(circle_cmd(), ring(12, 3.83), 0);
+  CHECK(*m.shape_error_mean == Approx(0.17));
+  CHECK(*m.shape_error_max == Approx(0.17));
+}
+
+TEST_CASE("two equal clusters have gap CV 1 and count as 2", "[metrics]") {
+  // Four agents: two at angle 0, two at angle pi (ordered by angle: 0, 0, pi, pi).
+  // Gaps 0, 8, 0, 8: mean 4, std 4, CV 1.
+  std::vector<Vec2> x = {Vec2(4, 0), Vec2(4, 0), Vec2(-4, 0), Vec2(-4, 0)};
+  const Metrics m = compute_metrics(circle_cmd(), x, 0);
+  CHECK(*m.gap_cv == Approx(1.0));
+  CHECK(*m.clusters == 2);
+  CHECK(*m.min_separation == 0.0);
+  CHECK(*m.extent == Approx(8.0));
+  // Nearest-neighbour distances are all 0: their CV is undefined, not 0.
+  CHECK_FALSE(m.nn_cv);
+}
+
+TEST_CASE("line gaps are ordered along the line", "[metrics]") {
+  Command c;
+  c.shape.kind = ShapeKind::Line;
+  c.shape.m = 0;
+  c.shape.c = 1;
+  // Positions given out of order: 3, 0, 1 along x. Gaps 1 and 2: CV = 0.5 / 1.5.
+  std::vector<Vec2> x = {Vec2(3, 1), Vec2(0, 1), Vec2(1, 1)};
+  const auto gaps = consecutive_gaps(c.shape, x);
+  REQUIRE(gaps.size() == 2);
+  const Metrics m = compute_metrics(c, x, 0);
+  CHECK(*m.gap_cv == Approx(1.0 / 3.0));
+  CHECK(*m.shape_error_mean < 1e-12);
+}
+
+TEST_CASE("closed gaps wrap around", "[metrics]") {
+  // Three agents at angles 0, 90, 180 degrees on radius 1: gaps sqrt2, sqrt2, 2.
+  Command c = circle_cmd(1.0);
+  std::vector<Vec2> x = {Vec2(0, 1), Vec2(1, 0), Vec2(-1, 0)};
+  const auto gaps = consecutive_gaps(c.shape, x);
+  REQUIRE(gaps.size() == 3);
+  double sum = 0;
+  for (double g : gaps) sum += g;
+  CHECK(sum == Approx(2 * std::sqrt(2.0) + 2));
+}
+
+TEST_CASE("undefined metrics are null, never 0 or NaN", "[metrics]") {
+  const Metrics none = compute_metrics(circle_cmd(), {}, 0);
+  CHECK(none.agents == 0);
+  CHECK_FALSE(none.shape_error_mean);
+  CHECK_FALSE(none.clusters);
+
+  const Metrics one = compute_metrics(circle_cmd(), {Vec2(1, 1)}, 0);
+  CHECK(one.shape_error_mean);
+  CHECK_FALSE(one.gap_cv);
+  CHECK_FALSE(one.nn_cv);
+  CHECK_FALSE(one.min_separation);
+  CHECK_FALSE(one.extent);
+  CHECK(*one.clusters == 1);
+
+  const std::vector<Vec2> same(5, Vec2(2, 2));
+  const Metrics merged = compute_metrics(circle_cmd(), same, 0);
+  CHECK_FALSE(merged.gap_cv);
+  CHECK_FALSE(merged.nn_cv);
+  CHECK(*merged.min_separation == 0.0);
+  CHECK(*merged.clusters == 1);
+  CHECK_FALSE(coefficient_of_variation({1.0}));
+  CHECK(*coefficient_of_variation({1.0, 3.0}) == Approx(0.5));
+}
+
+TEST_CASE("tracking metrics: centroid and ring errors about C(t)", "[metrics][tracking]") {
+  Command c = circle_cmd(2.0);
+  c.tracking.enabled = true;
+  c.tracking.path.kind = CentrePath::Kind::Line;
+  c.tracking.path.point = Vec2(-10, -10);
+  c.tracking.path.velocity = Vec2(0.1, 0.1);
+  // At t = 50 the centre is (-5, -5). A ring of radius 2.5 around (-4, -5).
+  const Metrics m = compute_metrics(c, ring(10, 2.5, Vec2(-4, -5)), 50);
+  CHECK(*m.centroid_error == Approx(1.0));
+  CHECK(*m.ring_error > 0.0);
+  const Metrics on = compute_metrics(c, ring(10, 2.0, Vec2(-5, -5)), 50);
+  CHECK(*on.centroid_error < 1e-12);
+  CHECK(*on.ring_error < 1e-12);
+  CHECK(*on.shape_error_mean < 1e-12);
+}
+
+TEST_CASE("cluster counting is single linkage at 0.05", "[metrics]") {
+  // A chain with links of 0.04 is one cluster even though its ends are 0.12 apart.
+  CHECK(count_clusters({Vec2(0, 0), Vec2(0.04, 0), Vec2(0.08, 0), Vec2(0.12, 0)}) == 1);
+  CHECK(count_clusters({Vec2(0, 0), Vec2(0.06, 0)}) == 2);
+}
+
+TEST_CASE("settling: first step after which error stays on its plateau", "[metrics][settle]") {
+  std::vector<double> err;
+  std::vector<std::optional<double>> cv;
+  for (int k = 0; k <= 300; ++k) {
+    err.push_back(0.17 + 3.0 * std::exp(-k / 20.0) + ((k % 2) ? 0.005 : -0.005));  // chatter
+    cv.push_back(k < 150 ? 0.5 : 0.05);
+  }
+  // Error band 0.02 is reached at k ~ 20 ln(3 / 0.015) = 106, but gap CV only from 150.
+  auto s = settle_index(err, cv);
+  REQUIRE(s);
+  CHECK(*s == 150);
+  for (auto& v : cv) v = 0.05;
+  s = settle_index(err, cv);
+  REQUIRE(s);
+  CHECK(*s >= 100);
+  CHECK(*s <= 110);
+  // Still moving at the end: not settled.
+  err.back() = 5.0;
+  CHECK_FALSE(settle_index(err, cv));
+  CHECK_FALSE(settle_index({}, {}));
+}
+
+TEST_CASE("online convergence detector holds for the hold time", "[metrics][settle]") {
+  ConvergenceDetector::Params p;
+  p.hold = 10;
+  ConvergenceDetector d(p);
+  for (int k = 0; k < 30; ++k) {
+    d.add(k, 2.0 - 0.1 * k, 0.05);  // still falling fast
+    CHECK_FALSE(d.converged());
+  }
+  int first = -1;
+  for (int k = 30; k < 60; ++k) {
+    d.add(k, 0.17 + ((k % 2) ? 0.004 : -0.004), 0.05);
+    if (d.converged() && first < 0) first = k;
+  }
+  CHECK(first == 40);
+  d.add(60, 0.17, std::nullopt);  // undefined gap CV resets
+  CHECK_FALSE(d.converged());
+  d.add(61, 0.17, 0.5);  // gap CV over the threshold
+  CHECK_FALSE(d.converged());
+}
