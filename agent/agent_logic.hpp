@@ -1,0 +1,86 @@
+#pragma once
+/// The agent's behaviour without DDS or clocks: a latest-per-agent neighbour table, the command and
+/// tracking target in force, and one core::agent_step per tick. agent/main.cpp only wires DDS to it.
+#include <cstdint>
+#include <optional>
+#include <unordered_map>
+#include <vector>
+
+#include "core/command.hpp"
+
+namespace shapeform::agent {
+
+/// The latest tracking target heard: the centre C and its velocity at the supervisor's model time.
+struct TargetSample {
+  std::uint32_t epoch = 0;
+  double model_time = 0.0;
+  core::Vec2 centre = core::Vec2::Zero();
+  core::Vec2 velocity = core::Vec2::Zero();
+};
+
+struct AgentCounters {
+  std::uint64_t samples_received = 0;  ///< neighbour states accepted
+  std::uint64_t samples_rejected = 0;  ///< states, commands or targets refused by validation
+  std::uint64_t samples_lost = 0;      ///< gaps in neighbours' sequence numbers
+  std::uint64_t stale_dropped = 0;     ///< neighbours dropped for silence
+  std::uint64_t departed = 0;          ///< neighbours dropped because they left (disposed)
+};
+
+class AgentLogic {
+ public:
+  /// timeout_ns: a neighbour unheard for longer is dropped (neighbour_timeout periods).
+  AgentLogic(std::int32_t id, core::Vec2 start, std::int64_t timeout_ns);
+
+  /// Adopts cmd if epoch is newer than the one followed; returns whether it did. Model time restarts.
+  bool on_command(const core::Command& cmd, std::uint32_t epoch);
+  /// Keeps the newest target of the followed epoch.
+  void on_target(const TargetSample& t);
+  /// A valid neighbour state received at now_ns. Own samples are ignored.
+  void on_state(std::int32_t id, const core::Vec2& x, std::uint64_t seq, std::int64_t now_ns);
+  /// The neighbour left (its instance was disposed or lost its writer): drop it now.
+  void on_gone(std::int32_t id);
+  void count_rejected() { ++counters_.samples_rejected; }
+
+  /// Drops neighbours unheard since now_ns - timeout.
+  void drop_stale(std::int64_t now_ns);
+  /// One control step: the law for the command and target in force, integrated over cmd.dt.
+  /// Before the first command the agent holds its position.
+  void step();
+
+  std::int32_t id() const { return id_; }
+  const core::Vec2& position() const { return x_; }
+  const core::Vec2& velocity() const { return v_; }
+  std::uint32_t epoch() const { return epoch_; }
+  double model_time() const { return t_; }
+  bool has_command() const { return epoch_ != 0; }
+  const core::Command& command() const { return cmd_; }
+  int neighbours() const { return static_cast<int>(table_.size()); }
+  const AgentCounters& counters() const { return counters_; }
+  /// The tracked centre this agent uses now (extrapolated from the last target), if tracking.
+  std::optional<core::Vec2> tracked_centre() const;
+
+ private:
+  struct Entry {
+    core::Vec2 x;
+    std::int64_t last_seen_ns;
+    std::uint64_t seq;
+  };
+  std::int32_t id_;
+  core::Vec2 x_;
+  core::Vec2 v_ = core::Vec2::Zero();
+  std::int64_t timeout_ns_;
+  core::Command cmd_;
+  std::uint32_t epoch_ = 0;
+  double t_ = 0.0;  ///< model time since the command was adopted
+  std::optional<TargetSample> target_;
+  double target_age_ = 0.0;  ///< model time since the target was received
+  std::unordered_map<std::int32_t, Entry> table_;
+  std::vector<core::Neighbour> nbrs_;  ///< reused every step
+  AgentCounters counters_;
+};
+
+/// Agent i's start for a seeded swarm of n: the i-th position of core::uniform_start(max(n, i+1), seed),
+/// so a swarm of processes starts exactly where the simulator with the same seed starts.
+core::Vec2 seeded_start(std::int32_t id, int n, std::uint64_t seed, double half_width);
+
+}  // namespace shapeform::agent

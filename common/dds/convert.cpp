@@ -1,0 +1,224 @@
+#include "dds/convert.hpp"
+
+#include <cmath>
+#include <optional>
+#include <sstream>
+#include <vector>
+
+namespace shapeform::dds {
+namespace {
+
+std::string num(double v) {
+  std::ostringstream os;
+  os.precision(10);
+  os << v;
+  return os.str();
+}
+
+/// Collects problems of one message, "prefix.field: problem".
+class Problems {
+ public:
+  explicit Problems(const char* prefix) : prefix_(prefix) {}
+
+  bool finite(const char* field, double v) {
+    if (std::isfinite(v)) return true;
+    add(field, "must be finite, got " + num(v));
+    return false;
+  }
+  void positive(const char* field, double v) {
+    if (finite(field, v) && !(v > 0.0)) add(field, "must be > 0, got " + num(v));
+  }
+  void non_negative(const char* field, double v) {
+    if (finite(field, v) && !(v >= 0.0)) add(field, "must be >= 0, got " + num(v));
+  }
+  void add(const char* field, const std::string& problem) {
+    list_.push_back(std::string(prefix_) + "." + field + ": " + problem);
+  }
+  bool empty() const { return list_.empty(); }
+  std::string joined() const {
+    std::string s;
+    for (const auto& p : list_) s += (s.empty() ? "" : "; ") + p;
+    return s;
+  }
+
+ private:
+  const char* prefix_;
+  std::vector<std::string> list_;
+};
+
+std::string quoted(const std::string& s) { return "\"" + s + "\""; }
+
+std::optional<double> undefined_if_negative(double v) {
+  if (!std::isfinite(v) || v < 0.0) return std::nullopt;
+  return v;
+}
+
+}  // namespace
+
+msg::ShapeCommand to_msg(const core::Command& cmd, std::uint32_t epoch) {
+  msg::ShapeCommand m;
+  m.epoch(epoch);
+  const core::ShapeSpec& s = cmd.shape;
+  m.shape_kind(std::string(core::to_string(s.kind)));
+  m.m(s.m);
+  m.c(s.c);
+  m.r0(s.r0);
+  m.a(s.a);
+  m.b(s.b);
+  m.cx(s.centre.x());
+  m.cy(s.centre.y());
+
+  const core::Tracking& t = cmd.tracking;
+  m.tracking(t.enabled);
+  m.path_kind(std::string(core::to_string(t.path.kind)));
+  m.path_px(t.path.point.x());
+  m.path_py(t.path.point.y());
+  m.path_vx(t.path.velocity.x());
+  m.path_vy(t.path.velocity.y());
+  m.path_ox(t.path.origin.x());
+  m.path_oy(t.path.origin.y());
+  m.path_radius(t.path.radius);
+  m.path_period(t.path.period);
+  m.path_phase(t.path.phase);
+  m.feedforward(t.feedforward);
+
+  m.k1(cmd.gains.k1);
+  m.k2(cmd.gains.k2);
+  m.sigma(cmd.gains.sigma);
+  m.beta(cmd.gains.beta);
+  m.r(cmd.gains.r);
+  m.max_speed(cmd.max_speed);
+
+  m.integrator(std::string(core::to_string(cmd.integrator)));
+  m.dt(cmd.dt);
+  m.law(kLawPaper);
+  return m;
+}
+
+bool from_msg(const msg::ShapeCommand& m, core::Command& out, std::string& error) {
+  Problems p("command");
+  core::Command c;
+
+  if (!core::parse_shape_kind(m.shape_kind(), c.shape.kind)) {
+    p.add("shape_kind", "unknown shape " + quoted(m.shape_kind()) + " (line|circle|ellipse|square)");
+  }
+  p.finite("m", m.m());
+  p.finite("c", m.c());
+  p.positive("r0", m.r0());
+  p.positive("a", m.a());
+  p.positive("b", m.b());
+  p.finite("cx", m.cx());
+  p.finite("cy", m.cy());
+  c.shape.m = m.m();
+  c.shape.c = m.c();
+  c.shape.r0 = m.r0();
+  c.shape.a = m.a();
+  c.shape.b = m.b();
+  c.shape.centre = core::Vec2(m.cx(), m.cy());
+
+  c.tracking.enabled = m.tracking();
+  if (!core::parse_path_kind(m.path_kind(), c.tracking.path.kind)) {
+    p.add("path_kind", "unknown path " + quoted(m.path_kind()) + " (fixed|line|circle)");
+  }
+  p.finite("path_px", m.path_px());
+  p.finite("path_py", m.path_py());
+  p.finite("path_vx", m.path_vx());
+  p.finite("path_vy", m.path_vy());
+  p.finite("path_ox", m.path_ox());
+  p.finite("path_oy", m.path_oy());
+  p.non_negative("path_radius", m.path_radius());
+  p.positive("path_period", m.path_period());
+  p.finite("path_phase", m.path_phase());
+  c.tracking.path.point = core::Vec2(m.path_px(), m.path_py());
+  c.tracking.path.velocity = core::Vec2(m.path_vx(), m.path_vy());
+  c.tracking.path.origin = core::Vec2(m.path_ox(), m.path_oy());
+  c.tracking.path.radius = m.path_radius();
+  c.tracking.path.period = m.path_period();
+  c.tracking.path.phase = m.path_phase();
+  c.tracking.feedforward = m.feedforward();
+
+  p.non_negative("k1", m.k1());
+  p.non_negative("k2", m.k2());
+  p.positive("sigma", m.sigma());
+  p.non_negative("beta", m.beta());
+  p.non_negative("r", m.r());
+  p.non_negative("max_speed", m.max_speed());
+  c.gains.k1 = m.k1();
+  c.gains.k2 = m.k2();
+  c.gains.sigma = m.sigma();
+  c.gains.beta = m.beta();
+  c.gains.r = m.r();
+  c.max_speed = m.max_speed();
+
+  if (!core::parse_integrator(m.integrator(), c.integrator)) {
+    p.add("integrator", "unknown integrator " + quoted(m.integrator()) + " (euler|rk4)");
+  }
+  p.positive("dt", m.dt());
+  c.dt = m.dt();
+  if (m.law() != kLawPaper) p.add("law", "unknown law " + quoted(m.law()) + " (paper)");
+
+  if (!p.empty()) {
+    error = p.joined();
+    return false;
+  }
+  out = c;
+  return true;
+}
+
+bool valid_state(const msg::AgentState& s, std::string& why) {
+  Problems p("state");
+  if (s.id() < 0) p.add("id", "must be >= 0, got " + std::to_string(s.id()));
+  p.finite("model_time", s.model_time());
+  const bool fx = p.finite("x", s.x());
+  const bool fy = p.finite("y", s.y());
+  const bool fvx = p.finite("vx", s.vx());
+  const bool fvy = p.finite("vy", s.vy());
+  if (fx && std::abs(s.x()) > kStateLimit) p.add("x", "|x| must be <= 1e6, got " + num(s.x()));
+  if (fy && std::abs(s.y()) > kStateLimit) p.add("y", "|y| must be <= 1e6, got " + num(s.y()));
+  if (fvx && fvy) {
+    const double speed = std::hypot(s.vx(), s.vy());
+    if (speed > kStateLimit) p.add("v", "speed must be <= 1e6, got " + num(speed));
+  }
+  if (!p.empty()) {
+    why = p.joined();
+    return false;
+  }
+  return true;
+}
+
+msg::SwarmMetrics to_msg(const core::Metrics& m, std::uint32_t epoch, double model_time,
+                         std::int64_t stamp_ns, bool converged) {
+  msg::SwarmMetrics w;
+  w.epoch(epoch);
+  w.model_time(model_time);
+  w.stamp_ns(stamp_ns);
+  w.agents_alive(m.agents);
+  w.shape_error_mean(m.shape_error_mean.value_or(-1.0));
+  w.shape_error_max(m.shape_error_max.value_or(-1.0));
+  w.gap_cv(m.gap_cv.value_or(-1.0));
+  w.nn_cv(m.nn_cv.value_or(-1.0));
+  w.min_separation(m.min_separation.value_or(-1.0));
+  w.extent(m.extent.value_or(-1.0));
+  w.centroid_error(m.centroid_error.value_or(-1.0));
+  w.ring_error(m.ring_error.value_or(-1.0));
+  w.clusters(m.clusters.value_or(-1));
+  w.converged(converged);
+  return w;
+}
+
+core::Metrics from_msg(const msg::SwarmMetrics& w) {
+  core::Metrics m;
+  m.agents = w.agents_alive();
+  m.shape_error_mean = undefined_if_negative(w.shape_error_mean());
+  m.shape_error_max = undefined_if_negative(w.shape_error_max());
+  m.gap_cv = undefined_if_negative(w.gap_cv());
+  m.nn_cv = undefined_if_negative(w.nn_cv());
+  m.min_separation = undefined_if_negative(w.min_separation());
+  m.extent = undefined_if_negative(w.extent());
+  m.centroid_error = undefined_if_negative(w.centroid_error());
+  m.ring_error = undefined_if_negative(w.ring_error());
+  if (w.clusters() >= 0) m.clusters = w.clusters();
+  return m;
+}
+
+}  // namespace shapeform::dds

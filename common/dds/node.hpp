@@ -1,0 +1,317 @@
+#pragma once
+/// RAII DDS node: one participant (from the transport profile), one publisher, one subscriber, the
+/// project's topics created on demand, and typed Writer / Reader handles.
+///
+/// Threading: a Node and its handles are used from one thread of control (the process's loop); the only
+/// other thread is Fast DDS's receive thread, which only appends to a Reader's mailbox.
+/// Lifetime: handles may be destroyed before or after their Node; after the Node is gone they do nothing
+/// (write() returns false, drain() returns what was already received).
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <fastdds/dds/core/status/PublicationMatchedStatus.hpp>
+#include <fastdds/dds/core/status/SubscriptionMatchedStatus.hpp>
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/publisher/Publisher.hpp>
+#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/DataReaderListener.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <fastdds/dds/topic/Topic.hpp>
+
+#include "config/config.hpp"
+#include "dds/msg_traits.hpp"
+#include "dds/topics.hpp"
+
+namespace shapeform::dds {
+
+/// steady_clock now, ns (the clock of every *_stamp_ns in the project).
+std::int64_t steady_now_ns();
+
+/// Instance state of a keyed sample as the reader saw it.
+enum class InstanceState {
+  Alive,     ///< the writer publishes this instance
+  Disposed,  ///< the writer disposed it (clean agent exit): drop the agent now
+  NoWriters  ///< no writer left for it (writer deleted / participant gone)
+};
+
+/// One sample as taken by a Reader.
+template <class Msg>
+struct Received {
+  Msg msg;                          ///< the data; default-constructed when !valid_data
+  std::int64_t receive_stamp_ns = 0;  ///< steady_now_ns() when taken in the listener
+  bool valid_data = false;          ///< false for instance-state-only samples (dispose, no writers)
+  InstanceState instance = InstanceState::Alive;
+  /// Keyed types: the instance's id (from msg when valid, else remembered from an earlier valid sample
+  /// of the same instance; -1 if never seen). Unkeyed types: -1.
+  std::int32_t key_id = -1;
+};
+
+/// Default bound of a Reader's mailbox; samples beyond it (nobody draining) are dropped and counted.
+inline constexpr std::size_t kDefaultMailboxCapacity = 16384;
+
+namespace detail {
+
+/// The DDS entities of a Node. Shared with handles through weak_ptr so they can tell whether the
+/// Node still exists.
+struct Entities {
+  eprosima::fastdds::dds::DomainParticipant* participant = nullptr;
+  eprosima::fastdds::dds::Publisher* publisher = nullptr;
+  eprosima::fastdds::dds::Subscriber* subscriber = nullptr;
+  std::array<eprosima::fastdds::dds::Topic*, kAllTopics.size()> topics{};
+  std::string name;
+
+  Entities() = default;
+  Entities(const Entities&) = delete;
+  Entities& operator=(const Entities&) = delete;
+  /// delete_contained_entities() + delete_participant().
+  ~Entities();
+};
+
+void delete_writer(Entities& e, eprosima::fastdds::dds::DataWriter* w) noexcept;
+void delete_reader(Entities& e, eprosima::fastdds::dds::DataReader* r) noexcept;
+bool is_ok(const eprosima::fastrtps::types::ReturnCode_t& rc);
+
+/// The listener of one Reader: takes every sample into a mutex-protected mailbox. No maths here: it
+/// runs on Fast DDS's receive thread.
+template <class Msg>
+class Mailbox final : public eprosima::fastdds::dds::DataReaderListener {
+ public:
+  explicit Mailbox(std::size_t capacity) : capacity_(capacity) {
+    pending_.reserve(capacity < 256 ? capacity : 256);
+  }
+
+  void on_data_available(eprosima::fastdds::dds::DataReader* reader) override {
+    namespace fdds = eprosima::fastdds::dds;
+    Msg sample;
+    fdds::SampleInfo info;
+    while (is_ok(reader->take_next_sample(&sample, &info))) {
+      const std::int64_t now = steady_now_ns();
+      InstanceState state = InstanceState::Alive;
+      if (info.instance_state == fdds::NOT_ALIVE_DISPOSED_INSTANCE_STATE) {
+        state = InstanceState::Disposed;
+      } else if (info.instance_state == fdds::NOT_ALIVE_NO_WRITERS_INSTANCE_STATE) {
+        state = InstanceState::NoWriters;
+      }
+      std::lock_guard<std::mutex> lock(mutex_);
+      std::int32_t key = -1;
+      if constexpr (MsgTraits<Msg>::keyed) {
+        // get_key_value() is unsupported in 2.9: remember handle -> id to name invalid samples.
+        // (One map node per instance ever seen; nothing allocated per sample.)
+        if (info.valid_data) {
+          key = MsgTraits<Msg>::key(sample);
+          if (keys_.find(info.instance_handle) == keys_.end()) keys_.emplace(info.instance_handle, key);
+        } else {
+          const auto it = keys_.find(info.instance_handle);
+          if (it != keys_.end()) key = it->second;
+        }
+      }
+      if (pending_.size() >= capacity_) {
+        ++overflowed_;
+        continue;
+      }
+      // An invalid sample carries no data (take leaves `sample` as it was): hand out a default Msg.
+      pending_.push_back(Received<Msg>{info.valid_data ? sample : Msg{}, now, info.valid_data, state, key});
+    }
+  }
+
+  /// Swaps the pending samples into out (out is cleared first; capacities are recycled).
+  std::size_t drain(std::vector<Received<Msg>>& out) {
+    out.clear();
+    std::lock_guard<std::mutex> lock(mutex_);
+    out.swap(pending_);
+    return out.size();
+  }
+
+  std::uint64_t overflowed() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return overflowed_;
+  }
+
+ private:
+  const std::size_t capacity_;
+  mutable std::mutex mutex_;
+  std::vector<Received<Msg>> pending_;
+  std::uint64_t overflowed_ = 0;
+  std::map<eprosima::fastdds::dds::InstanceHandle_t, std::int32_t> keys_;
+};
+
+}  // namespace detail
+
+/// Typed writer of one topic. Move-only; deletes its DataWriter when destroyed (if the Node still lives).
+template <class Msg>
+class Writer {
+ public:
+  Writer() = default;
+  Writer(const Writer&) = delete;
+  Writer& operator=(const Writer&) = delete;
+  Writer(Writer&& o) noexcept : entities_(std::move(o.entities_)), writer_(std::exchange(o.writer_, nullptr)) {}
+  Writer& operator=(Writer&& o) noexcept {
+    if (this != &o) {
+      reset();
+      entities_ = std::move(o.entities_);
+      writer_ = std::exchange(o.writer_, nullptr);
+    }
+    return *this;
+  }
+  ~Writer() { reset(); }
+
+  /// Publishes m. False when Fast DDS refuses it or the Node is gone.
+  bool write(const Msg& m) {
+    const auto e = entities_.lock();
+    // DataWriter::write takes void*; it only reads the sample.
+    return e && writer_ != nullptr && writer_->write(const_cast<Msg*>(&m));
+  }
+
+  /// Disposes the instance with m's key (keyed topics only): readers see it NOT_ALIVE_DISPOSED at once.
+  bool dispose(const Msg& m) {
+    static_assert(MsgTraits<Msg>::keyed, "dispose() is for keyed topics only");
+    const auto e = entities_.lock();
+    return e && writer_ != nullptr &&
+           detail::is_ok(writer_->dispose(const_cast<Msg*>(&m), eprosima::fastdds::dds::HANDLE_NIL));
+  }
+
+  /// Number of matched readers now (-1 without a writer).
+  int matched() const {
+    const auto e = entities_.lock();
+    if (!e || writer_ == nullptr) return -1;
+    eprosima::fastdds::dds::PublicationMatchedStatus st;
+    if (!detail::is_ok(writer_->get_publication_matched_status(st))) return -1;
+    return st.current_count;
+  }
+
+  bool valid() const { return writer_ != nullptr && !entities_.expired(); }
+  eprosima::fastdds::dds::DataWriter* get() const { return writer_; }
+
+ private:
+  friend class Node;
+  Writer(std::weak_ptr<detail::Entities> e, eprosima::fastdds::dds::DataWriter* w)
+      : entities_(std::move(e)), writer_(w) {}
+  void reset() noexcept {
+    if (writer_ != nullptr) {
+      if (const auto e = entities_.lock()) detail::delete_writer(*e, writer_);
+      writer_ = nullptr;
+    }
+    entities_.reset();
+  }
+
+  std::weak_ptr<detail::Entities> entities_;
+  eprosima::fastdds::dds::DataWriter* writer_ = nullptr;
+};
+
+/// Typed reader of one topic with a mailbox filled by the listener. Move-only; deletes its DataReader
+/// when destroyed (if the Node still lives).
+template <class Msg>
+class Reader {
+ public:
+  Reader() = default;
+  Reader(const Reader&) = delete;
+  Reader& operator=(const Reader&) = delete;
+  Reader(Reader&& o) noexcept
+      : entities_(std::move(o.entities_)),
+        mailbox_(std::move(o.mailbox_)),
+        reader_(std::exchange(o.reader_, nullptr)) {}
+  Reader& operator=(Reader&& o) noexcept {
+    if (this != &o) {
+      reset();
+      entities_ = std::move(o.entities_);
+      mailbox_ = std::move(o.mailbox_);
+      reader_ = std::exchange(o.reader_, nullptr);
+    }
+    return *this;
+  }
+  ~Reader() { reset(); }
+
+  /// Moves every sample received since the last call into out (cleared first), oldest first.
+  /// Never blocks on DDS; no allocation in steady state (the two buffers are swapped).
+  std::size_t drain(std::vector<Received<Msg>>& out) {
+    if (!mailbox_) {
+      out.clear();
+      return 0;
+    }
+    return mailbox_->drain(out);
+  }
+
+  /// Number of matched writers now (-1 without a reader).
+  int matched() const {
+    const auto e = entities_.lock();
+    if (!e || reader_ == nullptr) return -1;
+    eprosima::fastdds::dds::SubscriptionMatchedStatus st;
+    if (!detail::is_ok(reader_->get_subscription_matched_status(st))) return -1;
+    return st.current_count;
+  }
+
+  /// Samples dropped because the mailbox was full (nobody drained).
+  std::uint64_t overflowed() const { return mailbox_ ? mailbox_->overflowed() : 0; }
+
+  bool valid() const { return reader_ != nullptr && !entities_.expired(); }
+  eprosima::fastdds::dds::DataReader* get() const { return reader_; }
+
+ private:
+  friend class Node;
+  void reset() noexcept {
+    if (reader_ != nullptr) {
+      if (const auto e = entities_.lock()) detail::delete_reader(*e, reader_);
+      reader_ = nullptr;
+    }
+    entities_.reset();
+    mailbox_.reset();  // after the DataReader: no callback can run any more
+  }
+
+  std::weak_ptr<detail::Entities> entities_;
+  std::unique_ptr<detail::Mailbox<Msg>> mailbox_;
+  eprosima::fastdds::dds::DataReader* reader_ = nullptr;
+};
+
+/// Owns a participant built by create_participant(cfg, name), one publisher and one subscriber; all
+/// message types are registered at construction; topics are created on first use.
+/// Throws std::runtime_error naming the entity (and topic) whose creation failed.
+class Node {
+ public:
+  Node(const config::TransportConfig& cfg, const std::string& name);
+  ~Node();  ///< deletes contained entities (endpoints, publisher, subscriber, topics), then the participant
+  Node(const Node&) = delete;
+  Node& operator=(const Node&) = delete;
+
+  /// A writer on topic id with writer_qos(id). Msg must be the topic's type (else std::logic_error).
+  template <class Msg>
+  Writer<Msg> writer(TopicId id) {
+    check_type(id, MsgTraits<Msg>::topic);
+    return Writer<Msg>(entities_, create_writer(id));
+  }
+
+  /// A reader on topic id with reader_qos(id), its listener filling a mailbox of at most
+  /// mailbox_capacity samples. Msg must be the topic's type (else std::logic_error).
+  template <class Msg>
+  Reader<Msg> reader(TopicId id, std::size_t mailbox_capacity = kDefaultMailboxCapacity) {
+    check_type(id, MsgTraits<Msg>::topic);
+    Reader<Msg> r;
+    r.mailbox_ = std::make_unique<detail::Mailbox<Msg>>(mailbox_capacity);
+    r.reader_ = create_reader(id, r.mailbox_.get());
+    r.entities_ = entities_;
+    return r;
+  }
+
+  eprosima::fastdds::dds::DomainParticipant* participant() const { return entities_->participant; }
+  const std::string& name() const { return entities_->name; }
+
+ private:
+  static void check_type(TopicId requested, TopicId of_type);
+  eprosima::fastdds::dds::Topic* topic(TopicId id);
+  eprosima::fastdds::dds::DataWriter* create_writer(TopicId id);
+  eprosima::fastdds::dds::DataReader* create_reader(TopicId id,
+                                                    eprosima::fastdds::dds::DataReaderListener* listener);
+
+  std::shared_ptr<detail::Entities> entities_;
+};
+
+}  // namespace shapeform::dds

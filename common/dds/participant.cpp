@@ -1,0 +1,235 @@
+#include "dds/participant.hpp"
+
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/rtps/attributes/ServerAttributes.h>
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastrtps/utils/IPLocator.h>
+
+namespace shapeform::dds {
+namespace {
+
+namespace fdds = eprosima::fastdds::dds;
+namespace frtps = eprosima::fastrtps::rtps;
+
+/// Largest max_participants accepted (ids probed per initial peer; ~100 per host is the practical limit).
+constexpr int kMaxParticipantsLimit = 1000;
+
+[[noreturn]] void fail(const std::string& what) { throw std::runtime_error(what); }
+
+std::string quoted(const std::string& s) { return "\"" + s + "\""; }
+
+template <class T>
+std::string str(const T& v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+struct HostPort {
+  std::string host;
+  std::array<std::uint8_t, 4> ip{};
+  std::uint32_t port = 0;
+};
+
+/// "host:port" with host an IPv4 literal or "localhost" and port 1..65535.
+HostPort parse_host_port(const std::string& text, const std::string& field) {
+  const auto colon = text.rfind(':');
+  if (colon == std::string::npos || colon == 0 || colon + 1 == text.size()) {
+    fail(field + ": expected \"host:port\", got " + quoted(text));
+  }
+  HostPort hp;
+  hp.host = text.substr(0, colon);
+  if (hp.host == "localhost") hp.host = "127.0.0.1";
+  if (!parse_ipv4(hp.host, hp.ip)) {
+    fail(field + ": host must be an IPv4 address or localhost, got " + quoted(text));
+  }
+  const std::string port_text = text.substr(colon + 1);
+  unsigned long port = 0;
+  for (char ch : port_text) {
+    if (ch < '0' || ch > '9' || port > 65535) fail(field + ": bad port in " + quoted(text));
+    port = port * 10 + static_cast<unsigned long>(ch - '0');
+  }
+  if (port < 1 || port > 65535) fail(field + ": port must be in 1..65535, got " + quoted(text));
+  hp.port = static_cast<std::uint32_t>(port);
+  return hp;
+}
+
+frtps::Locator_t udp_locator(const std::array<std::uint8_t, 4>& ip, std::uint32_t port) {
+  frtps::Locator_t loc;
+  loc.kind = LOCATOR_KIND_UDPv4;
+  frtps::IPLocator::setIPv4(loc, ip[0], ip[1], ip[2], ip[3]);
+  loc.port = port;
+  return loc;
+}
+
+frtps::Locator_t loopback_locator(std::uint32_t port) { return udp_locator({127, 0, 0, 1}, port); }
+
+void validate_common(const config::TransportConfig& cfg) {
+  if (cfg.domain < 0 || cfg.domain > kMaxDomainId) {
+    fail("transport.domain: must be in 0.." + str(kMaxDomainId) + ", got " + str(cfg.domain));
+  }
+  if (cfg.max_participants < 1 || cfg.max_participants > kMaxParticipantsLimit) {
+    fail("transport.max_participants: must be in 1.." + str(kMaxParticipantsLimit) + ", got " +
+         str(cfg.max_participants));
+  }
+  if (!std::isfinite(cfg.lease_s) || cfg.lease_s <= 0.0) {
+    fail("transport.lease_s: must be > 0, got " + str(cfg.lease_s));
+  }
+  if (!std::isfinite(cfg.announce_s) || cfg.announce_s <= 0.0 || cfg.announce_s >= cfg.lease_s) {
+    fail("transport.announce_s: must be > 0 and < lease_s (" + str(cfg.lease_s) + "), got " +
+         str(cfg.announce_s));
+  }
+  if (cfg.socket_buffer_bytes < 0) {
+    fail("transport.socket_buffer_bytes: must be >= 0, got " + str(cfg.socket_buffer_bytes));
+  }
+}
+
+}  // namespace
+
+bool parse_ipv4(const std::string& text, std::array<std::uint8_t, 4>& octets) {
+  std::size_t pos = 0;
+  for (std::size_t i = 0; i < 4; ++i) {
+    if (i > 0) {
+      if (pos >= text.size() || text[pos] != '.') return false;
+      ++pos;
+    }
+    const std::size_t start = pos;
+    unsigned value = 0;
+    while (pos < text.size() && text[pos] >= '0' && text[pos] <= '9' && pos - start < 3) {
+      value = value * 10 + static_cast<unsigned>(text[pos] - '0');
+      ++pos;
+    }
+    if (pos == start || value > 255) return false;
+    if (pos - start > 1 && text[start] == '0') return false;  // no leading zeros (octal ambiguity)
+    octets[i] = static_cast<std::uint8_t>(value);
+  }
+  return pos == text.size();
+}
+
+fdds::DomainParticipantQos participant_qos(const config::TransportConfig& cfg, const std::string& name) {
+  validate_common(cfg);
+
+  // Built by hand: get_default_participant_qos() / PARTICIPANT_QOS_DEFAULT would pick up XML profiles
+  // and builtin transports (UDPv4 on every interface + SHM).
+  fdds::DomainParticipantQos pq;
+  pq.name(name);
+  pq.transport().use_builtin_transports = false;
+
+  auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();
+  udp->maxInitialPeersRange = static_cast<std::uint32_t>(cfg.max_participants);
+  if (cfg.socket_buffer_bytes > 0) {
+    udp->sendBufferSize = static_cast<std::uint32_t>(cfg.socket_buffer_bytes);
+    udp->receiveBufferSize = static_cast<std::uint32_t>(cfg.socket_buffer_bytes);
+  }
+
+  auto& builtin = pq.wire_protocol().builtin;
+  builtin.discovery_config.leaseDuration = eprosima::fastrtps::Duration_t(cfg.lease_s);
+  builtin.discovery_config.leaseDuration_announcementperiod =
+      eprosima::fastrtps::Duration_t(cfg.announce_s);
+
+  if (cfg.profile == "loopback") {
+    udp->interfaceWhiteList.push_back("127.0.0.1");
+    // Port 0: expanded to the metatraffic unicast ports of participant ids 0..maxInitialPeersRange-1.
+    builtin.initialPeersList.push_back(loopback_locator(0));
+    // Unicast locators only: with no multicast locator nothing is sent to or joined on multicast.
+    builtin.metatrafficUnicastLocatorList.push_back(loopback_locator(0));
+    pq.wire_protocol().default_unicast_locator_list.push_back(loopback_locator(0));
+  } else if (cfg.profile == "lan") {
+    for (std::size_t i = 0; i < cfg.interfaces.size(); ++i) {
+      std::array<std::uint8_t, 4> ip{};
+      if (!parse_ipv4(cfg.interfaces[i], ip)) {
+        fail("transport.interfaces[" + str(i) + "]: must be an IPv4 address, got " +
+             quoted(cfg.interfaces[i]));
+      }
+      udp->interfaceWhiteList.push_back(cfg.interfaces[i]);
+    }
+    for (std::size_t i = 0; i < cfg.peers.size(); ++i) {
+      std::array<std::uint8_t, 4> ip{};
+      if (!parse_ipv4(cfg.peers[i], ip)) {
+        fail("transport.peers[" + str(i) + "]: must be an IPv4 address, got " + quoted(cfg.peers[i]));
+      }
+      builtin.initialPeersList.push_back(udp_locator(ip, 0));
+    }
+    // No peers: Fast DDS uses the default multicast discovery locator as the initial peer.
+  } else if (cfg.profile == "discovery-server") {
+    const HostPort server = parse_host_port(cfg.discovery_server, "transport.discovery_server");
+    if (server.ip[0] == 127) udp->interfaceWhiteList.push_back("127.0.0.1");
+    builtin.discovery_config.discoveryProtocol = frtps::DiscoveryProtocol_t::CLIENT;
+    builtin.discovery_config.discoveryServer_client_syncperiod =
+        eprosima::fastrtps::Duration_t(kDiscoveryServerSyncPeriod_s);
+    frtps::RemoteServerAttributes remote;
+    if (!remote.ReadguidPrefix(kDiscoveryServerPrefix)) {
+      fail(std::string("discovery server guid prefix does not parse: ") + kDiscoveryServerPrefix);
+    }
+    remote.metatrafficUnicastLocatorList.push_back(udp_locator(server.ip, server.port));
+    builtin.discovery_config.m_DiscoveryServers.push_back(remote);
+  } else {
+    fail("transport.profile: must be loopback, lan or discovery-server, got " + quoted(cfg.profile));
+  }
+
+  pq.transport().user_transports.push_back(udp);
+  return pq;
+}
+
+fdds::DomainParticipant* create_participant(const config::TransportConfig& cfg, const std::string& name) {
+  const fdds::DomainParticipantQos pq = participant_qos(cfg, name);
+  // Invariant of the project: never builtin transports (they open every interface and SHM).
+  if (pq.transport().use_builtin_transports || pq.transport().user_transports.empty()) {
+    fail("create_participant: refusing a participant with builtin transports");
+  }
+  auto* factory = fdds::DomainParticipantFactory::get_instance();
+  if (factory == nullptr) fail("create_participant: DomainParticipantFactory unavailable");
+  fdds::DomainParticipant* participant =
+      factory->create_participant(static_cast<fdds::DomainId_t>(cfg.domain), pq);
+  if (participant == nullptr) {
+    fail("create_participant failed for " + quoted(name) + " on " + describe(cfg) +
+         " (see Fast DDS log above; ports in use or bad interface address?)");
+  }
+  return participant;
+}
+
+void delete_participant(fdds::DomainParticipant* participant) {
+  if (participant == nullptr) return;
+  // Children first (publishers, subscribers, their endpoints, topics), then the participant itself,
+  // which announces its departure so peers drop it at once.
+  participant->delete_contained_entities();
+  fdds::DomainParticipantFactory::get_instance()->delete_participant(participant);
+}
+
+std::string describe(const config::TransportConfig& cfg) {
+  std::ostringstream os;
+  if (cfg.profile == "loopback") {
+    os << "loopback (UDPv4 127.0.0.1 only, unicast discovery of ids 0.." << (cfg.max_participants - 1)
+       << ")";
+  } else if (cfg.profile == "lan") {
+    os << "lan (UDPv4 on ";
+    if (cfg.interfaces.empty()) {
+      os << "all interfaces";
+    } else {
+      for (std::size_t i = 0; i < cfg.interfaces.size(); ++i) os << (i ? "," : "") << cfg.interfaces[i];
+    }
+    if (cfg.peers.empty()) {
+      os << ", multicast discovery)";
+    } else {
+      os << ", unicast peers ";
+      for (std::size_t i = 0; i < cfg.peers.size(); ++i) os << (i ? "," : "") << cfg.peers[i];
+      os << " ids 0.." << (cfg.max_participants - 1) << ")";
+    }
+  } else if (cfg.profile == "discovery-server") {
+    os << "discovery-server (client of " << cfg.discovery_server << ")";
+  } else {
+    os << "unknown profile \"" << cfg.profile << "\"";
+  }
+  os << ", domain " << cfg.domain << ", lease " << cfg.lease_s << " s, announce " << cfg.announce_s
+     << " s";
+  if (cfg.socket_buffer_bytes > 0) os << ", socket buffers " << cfg.socket_buffer_bytes << " B";
+  return os.str();
+}
+
+}  // namespace shapeform::dds

@@ -1,0 +1,54 @@
+#pragma once
+/// The ONE place DDS participants are made. Every participant of the project is built from a
+/// config::TransportConfig profile by create_participant(); builtin transports are never used, so
+/// traffic stays on loopback unless a profile explicitly asks for more.
+#include <array>
+#include <cstdint>
+#include <string>
+
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
+
+#include "config/config.hpp"
+
+namespace shapeform::dds {
+
+/// Guid prefix of discovery server id 0, as `fastdds discovery -i 0` uses.
+inline constexpr const char* kDiscoveryServerPrefix = "44.53.00.5f.45.50.52.4f.53.49.4d.41";
+/// Discovery-server client sync period, seconds (Fast DDS default 0.45 s; 0.1 s discovers faster).
+inline constexpr double kDiscoveryServerSyncPeriod_s = 0.1;
+/// Largest valid DDS domain id (ports 7400 + 250 d must stay below 65536).
+inline constexpr int kMaxDomainId = 232;
+
+/// The participant QoS of a transport profile, built by hand (never the factory default, which an XML
+/// file could change): builtin transports off, one UDPv4 descriptor, no shared memory.
+///  - "loopback": UDPv4 whitelisted to 127.0.0.1; initial peer 127.0.0.1 port 0 expanded to
+///    participant ids 0..max_participants-1; metatraffic and default unicast locators on 127.0.0.1,
+///    no multicast locator at all (pure unicast on lo).
+///  - "lan": UDPv4 bound to `interfaces` (all when empty); unicast initial peers `peers` (port 0,
+///    ids 0..max_participants-1) when given, else multicast discovery. List this host in `peers` too
+///    if local participants must meet.
+///  - "discovery-server": CLIENT of server id 0 at `discovery_server` "host:port" (host an IPv4
+///    address or "localhost"); UDPv4 whitelisted to 127.0.0.1 when the host is a loopback address.
+/// Lease and announcement period come from lease_s / announce_s; socket_buffer_bytes > 0 sets the
+/// UDP send and receive buffer sizes. Pure: creates nothing.
+/// Throws std::runtime_error naming the offending field ("transport.domain: must be in 0..232, got 300").
+eprosima::fastdds::dds::DomainParticipantQos participant_qos(const config::TransportConfig& cfg,
+                                                             const std::string& name);
+
+/// Creates a participant on cfg.domain from participant_qos(cfg, name). Never returns null:
+/// throws std::runtime_error naming the problem. Free it with delete_participant().
+eprosima::fastdds::dds::DomainParticipant* create_participant(const config::TransportConfig& cfg,
+                                                              const std::string& name);
+
+/// delete_contained_entities() then deletes the participant. Null is a no-op. Never throws.
+void delete_participant(eprosima::fastdds::dds::DomainParticipant* participant);
+
+/// One line for logs, e.g. "loopback (UDPv4 127.0.0.1 only, unicast discovery of ids 0..119),
+/// domain 0, lease 2 s, announce 0.5 s". Never throws, even for an invalid config.
+std::string describe(const config::TransportConfig& cfg);
+
+/// Strict dotted-quad IPv4 parser ("127.0.0.1"); false for anything else. Exposed for tests.
+bool parse_ipv4(const std::string& text, std::array<std::uint8_t, 4>& octets);
+
+}  // namespace shapeform::dds

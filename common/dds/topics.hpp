@@ -1,0 +1,43 @@
+#pragma once
+/// The ONE topic table of the project: topic names, their types and their QoS. Writers and readers are
+/// only ever created with writer_qos() / reader_qos() so both sides always match.
+#include <array>
+
+#include <fastdds/dds/publisher/qos/DataWriterQos.hpp>
+#include <fastdds/dds/subscriber/qos/DataReaderQos.hpp>
+
+namespace shapeform::dds {
+
+enum class TopicId { State, Command, Target, Metrics, Status };
+
+inline constexpr std::array<TopicId, 5> kAllTopics = {TopicId::State, TopicId::Command, TopicId::Target,
+                                                      TopicId::Metrics, TopicId::Status};
+
+/// DDS topic name: "shapeform/state", "shapeform/command", "shapeform/target", "shapeform/metrics",
+/// "shapeform/status".
+const char* topic_name(TopicId id);
+
+/// Registered type name of the topic's message, e.g. "shapeform::msg::AgentState".
+const char* type_name(TopicId id);
+
+/// True for topics with one instance per agent (@key id): State and Status.
+bool is_keyed(TopicId id);
+
+/// Writer QoS of a topic (data sharing always off; KEEP_LAST 1 everywhere):
+///  - State:   BEST_EFFORT, VOLATILE        (every agent tick)
+///  - Command: RELIABLE, TRANSIENT_LOCAL    (late joiners get the newest command)
+///  - Target:  BEST_EFFORT, VOLATILE
+///  - Metrics: RELIABLE, VOLATILE
+///  - Status:  RELIABLE, VOLATILE
+/// Keyed topics allow unlimited instances (max_instances = max_samples = 0, 1 sample per instance).
+/// Reliable writers send a heartbeat every kHeartbeatPeriod_s so a lost sample is repaired quickly.
+eprosima::fastdds::dds::DataWriterQos writer_qos(TopicId id);
+
+/// Reader QoS of a topic: the same reliability, durability and history as the writer. Keyed readers
+/// lift max_instances (Fast DDS default 10 would silently hide agents 11 and up).
+eprosima::fastdds::dds::DataReaderQos reader_qos(TopicId id);
+
+/// Heartbeat period of reliable writers, seconds (Fast DDS default 3 s).
+inline constexpr double kHeartbeatPeriod_s = 0.5;
+
+}  // namespace shapeform::dds

@@ -1,0 +1,32 @@
+#pragma once
+/// Process resource figures for status lines and the supervisor's report. Linux only.
+#include <chrono>
+#include <cstdint>
+
+namespace shapeform::util {
+
+/// steady_clock now in nanoseconds since that clock's epoch. On Linux this is CLOCK_MONOTONIC,
+/// which is system-wide, so stamps from different processes on the same host are comparable
+/// (e.g. data age = receiver steady_ns() - sender stamp_ns).
+std::int64_t steady_ns();
+
+/// Resident set size of this process in MiB (from /proc/self/statm); -1 if it cannot be read.
+double rss_mb();
+
+/// CPU use of this process (all threads) in percent of one core, measured between calls:
+/// 100 = one core fully busy, may exceed 100 with several busy threads.
+class CpuMeter {
+ public:
+  /// Starts the first interval now.
+  CpuMeter();
+
+  /// CPU % since the previous call (or construction), then starts a new interval.
+  /// 0 when no steady time has passed.
+  double percent();
+
+ private:
+  std::int64_t cpu_ns_;
+  std::chrono::steady_clock::time_point wall_;
+};
+
+}  // namespace shapeform::util

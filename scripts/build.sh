@@ -1,0 +1,8 @@
+#!/usr/bin/env bash
+# Installs the Debian dependencies (when run as root) and builds shapeform into build/ (Release).
+# Idempotent: a second run only rebuilds what changed. Extra arguments go to the configure step.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+./scripts/install_deps.sh
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null
+cmake --build build -j"$(nproc)"

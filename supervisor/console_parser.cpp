@@ -1,0 +1,536 @@
+#include "console_parser.hpp"
+
+#include <cerrno>
+#include <climits>
+#include <cmath>
+#include <cstdlib>
+#include <initializer_list>
+#include <map>
+#include <optional>
+#include <utility>
+#include <vector>
+
+namespace shapeform::supervisor {
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// Tokens
+
+struct Token {
+  std::string text;  ///< the whole token, quotes stripped
+  bool is_pair = false;
+  std::string key;    ///< pairs: left of the first unquoted '='
+  std::string value;  ///< pairs: right of it, quotes stripped
+};
+
+bool is_space(char ch) {
+  return ch == ' ' || ch == '\t' || ch == '\r' || ch == '\n' || ch == '\v' || ch == '\f';
+}
+
+/// Splits on whitespace outside double quotes; an unquoted '#' at a token start ends the line.
+/// Returns an error message (empty on success).
+std::string tokenize(std::string_view line, std::vector<Token>& out) {
+  std::size_t i = 0;
+  const std::size_t n = line.size();
+  while (i < n) {
+    while (i < n && is_space(line[i])) ++i;
+    if (i >= n || line[i] == '#') break;
+    Token tok;
+    bool in_quotes = false;
+    for (; i < n && (in_quotes || !is_space(line[i])); ++i) {
+      const char ch = line[i];
+      if (ch == '"') {
+        in_quotes = !in_quotes;
+        continue;
+      }
+      if (ch == '=' && !in_quotes && !tok.is_pair) {
+        tok.is_pair = true;
+        tok.key = tok.text;
+        tok.text.push_back(ch);
+        continue;
+      }
+      tok.text.push_back(ch);
+      if (tok.is_pair) tok.value.push_back(ch);
+    }
+    if (in_quotes) return "unterminated double quote";
+    out.push_back(std::move(tok));
+  }
+  return {};
+}
+
+// ---------------------------------------------------------------------------------------------
+// Errors: thrown inside this file only, turned into ParseResult::error by parse_command.
+
+struct ParseError {
+  std::string message;
+};
+
+[[noreturn]] void fail(std::string message) { throw ParseError{std::move(message)}; }
+
+std::string join(std::initializer_list<const char*> words, const char* sep) {
+  std::string s;
+  for (const char* w : words) {
+    if (!s.empty()) s += sep;
+    s += w;
+  }
+  return s;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Numbers
+
+/// strtod with a full-consumption check; nullopt when the text is not a number. May return
+/// non-finite values ("inf", "nan", overflow), which callers reject with their own message.
+std::optional<double> to_double(const std::string& s) {
+  if (s.empty() || is_space(s.front())) return std::nullopt;  // strtod would skip leading blanks
+  char* end = nullptr;
+  errno = 0;
+  const double v = std::strtod(s.c_str(), &end);
+  if (end != s.c_str() + s.size()) return std::nullopt;
+  return v;  // ERANGE overflow gives +-HUGE_VAL (non-finite); underflow gives a finite value
+}
+
+enum class Bound { Any, Positive, NonNegative };
+
+/// Arguments of one command after its command word(s): positionals and key=value pairs.
+class Args {
+ public:
+  /// Checks unknown and duplicate parameters and too many positionals, in token order.
+  Args(std::string name, const std::vector<Token>& tokens, std::size_t first,
+       std::initializer_list<const char*> keys, std::size_t max_positionals)
+      : name_(std::move(name)) {
+    for (std::size_t i = first; i < tokens.size(); ++i) {
+      const Token& t = tokens[i];
+      if (!t.is_pair) {
+        if (positionals_.size() >= max_positionals) {
+          fail(name_ + ": unexpected argument '" + t.text + "'");
+        }
+        positionals_.push_back(t.text);
+        continue;
+      }
+      if (t.key.empty()) fail(name_ + ": missing parameter name in '" + t.text + "'");
+      bool known = false;
+      for (const char* k : keys) known = known || t.key == k;
+      if (!known) {
+        fail(name_ + ": unknown parameter '" + t.key + "' " +
+             (keys.size() == 0 ? std::string("(takes no key=value parameters)")
+                               : "(expected " + join(keys, ", ") + ")"));
+      }
+      if (!pairs_.emplace(t.key, t.value).second) fail(name_ + ": duplicate parameter " + t.key);
+    }
+  }
+
+  const std::string& name() const { return name_; }
+  bool has(const std::string& key) const { return pairs_.count(key) != 0; }
+  bool empty() const { return pairs_.empty() && positionals_.empty(); }
+  std::size_t positionals() const { return positionals_.size(); }
+  const std::string& positional(std::size_t i) const { return positionals_.at(i); }
+
+  const std::string& raw(const std::string& key) const {
+    const auto it = pairs_.find(key);
+    if (it == pairs_.end()) fail(name_ + ": missing parameter " + key);
+    return it->second;
+  }
+
+  /// A required number parameter.
+  double number(const std::string& key, Bound bound) const {
+    return check_number(key, raw(key), bound);
+  }
+  /// An optional number parameter.
+  double number_or(const std::string& key, Bound bound, double fallback) const {
+    return has(key) ? number(key, bound) : fallback;
+  }
+
+  /// Parses `text` as a number named `label` (empty label: the value of the command itself).
+  double check_number(const std::string& label, const std::string& text, Bound bound) const {
+    const std::string owner = label.empty() ? name_ : name_ + ": " + label;
+    const std::optional<double> v = to_double(text);
+    if (!v) fail(owner + ": not a number: '" + text + "'");
+    if (!std::isfinite(*v)) fail(owner + " must be finite, got " + text);
+    if (bound == Bound::Positive && !(*v > 0.0)) fail(owner + " must be > 0, got " + text);
+    if (bound == Bound::NonNegative && !(*v >= 0.0)) fail(owner + " must be >= 0, got " + text);
+    return *v;
+  }
+
+  /// A required `x,y` parameter with finite components.
+  core::Vec2 vec2(const std::string& key) const {
+    const std::string& text = raw(key);
+    const std::size_t comma = text.find(',');
+    if (comma == std::string::npos || text.find(',', comma + 1) != std::string::npos) {
+      fail(name_ + ": " + key + " must be x,y, got '" + text + "'");
+    }
+    const std::optional<double> x = to_double(text.substr(0, comma));
+    const std::optional<double> y = to_double(text.substr(comma + 1));
+    if (!x || !y) fail(name_ + ": " + key + ": not a number: '" + text + "'");
+    if (!std::isfinite(*x) || !std::isfinite(*y)) {
+      fail(name_ + ": " + key + " must be finite, got " + text);
+    }
+    return core::Vec2(*x, *y);
+  }
+
+  /// An optional on|off parameter.
+  bool on_off_or(const std::string& key, bool fallback) const {
+    if (!has(key)) return fallback;
+    const std::string& text = raw(key);
+    if (text == "on") return true;
+    if (text == "off") return false;
+    fail(name_ + ": " + key + " must be on or off, got '" + text + "'");
+  }
+
+  /// Optional centre cx, cy (default 0, 0).
+  core::Vec2 centre() const {
+    return core::Vec2(number_or("cx", Bound::Any, 0.0), number_or("cy", Bound::Any, 0.0));
+  }
+
+ private:
+  std::string name_;
+  std::vector<std::string> positionals_;
+  std::map<std::string, std::string> pairs_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Commands
+
+using Tokens = std::vector<Token>;
+
+/// The sub-word at tokens[1] (e.g. `circle` in `shape circle`); fails with `expected` when absent.
+const std::string& sub_word(const Tokens& t, const std::string& cmd, const std::string& expected) {
+  if (t.size() < 2 || t[1].is_pair) fail(cmd + ": expected " + expected);
+  return t[1].text;
+}
+
+Action parse_shape(const Tokens& t, const core::Command& current) {
+  const std::string& kind = sub_word(t, "shape", "a shape (line, circle, ellipse, square)");
+  const std::string name = "shape " + kind;
+  core::Command cmd = current;
+  cmd.tracking = core::Tracking{};  // a fixed shape: tracking off, no stale path
+  core::ShapeSpec& s = cmd.shape;
+  if (kind == "line") {
+    const Args a(name, t, 2, {"m", "c"}, 0);
+    s.kind = core::ShapeKind::Line;
+    s.m = a.number("m", Bound::Any);
+    s.c = a.number("c", Bound::Any);
+  } else if (kind == "circle") {
+    const Args a(name, t, 2, {"r", "cx", "cy"}, 0);
+    s.kind = core::ShapeKind::Circle;
+    s.r0 = a.number("r", Bound::Positive);
+    s.centre = a.centre();
+  } else if (kind == "ellipse") {
+    const Args a(name, t, 2, {"a", "b", "cx", "cy"}, 0);
+    s.kind = core::ShapeKind::Ellipse;
+    s.a = a.number("a", Bound::Positive);
+    s.b = a.number("b", Bound::Positive);
+    s.centre = a.centre();
+  } else if (kind == "square") {
+    const Args a(name, t, 2, {"a", "cx", "cy"}, 0);
+    s.kind = core::ShapeKind::Square;
+    s.a = a.number("a", Bound::Positive);
+    s.centre = a.centre();
+  } else {
+    fail("shape: unknown shape '" + kind + "' (expected line, circle, ellipse, square)");
+  }
+  return SetCommand{SetCommand::What::Shape, cmd};
+}
+
+Action parse_track(const Tokens& t, const core::Command& current) {
+  const std::string& kind = sub_word(t, "track", "line, circle, point or stop");
+  const std::string name = "track " + kind;
+  if (kind == "stop") {
+    const Args a(name, t, 2, {}, 0);
+    return TrackStop{};
+  }
+  core::CentrePath path;
+  double r0 = 0.0;
+  bool ff = false;
+  if (kind == "line") {
+    const Args a(name, t, 2, {"from", "vel", "r", "ff"}, 0);
+    path.kind = core::CentrePath::Kind::Line;
+    path.point = a.vec2("from");
+    path.velocity = a.vec2("vel");
+    r0 = a.number("r", Bound::Positive);
+    ff = a.on_off_or("ff", false);
+  } else if (kind == "circle") {
+    const Args a(name, t, 2, {"radius", "period", "r", "cx", "cy", "phase", "ff"}, 0);
+    path.kind = core::CentrePath::Kind::Circle;
+    path.radius = a.number("radius", Bound::Positive);
+    path.period = a.number("period", Bound::Positive);
+    r0 = a.number("r", Bound::Positive);
+    path.origin = a.centre();
+    path.phase = a.number_or("phase", Bound::Any, 0.0);
+    ff = a.on_off_or("ff", false);
+  } else if (kind == "point") {
+    const Args a(name, t, 2, {"at", "r", "ff"}, 0);
+    path.kind = core::CentrePath::Kind::Fixed;
+    path.point = a.vec2("at");
+    r0 = a.number("r", Bound::Positive);
+    ff = a.on_off_or("ff", false);
+  } else {
+    fail("track: unknown path '" + kind + "' (expected line, circle, point, stop)");
+  }
+  core::Command cmd = current;
+  cmd.shape.kind = core::ShapeKind::Circle;
+  cmd.shape.r0 = r0;
+  // The centre at t = 0 (shape_at() moves it along the path; this keeps the spec consistent).
+  if (path.kind == core::CentrePath::Kind::Circle) {
+    cmd.shape.centre =
+        path.origin + path.radius * core::Vec2(std::cos(path.phase), std::sin(path.phase));
+  } else {
+    cmd.shape.centre = path.point;
+  }
+  cmd.tracking.enabled = true;
+  cmd.tracking.path = path;
+  cmd.tracking.feedforward = ff;
+  return SetCommand{SetCommand::What::Track, cmd};
+}
+
+Action parse_gains(const Tokens& t, const core::Command& current) {
+  const Args a("gains", t, 1, {"k1", "k2", "sigma", "beta", "r"}, 0);
+  if (a.empty()) fail("gains: expected at least one of k1, k2, sigma, beta, r");
+  core::Command cmd = current;
+  core::Gains& g = cmd.gains;
+  g.k1 = a.number_or("k1", Bound::NonNegative, g.k1);
+  g.k2 = a.number_or("k2", Bound::NonNegative, g.k2);
+  g.sigma = a.number_or("sigma", Bound::Positive, g.sigma);
+  g.beta = a.number_or("beta", Bound::NonNegative, g.beta);
+  g.r = a.number_or("r", Bound::NonNegative, g.r);
+  return SetCommand{SetCommand::What::Gains, cmd};
+}
+
+constexpr double kMaxDt = 10.0;  ///< model time units; larger steps make the law meaningless
+
+Action parse_integrator(const Tokens& t, const core::Command& current) {
+  const Args a("integrator", t, 1, {"dt"}, 1);
+  if (a.positionals() == 0) fail("integrator: missing method (euler or rk4)");
+  core::Command cmd = current;
+  const std::string& method = a.positional(0);
+  // Own mapping rather than core::parse_integrator so the parser needs no core object code.
+  if (method == "euler") {
+    cmd.integrator = core::Integrator::Euler;
+  } else if (method == "rk4") {
+    cmd.integrator = core::Integrator::RK4;
+  } else {
+    fail("integrator: unknown method '" + method + "' (expected euler or rk4)");
+  }
+  if (a.has("dt")) {
+    const double dt = a.number("dt", Bound::Positive);
+    if (dt > kMaxDt) fail("integrator: dt must be <= 10, got " + a.raw("dt"));
+    cmd.dt = dt;
+  }
+  return SetCommand{SetCommand::What::Integrator, cmd};
+}
+
+Action parse_max_speed(const Tokens& t, const core::Command& current) {
+  const Args a("max_speed", t, 1, {}, 1);
+  if (a.positionals() == 0) fail("max_speed: missing value (units per model time, 0 = off)");
+  core::Command cmd = current;
+  cmd.max_speed = a.check_number("", a.positional(0), Bound::NonNegative);
+  return SetCommand{SetCommand::What::MaxSpeed, cmd};
+}
+
+Action parse_wait(const Tokens& t) {
+  const std::string& what = sub_word(t, "wait", "converged or agents");
+  const std::string name = "wait " + what;
+  if (what == "converged") {
+    const Args a(name, t, 2, {"timeout"}, 0);
+    return WaitConverged{a.number_or("timeout", Bound::NonNegative, 60.0)};
+  }
+  if (what == "agents") {
+    const Args a(name, t, 2, {"timeout"}, 1);
+    if (a.positionals() == 0) fail(name + ": missing agent count N");
+    const std::string& text = a.positional(0);
+    const double n = a.check_number("N", text, Bound::Any);
+    if (!(n >= 1.0) || n != std::floor(n) || n > static_cast<double>(INT_MAX)) {
+      fail(name + ": N must be an integer >= 1, got " + text);
+    }
+    return WaitAgents{static_cast<int>(n), a.number_or("timeout", Bound::NonNegative, 30.0)};
+  }
+  fail("wait: unknown condition '" + what + "' (expected converged, agents)");
+}
+
+Action parse_record(const Tokens& t) {
+  const std::string& what = sub_word(t, "record", "start DIR or stop");
+  const std::string name = "record " + what;
+  if (what == "start") {
+    const Args a(name, t, 2, {}, 1);
+    if (a.positionals() == 0 || a.positional(0).empty()) fail(name + ": missing directory");
+    return RecordStart{a.positional(0)};
+  }
+  if (what == "stop") {
+    const Args a(name, t, 2, {}, 0);
+    return RecordStop{};
+  }
+  fail("record: unknown action '" + what + "' (expected start, stop)");
+}
+
+Action parse_tokens(const Tokens& t, const core::Command& current) {
+  const std::string& word = t.front().text;
+  if (word == "shape") return parse_shape(t, current);
+  if (word == "track") return parse_track(t, current);
+  if (word == "gains") return parse_gains(t, current);
+  if (word == "integrator") return parse_integrator(t, current);
+  if (word == "max_speed") return parse_max_speed(t, current);
+  if (word == "wait") return parse_wait(t);
+  if (word == "record") return parse_record(t);
+  if (word == "status" || word == "metrics" || word == "quit" || word == "exit" ||
+      word == "start") {
+    const Args a(word, t, 1, {}, 0);
+    if (word == "start") return StartScenario{};
+    if (word == "status") return Status{};
+    if (word == "metrics") return ShowMetrics{};
+    return Quit{};
+  }
+  if (word == "sleep") {
+    const Args a(word, t, 1, {}, 1);
+    if (a.positionals() == 0) fail("sleep: missing duration (seconds)");
+    return Sleep{a.check_number("", a.positional(0), Bound::NonNegative)};
+  }
+  if (word == "help") {
+    const Args a(word, t, 1, {}, 1);
+    if (a.positionals() == 0) return Help{};
+    const std::string& topic = a.positional(0);
+    if (!has_help(topic)) fail("help: unknown command '" + topic + "'");
+    return Help{topic};
+  }
+  fail("unknown command '" + word + "' (try 'help')");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Help
+
+struct HelpEntry {
+  const char* word;
+  const char* overview;  ///< one line per syntax variant
+  const char* details;
+};
+
+// clang-format off
+const HelpEntry kHelp[] = {
+  {"shape",
+   "shape line m=M c=C                 line x2 = m x1 + c\n"
+   "shape circle r=R [cx=X cy=Y]       circle of radius R\n"
+   "shape ellipse a=A b=B [cx=X cy=Y]  ellipse with semi-axes A (x1), B (x2)\n"
+   "shape square a=A [cx=X cy=Y]       square of half side A\n",
+   "shape line m=M c=C\n"
+   "shape circle r=R [cx=X cy=Y]\n"
+   "shape ellipse a=A b=B [cx=X cy=Y]\n"
+   "shape square a=A [cx=X cy=Y]\n"
+   "  Commands a fixed shape and turns tracking off. Parameters are required except the centre.\n"
+   "  m, c    line slope and intercept (any finite value)\n"
+   "  r       circle radius (> 0)\n"
+   "  a, b    ellipse semi-axes along x1 and x2 (> 0); for the square, a is the half side (> 0)\n"
+   "  cx, cy  centre of a closed shape (default 0, 0)\n"},
+  {"track",
+   "track line from=X,Y vel=VX,VY r=R [ff=on|off]               circle following a line\n"
+   "track circle radius=RP period=T r=R [cx= cy= phase=] [ff=]  circle following a circle\n"
+   "track point at=X,Y r=R [ff=on|off]                          circle held at a point\n"
+   "track stop                                                  stop tracking, stay put\n",
+   "track line from=X,Y vel=VX,VY r=R [ff=on|off]\n"
+   "track circle radius=RP period=T r=R [cx=X cy=Y] [phase=P] [ff=on|off]\n"
+   "track point at=X,Y r=R [ff=on|off]\n"
+   "track stop\n"
+   "  The swarm forms a circle of radius r (> 0) around a moving centre C(t).\n"
+   "  from     C(0) of the line path; vel: velocity in units per model time\n"
+   "  radius   radius of the circular path (> 0); period: model time per revolution (> 0)\n"
+   "  cx, cy   centre of the circular path (default 0, 0); phase: angle at t = 0, rad (default 0)\n"
+   "  at       the fixed centre\n"
+   "  ff       feed-forward: add dC/dt to every agent's velocity (default off)\n"
+   "  track stop keeps the shape where the tracked centre was.\n"},
+  {"gains",
+   "gains [k1=] [k2=] [sigma=] [beta=] [r=]                     change control gains\n",
+   "gains [k1=K1] [k2=K2] [sigma=S] [beta=B] [r=R]\n"
+   "  At least one; the others keep their current values.\n"
+   "  k1     cohesion gain (>= 0)\n"
+   "  k2     attraction-to-shape gain (>= 0)\n"
+   "  sigma  softening length (> 0)\n"
+   "  beta   decay exponent (>= 0)\n"
+   "  r      nearest-neighbour repulsion magnitude (>= 0)\n"},
+  {"integrator",
+   "integrator euler|rk4 [dt=DT]                                integration method and step\n",
+   "integrator euler|rk4 [dt=DT]\n"
+   "  dt  model time per step, 0 < dt <= 10 (default: keep the current step)\n"},
+  {"max_speed",
+   "max_speed V                                                 speed limit (0 = off)\n",
+   "max_speed V\n"
+   "  V  speed limit in units per model time (>= 0; 0 = no limit)\n"},
+  {"start",
+   "start                                                       publish the scenario of --config\n",
+   "start\n"
+   "  Publishes the command of the supervisor's --config file (shape, tracking, gains,\n"
+   "  integrator) as a new epoch. The launcher runs it once every agent is heard.\n"},
+  {"status",
+   "status                                                      table of agents\n",
+   "status\n"
+   "  One row per agent heard: id, alive/DEAD/left, last seen, position, epoch followed,\n"
+   "  its shape error and how many neighbours it hears.\n"},
+  {"metrics",
+   "metrics                                                     latest formation metrics\n",
+   "metrics\n"
+   "  Prints the latest metrics (shape error, gap CV, clusters, ...).\n"},
+  {"wait",
+   "wait converged [timeout=S]                                  wait for convergence\n"
+   "wait agents N [timeout=S]                                   wait for N agents alive\n",
+   "wait converged [timeout=S]\n"
+   "wait agents N [timeout=S]\n"
+   "  Holds further input until the condition holds or the timeout (wall seconds, >= 0;\n"
+   "  default 60 for converged, 30 for agents) runs out. N is an integer >= 1.\n"},
+  {"sleep",
+   "sleep S                                                     pause input for S seconds\n",
+   "sleep S\n"
+   "  Holds further input for S wall-clock seconds (>= 0).\n"},
+  {"record",
+   "record start DIR | record stop                              CSV recording\n",
+   "record start DIR\n"
+   "record stop\n"
+   "  Writes DIR/metrics.csv and DIR/positions.csv (DIR is created; files are overwritten).\n"
+   "  Quote DIR if it contains spaces.\n"},
+  {"help",
+   "help [COMMAND]                                              this list, or details\n",
+   "help [COMMAND]\n"
+   "  Without COMMAND, one line per command; with it, the details of that command.\n"},
+  {"quit",
+   "quit | exit                                                 stop the supervisor\n",
+   "quit\n"
+   "exit\n"
+   "  Stops the supervisor.\n"},
+};
+// clang-format on
+
+const HelpEntry* find_help(std::string_view word) {
+  if (word == "exit") word = "quit";
+  for (const HelpEntry& e : kHelp) {
+    if (word == e.word) return &e;
+  }
+  return nullptr;
+}
+
+}  // namespace
+
+ParseResult parse_command(std::string_view line, const core::Command& current) {
+  ParseResult result{NoOp{}, {}};
+  std::vector<Token> tokens;
+  result.error = tokenize(line, tokens);
+  if (!result.ok() || tokens.empty()) return result;
+  try {
+    result.action = parse_tokens(tokens, current);
+  } catch (const ParseError& e) {
+    result.action = NoOp{};
+    result.error = e.message;
+  }
+  return result;
+}
+
+bool has_help(std::string_view word) { return find_help(word) != nullptr; }
+
+std::string help_text(std::string_view command) {
+  if (command.empty()) {
+    std::string text =
+        "Commands (key=value parameters in any order; `help COMMAND` for details):\n";
+    for (const HelpEntry& e : kHelp) text += e.overview;
+    text += "Lines starting with # are comments. Quote values containing spaces: dir=\"a b\".\n";
+    return text;
+  }
+  if (const HelpEntry* e = find_help(command)) return e->details;
+  return "no help for '" + std::string(command) + "' (try 'help')\n";
+}
+
+}  // namespace shapeform::supervisor

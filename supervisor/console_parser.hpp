@@ -1,0 +1,85 @@
+#pragma once
+/// The supervisor's console language: one line in, one action (or one error line) out.
+/// Pure: no I/O, no clocks, no DDS. The main loop executes the actions.
+///
+/// Syntax: a command word (sometimes two: `shape circle`, `wait agents`), then positional values
+/// and key=value parameters in any order. Tokens split on whitespace except inside double quotes;
+/// quotes are stripped (`r="4 + 1"` gives key r, value `4 + 1`). A token starting with `#`
+/// (outside quotes) starts a comment; blank and comment-only lines are no-ops.
+#include <string>
+#include <string_view>
+#include <variant>
+
+#include "core/command.hpp"
+
+namespace shapeform::supervisor {
+
+/// Empty line or comment: nothing to do.
+struct NoOp {};
+
+/// A new command to publish. Produced by shape, track (line/circle/point), gains, integrator and
+/// max_speed; `command` is the caller's current command with the change applied.
+struct SetCommand {
+  enum class What { Shape, Track, Gains, Integrator, MaxSpeed };
+  What what = What::Shape;
+  core::Command command;
+};
+
+/// `track stop`: the caller disables tracking and keeps the shape where the tracked centre was.
+struct TrackStop {};
+/// `status`: print the current command, agents, loop statistics.
+struct Status {};
+/// `metrics`: print the latest metrics.
+struct ShowMetrics {};
+/// `wait converged [timeout=S]`: block further input until converged or timeout.
+struct WaitConverged {
+  double timeout_s = 60.0;
+};
+/// `wait agents N [timeout=S]`: block further input until at least `count` agents are alive.
+struct WaitAgents {
+  int count = 1;
+  double timeout_s = 30.0;
+};
+/// `sleep S`: block further input for S seconds of wall time.
+struct Sleep {
+  double seconds = 0.0;
+};
+/// `record start DIR`: start CSV recording into DIR (created if missing).
+struct RecordStart {
+  std::string dir;
+};
+/// `record stop`.
+struct RecordStop {};
+/// `help [command]`: `topic` is empty for the overview, else a known command word.
+struct Help {
+  std::string topic;
+};
+/// `quit` or `exit`.
+struct Quit {};
+/// Publish the supervisor's configured scenario (its --config command) as a new epoch.
+struct StartScenario {};
+
+using Action = std::variant<NoOp, SetCommand, TrackStop, Status, ShowMetrics, WaitConverged,
+                            WaitAgents, Sleep, RecordStart, RecordStop, Help, Quit, StartScenario>;
+
+/// Either an action (error empty) or an error (action is NoOp).
+struct ParseResult {
+  Action action;
+  std::string error;  ///< one line naming the command and what is wrong, e.g.
+                      ///< `shape circle: r must be > 0, got -2`; empty on success
+  bool ok() const { return error.empty(); }
+};
+
+/// Parses one console or script line. `current` is the command in force; commands that change it
+/// return a copy of it with the change applied. Never throws for bad input.
+ParseResult parse_command(std::string_view line, const core::Command& current);
+
+/// Help text: with an empty `command`, one line per command with its syntax; with a command word
+/// (`shape`, `track`, `gains`, ...), the details of that command. Unknown words give a line saying
+/// so. Every returned text ends with a newline.
+std::string help_text(std::string_view command = {});
+
+/// True when `help_text(word)` has a details page for `word`.
+bool has_help(std::string_view word);
+
+}  // namespace shapeform::supervisor

@@ -1,0 +1,24 @@
+#pragma once
+#include <string>
+
+#include "config/config.hpp"
+
+namespace shapeform::supervisor {
+
+struct SupervisorOptions {
+  std::string script;      ///< run this script's lines first (validated up front)
+  std::string record_dir;  ///< start recording here at once
+  bool json = false;       ///< summary as one JSON object on stdout
+};
+
+/// Exit statuses.
+inline constexpr int kExitOk = 0;
+inline constexpr int kExitRuntime = 1;
+inline constexpr int kExitBadInput = 2;
+inline constexpr int kExitWaitTimedOut = 3;
+
+/// Runs the supervisor until `quit`, SIGINT/SIGTERM, or the end of all input (script done and console
+/// at end of input, and no recording running). Returns the exit status.
+int run_supervisor(const config::Config& cfg, const SupervisorOptions& opt);
+
+}  // namespace shapeform::supervisor

@@ -1,0 +1,123 @@
+#include "swarm_monitor.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+namespace shapeform::supervisor {
+
+SwarmMonitor::SwarmMonitor(std::int64_t agent_timeout_ns, core::ConvergenceDetector::Params converge)
+    : agent_timeout_ns_(agent_timeout_ns), detector_(converge) {}
+
+void SwarmMonitor::on_state(std::int32_t id, const core::Vec2& x, std::uint32_t epoch, double model_time,
+                            std::int64_t now_ns) {
+  AgentView& a = agents_[id];
+  a.x = x;
+  a.epoch = epoch;
+  a.model_time = model_time;
+  a.last_seen_ns = now_ns;
+  a.departed = false;
+  if (epoch > max_epoch_seen_) max_epoch_seen_ = epoch;
+}
+
+void SwarmMonitor::on_status(std::int32_t id, int neighbours_heard, std::uint64_t samples_rejected) {
+  const auto it = agents_.find(id);
+  if (it == agents_.end()) return;  // status before any state: wait for a state
+  it->second.neighbours_heard = neighbours_heard;
+  it->second.samples_rejected = samples_rejected;
+}
+
+void SwarmMonitor::on_departed(std::int32_t id) {
+  const auto it = agents_.find(id);
+  if (it != agents_.end()) it->second.departed = true;
+}
+
+void SwarmMonitor::set_command(const core::Command& cmd, std::uint32_t epoch, std::int64_t) {
+  command_ = cmd;
+  epoch_ = epoch;
+  detector_.reset();
+  last_.reset();
+  hist_t_.clear();
+  hist_err_.clear();
+  hist_gap_.clear();
+}
+
+bool SwarmMonitor::alive(const AgentView& a, std::int64_t now_ns) const {
+  return !a.departed && now_ns - a.last_seen_ns <= agent_timeout_ns_;
+}
+
+int SwarmMonitor::alive_count(std::int64_t now_ns) const {
+  int n = 0;
+  for (const auto& [id, a] : agents_) n += alive(a, now_ns) ? 1 : 0;
+  return n;
+}
+
+int SwarmMonitor::following_count(std::int64_t now_ns) const {
+  int n = 0;
+  for (const auto& [id, a] : agents_) n += (alive(a, now_ns) && a.epoch == epoch_ && epoch_ != 0) ? 1 : 0;
+  return n;
+}
+
+std::vector<std::pair<std::int32_t, core::Vec2>> SwarmMonitor::alive_positions(std::int64_t now_ns) const {
+  std::vector<std::pair<std::int32_t, core::Vec2>> out;
+  for (const auto& [id, a] : agents_)
+    if (alive(a, now_ns)) out.emplace_back(id, a.x);
+  return out;
+}
+
+SwarmMonitor::Sample SwarmMonitor::update(double model_time, std::int64_t now_ns) {
+  Sample s;
+  s.model_time = model_time;
+  s.alive = alive_count(now_ns);
+  s.following = following_count(now_ns);
+  if (command_) {
+    std::vector<core::Vec2> x;
+    x.reserve(agents_.size());
+    for (const auto& [id, p] : alive_positions(now_ns)) x.push_back(p);
+    s.metrics = core::compute_metrics(*command_, x, model_time);
+    if (s.alive > 0 && s.following == s.alive) {
+      detector_.add(model_time, s.metrics.shape_error_mean, s.metrics.gap_cv);
+      hist_t_.push_back(model_time);
+      hist_err_.push_back(s.metrics.shape_error_mean.value_or(0.0));
+      hist_gap_.push_back(s.metrics.gap_cv);
+    } else {
+      detector_.reset();  // agents still switching to the new command
+    }
+    s.converged = detector_.converged();
+  } else {
+    s.metrics.agents = s.alive;
+  }
+  last_ = s;
+  return s;
+}
+
+std::optional<double> SwarmMonitor::settle_time(const core::SettleParams& p) const {
+  const auto k = core::settle_index(hist_err_, hist_gap_, p);
+  if (!k) return std::nullopt;
+  return hist_t_[static_cast<std::size_t>(*k)];
+}
+
+std::string SwarmMonitor::status_table(std::int64_t now_ns, double model_time) const {
+  std::ostringstream o;
+  char line[200];
+  std::snprintf(line, sizeof line, "%6s %-6s %10s %10s %10s %6s %11s %6s\n", "agent", "alive", "last_seen",
+                "x1", "x2", "epoch", "shape_error", "heard");
+  o << line;
+  const std::optional<core::ShapeSpec> shape =
+      command_ ? std::optional<core::ShapeSpec>(core::shape_at(*command_, model_time)) : std::nullopt;
+  for (const auto& [id, a] : agents_) {
+    const double ago = static_cast<double>(now_ns - a.last_seen_ns) * 1e-9;
+    const bool up = alive(a, now_ns);
+    char err[32] = "-";
+    if (shape && a.epoch == epoch_) std::snprintf(err, sizeof err, "%.4f", (a.x - core::target_point(*shape, a.x)).norm());
+    char heard[16] = "-";
+    if (a.neighbours_heard) std::snprintf(heard, sizeof heard, "%d", *a.neighbours_heard);
+    std::snprintf(line, sizeof line, "%6d %-6s %9.2fs %10.4f %10.4f %6u %11s %6s\n", id,
+                  up ? "yes" : (a.departed ? "left" : "DEAD"), ago, a.x.x(), a.x.y(), a.epoch, err, heard);
+    o << line;
+  }
+  if (agents_.empty()) o << "(no agent heard yet)\n";
+  return o.str();
+}
+
+}  // namespace shapeform::supervisor

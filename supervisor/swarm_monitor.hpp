@@ -1,0 +1,80 @@
+#pragma once
+/// What the supervisor knows of the swarm, without DDS or clocks: the latest state of every agent,
+/// who is alive, the command in force and the model clock of its epoch, and the convergence metrics
+/// (computed with the same core functions as the simulator).
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/metrics.hpp"
+
+namespace shapeform::supervisor {
+
+struct AgentView {
+  core::Vec2 x = core::Vec2::Zero();
+  std::uint32_t epoch = 0;      ///< command epoch the agent follows
+  double model_time = 0.0;      ///< the agent's model time
+  std::int64_t last_seen_ns = 0;
+  bool departed = false;        ///< disposed its instance (clean exit)
+  // From the agent's status topic (absent until the first status).
+  std::optional<int> neighbours_heard;
+  std::uint64_t samples_rejected = 0;
+};
+
+class SwarmMonitor {
+ public:
+  SwarmMonitor(std::int64_t agent_timeout_ns, core::ConvergenceDetector::Params converge);
+
+  void on_state(std::int32_t id, const core::Vec2& x, std::uint32_t epoch, double model_time, std::int64_t now_ns);
+  void on_status(std::int32_t id, int neighbours_heard, std::uint64_t samples_rejected);
+  void on_departed(std::int32_t id);
+
+  /// A new command is in force from now (its epoch's model clock starts at 0).
+  void set_command(const core::Command& cmd, std::uint32_t epoch, std::int64_t now_ns);
+  const std::optional<core::Command>& command() const { return command_; }
+  std::uint32_t epoch() const { return epoch_; }
+  /// The highest epoch any agent was seen following (a restarted supervisor continues after it).
+  std::uint32_t max_epoch_seen() const { return max_epoch_seen_; }
+
+  bool alive(const AgentView& a, std::int64_t now_ns) const;
+  int alive_count(std::int64_t now_ns) const;
+  /// Alive agents following the current epoch.
+  int following_count(std::int64_t now_ns) const;
+  const std::map<std::int32_t, AgentView>& agents() const { return agents_; }
+
+  /// Ids and positions of alive agents, ascending id.
+  std::vector<std::pair<std::int32_t, core::Vec2>> alive_positions(std::int64_t now_ns) const;
+
+  /// Computes the metrics of the alive agents at model time t, feeds the convergence detector and the
+  /// settling history. Converged needs every alive agent on the current epoch. No command: all null.
+  struct Sample {
+    double model_time = 0.0;
+    core::Metrics metrics;
+    bool converged = false;
+    int alive = 0;
+    int following = 0;
+  };
+  Sample update(double model_time, std::int64_t now_ns);
+  const std::optional<Sample>& last() const { return last_; }
+  bool converged() const { return detector_.converged(); }
+  /// Model time at which the current epoch settled (core::settle_index over this epoch's samples).
+  std::optional<double> settle_time(const core::SettleParams& p) const;
+
+  /// The console's `status` table: agent, alive, last seen, position, epoch followed, shape error.
+  std::string status_table(std::int64_t now_ns, double model_time) const;
+
+ private:
+  std::int64_t agent_timeout_ns_;
+  core::ConvergenceDetector detector_;
+  std::map<std::int32_t, AgentView> agents_;
+  std::optional<core::Command> command_;
+  std::uint32_t epoch_ = 0;
+  std::uint32_t max_epoch_seen_ = 0;
+  std::optional<Sample> last_;
+  std::vector<double> hist_t_, hist_err_;
+  std::vector<std::optional<double>> hist_gap_;
+};
+
+}  // namespace shapeform::supervisor

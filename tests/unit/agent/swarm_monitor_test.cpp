@@ -1,0 +1,67 @@
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "swarm_monitor.hpp"
+
+using namespace shapeform;
+using core::Vec2;
+using supervisor::SwarmMonitor;
+
+namespace {
+constexpr std::int64_t kS = 1'000'000'000;
+core::Command circle() {
+  core::Command c;
+  c.shape.kind = core::ShapeKind::Circle;
+  c.shape.r0 = 4;
+  return c;
+}
+void ring(SwarmMonitor& m, int n, double radius, std::uint32_t epoch, std::int64_t now) {
+  for (int i = 0; i < n; ++i) {
+    const double a = 2 * M_PI * i / n;
+    m.on_state(i, radius * Vec2(std::cos(a), std::sin(a)), epoch, 0.0, now);
+  }
+}
+}  // namespace
+
+TEST_CASE("alive, dead and departed agents", "[supervisor]") {
+  SwarmMonitor m(kS, {});
+  ring(m, 4, 4.0, 0, 0);
+  CHECK(m.alive_count(kS / 2) == 4);
+  m.on_departed(2);
+  CHECK(m.alive_count(kS / 2) == 3);
+  m.on_state(0, Vec2(4, 0), 0, 0, kS);
+  CHECK(m.alive_count(kS + kS / 2) == 1);  // the others unheard for 1.5 s
+  const std::string table = m.status_table(kS + kS / 2, 0);
+  CHECK(table.find("DEAD") != std::string::npos);
+  CHECK(table.find("left") != std::string::npos);
+}
+
+TEST_CASE("metrics with the core functions; converged only when every agent follows the epoch", "[supervisor]") {
+  core::ConvergenceDetector::Params p;
+  p.hold = 10;
+  SwarmMonitor m(kS, p);
+  ring(m, 12, 4.0, 0, 0);
+  auto s = m.update(0, 0);
+  CHECK_FALSE(s.metrics.shape_error_mean);  // no command yet
+  m.set_command(circle(), 1, 0);
+  for (int k = 0; k <= 20; ++k) {
+    ring(m, 12, 3.9, 0, k * 1000);  // still on epoch 0
+    s = m.update(k, k * 1000);
+    CHECK_FALSE(s.converged);
+  }
+  CHECK(*s.metrics.shape_error_mean == Approx(0.1));
+  for (int k = 21; k <= 40; ++k) {
+    ring(m, 12, 3.9, 1, k * 1000);
+    s = m.update(k, k * 1000);
+  }
+  CHECK(s.following == 12);
+  CHECK(s.converged);
+  REQUIRE(m.settle_time({}));
+  CHECK(*m.settle_time({}) == 21.0);
+}
+
+TEST_CASE("a restarted supervisor learns the newest epoch followed", "[supervisor]") {
+  SwarmMonitor m(kS, {});
+  ring(m, 3, 4.0, 7, 0);
+  CHECK(m.max_epoch_seen() == 7);
+}

@@ -1,0 +1,660 @@
+#include "config/config.hpp"
+
+#include <catch2/catch.hpp>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+using shapeform::config::Config;
+using shapeform::config::ConfigError;
+using shapeform::config::load;
+using shapeform::config::load_string;
+using shapeform::config::to_yaml;
+namespace core = shapeform::core;
+
+namespace {
+
+const std::string kSourceDir = SHAPEFORM_SOURCE_DIR;
+
+std::string scenario(const std::string& name) {
+  return kSourceDir + "/config/scenarios/" + name + ".yaml";
+}
+
+/// The problems load_string reports (fails the test when it does not throw).
+std::vector<std::string> problems_of(const std::string& text,
+                                     const std::vector<std::string>& overrides = {}) {
+  try {
+    load_string(text, overrides);
+  } catch (const ConfigError& e) {
+    return e.problems();
+  }
+  FAIL("expected a ConfigError for:\n" << text);
+  return {};
+}
+
+/// The single problem reported.
+std::string problem_of(const std::string& text, const std::vector<std::string>& overrides = {}) {
+  const auto p = problems_of(text, overrides);
+  REQUIRE(p.size() == 1);
+  return p[0];
+}
+
+std::vector<std::string> problems_of_load(const std::string& path,
+                                          const std::vector<std::string>& overrides = {}) {
+  try {
+    load(path, overrides);
+  } catch (const ConfigError& e) {
+    return e.problems();
+  }
+  FAIL("expected a ConfigError for " << path);
+  return {};
+}
+
+void require_vec(const core::Vec2& v, double x1, double x2) {
+  CHECK(v.x() == x1);
+  CHECK(v.y() == x2);
+}
+
+void require_equal(const Config& a, const Config& b) {
+  CHECK(a.schema_version == b.schema_version);
+  CHECK(a.name == b.name);
+  CHECK(a.swarm.agents == b.swarm.agents);
+  CHECK(a.swarm.seed == b.swarm.seed);
+  CHECK(a.swarm.init_half_width == b.swarm.init_half_width);
+  const auto& sa = a.command.shape;
+  const auto& sb = b.command.shape;
+  CHECK(sa.kind == sb.kind);
+  CHECK(sa.m == sb.m);
+  CHECK(sa.c == sb.c);
+  CHECK(sa.r0 == sb.r0);
+  CHECK(sa.a == sb.a);
+  CHECK(sa.b == sb.b);
+  CHECK(sa.centre == sb.centre);
+  const auto& ta = a.command.tracking;
+  const auto& tb = b.command.tracking;
+  CHECK(ta.enabled == tb.enabled);
+  CHECK(ta.feedforward == tb.feedforward);
+  CHECK(ta.path.kind == tb.path.kind);
+  CHECK(ta.path.point == tb.path.point);
+  CHECK(ta.path.velocity == tb.path.velocity);
+  CHECK(ta.path.origin == tb.path.origin);
+  CHECK(ta.path.radius == tb.path.radius);
+  CHECK(ta.path.period == tb.path.period);
+  CHECK(ta.path.phase == tb.path.phase);
+  const auto& ga = a.command.gains;
+  const auto& gb = b.command.gains;
+  CHECK(ga.k1 == gb.k1);
+  CHECK(ga.k2 == gb.k2);
+  CHECK(ga.sigma == gb.sigma);
+  CHECK(ga.beta == gb.beta);
+  CHECK(ga.r == gb.r);
+  CHECK(a.command.max_speed == b.command.max_speed);
+  CHECK(a.command.integrator == b.command.integrator);
+  CHECK(a.command.dt == b.command.dt);
+  CHECK(a.sim.steps == b.sim.steps);
+  CHECK(a.agent.rate_hz == b.agent.rate_hz);
+  CHECK(a.agent.neighbour_timeout_periods == b.agent.neighbour_timeout_periods);
+  CHECK(a.agent.status_rate_hz == b.agent.status_rate_hz);
+  CHECK(a.supervisor.metrics_rate_hz == b.supervisor.metrics_rate_hz);
+  CHECK(a.supervisor.target_rate_hz == b.supervisor.target_rate_hz);
+  CHECK(a.supervisor.agent_timeout_s == b.supervisor.agent_timeout_s);
+  CHECK(a.supervisor.flush_s == b.supervisor.flush_s);
+  CHECK(a.supervisor.converge.band_abs == b.supervisor.converge.band_abs);
+  CHECK(a.supervisor.converge.band_rel == b.supervisor.converge.band_rel);
+  CHECK(a.supervisor.converge.gap_cv_max == b.supervisor.converge.gap_cv_max);
+  CHECK(a.supervisor.converge.hold == b.supervisor.converge.hold);
+  CHECK(a.transport.profile == b.transport.profile);
+  CHECK(a.transport.domain == b.transport.domain);
+  CHECK(a.transport.max_participants == b.transport.max_participants);
+  CHECK(a.transport.interfaces == b.transport.interfaces);
+  CHECK(a.transport.peers == b.transport.peers);
+  CHECK(a.transport.discovery_server == b.transport.discovery_server);
+  CHECK(a.transport.lease_s == b.transport.lease_s);
+  CHECK(a.transport.announce_s == b.transport.announce_s);
+  CHECK(a.transport.socket_buffer_bytes == b.transport.socket_buffer_bytes);
+}
+
+/// The paper's dynamics and step, shared by every scenario.
+void require_paper_dynamics(const Config& c, double r = 0.1) {
+  CHECK(c.command.gains.k1 == 0.1);
+  CHECK(c.command.gains.k2 == 2.0);
+  CHECK(c.command.gains.sigma == 3.5);
+  CHECK(c.command.gains.beta == 1.2);
+  CHECK(c.command.gains.r == r);
+  CHECK(c.command.integrator == core::Integrator::Euler);
+  CHECK(c.command.dt == 1.0);
+}
+
+/// A file in the system's temporary folder, removed at the end of the test.
+struct TempFile {
+  explicit TempFile(const std::string& text) { std::ofstream(path) << text; }
+  ~TempFile() { std::remove(path.c_str()); }
+  std::string path =
+      (std::filesystem::temp_directory_path() / "shapeform_config_test_syntax.yaml").string();
+};
+
+}  // namespace
+
+// ----------------------------------------------------------------------------------------------
+// Defaults and scenario files
+
+TEST_CASE("no file gives the struct defaults and needs no schema_version") {
+  const Config c = load("");
+  require_equal(c, Config{});
+  CHECK(c.name == "circle");
+  CHECK(c.swarm.agents == 12);
+  CHECK(c.command.shape.kind == core::ShapeKind::Circle);
+  CHECK(c.command.shape.r0 == 4.0);
+  CHECK(c.transport.profile == "loopback");
+  CHECK(c.transport.discovery_server == "127.0.0.1:11811");
+}
+
+TEST_CASE("a file with only schema_version gives the defaults") {
+  require_equal(load_string("schema_version: 1\n"), Config{});
+}
+
+TEST_CASE("empty sections and empty lists keep their defaults") {
+  const Config c = load_string("schema_version: 1\nshape:\ntransport:\n  peers:\n");
+  require_equal(c, Config{});
+}
+
+TEST_CASE("config/default.yaml loads to exactly the defaults") {
+  require_equal(load(kSourceDir + "/config/default.yaml"), Config{});
+}
+
+TEST_CASE("scenario line.yaml") {
+  const Config c = load(scenario("line"));
+  CHECK(c.name == "line");
+  CHECK(c.swarm.agents == 12);
+  CHECK(c.command.shape.kind == core::ShapeKind::Line);
+  CHECK(c.command.shape.m == -1.0);
+  CHECK(c.command.shape.c == 5.0);
+  CHECK_FALSE(c.command.tracking.enabled);
+  CHECK(c.sim.steps == 500);
+  require_paper_dynamics(c);
+}
+
+TEST_CASE("scenario circle.yaml") {
+  const Config c = load(scenario("circle"));
+  CHECK(c.name == "circle");
+  CHECK(c.swarm.agents == 12);
+  CHECK(c.command.shape.kind == core::ShapeKind::Circle);
+  CHECK(c.command.shape.r0 == 4.0);
+  require_vec(c.command.shape.centre, 0.0, 0.0);
+  CHECK(c.sim.steps == 500);
+  require_paper_dynamics(c);
+}
+
+TEST_CASE("scenarios ellipse.yaml and ellipse_no_repulsion.yaml") {
+  for (const auto& [name, r] :
+       {std::pair{"ellipse", 0.1}, std::pair{"ellipse_no_repulsion", 0.0}}) {
+    INFO(name);
+    const Config c = load(scenario(name));
+    CHECK(c.name == name);
+    CHECK(c.swarm.agents == 12);
+    CHECK(c.command.shape.kind == core::ShapeKind::Ellipse);
+    CHECK(c.command.shape.a == 4.0);
+    CHECK(c.command.shape.b == 2.0);
+    CHECK(c.sim.steps == 500);
+    require_paper_dynamics(c, r);
+  }
+}
+
+TEST_CASE("scenarios square.yaml and square_no_repulsion.yaml") {
+  for (const auto& [name, r] : {std::pair{"square", 0.1}, std::pair{"square_no_repulsion", 0.0}}) {
+    INFO(name);
+    const Config c = load(scenario(name));
+    CHECK(c.name == name);
+    CHECK(c.swarm.agents == 12);
+    CHECK(c.command.shape.kind == core::ShapeKind::Square);
+    CHECK(c.command.shape.a == 5.0);
+    CHECK(c.sim.steps == 500);
+    require_paper_dynamics(c, r);
+  }
+}
+
+TEST_CASE("scenario track_line.yaml") {
+  const Config c = load(scenario("track_line"));
+  CHECK(c.name == "track_line");
+  CHECK(c.swarm.agents == 10);
+  CHECK(c.command.shape.kind == core::ShapeKind::Circle);
+  CHECK(c.command.shape.r0 == 2.0);
+  CHECK(c.command.tracking.enabled);
+  CHECK(c.command.tracking.path.kind == core::CentrePath::Kind::Line);
+  require_vec(c.command.tracking.path.point, -10.0, -10.0);
+  require_vec(c.command.tracking.path.velocity, 0.1, 0.1);
+  CHECK(c.sim.steps == 200);
+  require_paper_dynamics(c);
+}
+
+TEST_CASE("scenario track_circle.yaml") {
+  const Config c = load(scenario("track_circle"));
+  CHECK(c.name == "track_circle");
+  CHECK(c.swarm.agents == 10);
+  CHECK(c.command.shape.kind == core::ShapeKind::Circle);
+  CHECK(c.command.shape.r0 == 2.0);
+  CHECK(c.command.tracking.enabled);
+  const auto& p = c.command.tracking.path;
+  CHECK(p.kind == core::CentrePath::Kind::Circle);
+  require_vec(p.origin, 0.0, 0.0);
+  CHECK(p.radius == 6.0);
+  CHECK(p.period == 200.0);
+  CHECK(p.phase == 0.0);
+  CHECK(c.sim.steps == 200);
+  require_paper_dynamics(c);
+}
+
+TEST_CASE("every key is read") {
+  const Config c = load_string(R"(schema_version: 1
+name: everything
+swarm: {agents: 7, seed: 18446744073709551615, init_half_width: 2.5}
+shape: {kind: ellipse, m: 0.5, c: -2, r0: 3, a: 6, b: 1.5, centre: [1, -2]}
+tracking: {enabled: true, path: circle, point: [1, 2], velocity: [3, 4], origin: [5, 6],
+           radius: 0, period: 10, phase: -1.5, feedforward: true}
+dynamics: {k1: 0, k2: 1, sigma: 0.5, beta: 0, r: 0.25, max_speed: 2}
+integration: {integrator: rk4, dt: 0.5}
+sim: {steps: 0}
+agent: {rate_hz: 1000, neighbour_timeout_periods: 1, status_rate_hz: 0.5}
+supervisor: {metrics_rate_hz: 5, target_rate_hz: 20, agent_timeout_s: 0.5, flush_s: 2,
+             converge: {band_abs: 0, band_rel: 0, gap_cv_max: 0.3, hold: 0}}
+transport: {profile: lan, domain: 232, max_participants: 230, interfaces: [192.168.1.2],
+            peers: [192.168.1.3, 192.168.1.4], discovery_server: "server.local:1",
+            lease_s: 10, announce_s: 9.5, socket_buffer_bytes: 2147483647}
+)");
+  CHECK(c.name == "everything");
+  CHECK(c.swarm.agents == 7);
+  CHECK(c.swarm.seed == UINT64_MAX);
+  CHECK(c.swarm.init_half_width == 2.5);
+  CHECK(c.command.shape.kind == core::ShapeKind::Ellipse);
+  CHECK(c.command.shape.m == 0.5);
+  CHECK(c.command.shape.c == -2.0);
+  CHECK(c.command.shape.r0 == 3.0);
+  CHECK(c.command.shape.a == 6.0);
+  CHECK(c.command.shape.b == 1.5);
+  require_vec(c.command.shape.centre, 1.0, -2.0);
+  const auto& t = c.command.tracking;
+  CHECK(t.enabled);
+  CHECK(t.feedforward);
+  CHECK(t.path.kind == core::CentrePath::Kind::Circle);
+  require_vec(t.path.point, 1.0, 2.0);
+  require_vec(t.path.velocity, 3.0, 4.0);
+  require_vec(t.path.origin, 5.0, 6.0);
+  CHECK(t.path.radius == 0.0);
+  CHECK(t.path.period == 10.0);
+  CHECK(t.path.phase == -1.5);
+  CHECK(c.command.gains.k1 == 0.0);
+  CHECK(c.command.gains.k2 == 1.0);
+  CHECK(c.command.gains.sigma == 0.5);
+  CHECK(c.command.gains.beta == 0.0);
+  CHECK(c.command.gains.r == 0.25);
+  CHECK(c.command.max_speed == 2.0);
+  CHECK(c.command.integrator == core::Integrator::RK4);
+  CHECK(c.command.dt == 0.5);
+  CHECK(c.sim.steps == 0);
+  CHECK(c.agent.rate_hz == 1000.0);
+  CHECK(c.agent.neighbour_timeout_periods == 1.0);
+  CHECK(c.agent.status_rate_hz == 0.5);
+  CHECK(c.supervisor.metrics_rate_hz == 5.0);
+  CHECK(c.supervisor.target_rate_hz == 20.0);
+  CHECK(c.supervisor.agent_timeout_s == 0.5);
+  CHECK(c.supervisor.flush_s == 2.0);
+  CHECK(c.supervisor.converge.band_abs == 0.0);
+  CHECK(c.supervisor.converge.band_rel == 0.0);
+  CHECK(c.supervisor.converge.gap_cv_max == 0.3);
+  CHECK(c.supervisor.converge.hold == 0.0);
+  CHECK(c.transport.profile == "lan");
+  CHECK(c.transport.domain == 232);
+  CHECK(c.transport.max_participants == 230);
+  CHECK(c.transport.interfaces == std::vector<std::string>{"192.168.1.2"});
+  CHECK(c.transport.peers == std::vector<std::string>{"192.168.1.3", "192.168.1.4"});
+  CHECK(c.transport.discovery_server == "server.local:1");
+  CHECK(c.transport.lease_s == 10.0);
+  CHECK(c.transport.announce_s == 9.5);
+  CHECK(c.transport.socket_buffer_bytes == 2147483647);
+}
+
+// ----------------------------------------------------------------------------------------------
+// Problems, one kind at a time
+
+TEST_CASE("unknown keys are reported with their line at every level") {
+  CHECK(problem_of("schema_version: 1\nshape:\n  kind: circle\n  radius: 3\n") ==
+        "shape.radius: unknown key (line 4)");
+  CHECK(problem_of("schema_version: 1\ncontrol: {sigma: 1}\n") == "control: unknown key (line 2)");
+  CHECK(problem_of("schema_version: 1\nsupervisor:\n  converge:\n    holdd: 3\n") ==
+        "supervisor.converge.holdd: unknown key (line 4)");
+}
+
+TEST_CASE("duplicate keys are reported") {
+  CHECK(problem_of("schema_version: 1\nsim:\n  steps: 5\n  steps: 6\n") ==
+        "sim.steps: duplicate key (line 4)");
+}
+
+TEST_CASE("wrong types are reported") {
+  CHECK(problem_of("schema_version: 1\nswarm:\n  agents: many\n") ==
+        "swarm.agents: expected an integer, got \"many\" (line 3)");
+  CHECK(problem_of("schema_version: 1\nswarm:\n  agents: 3.5\n") ==
+        "swarm.agents: expected an integer, got 3.5 (line 3)");
+  CHECK(problem_of("schema_version: 1\nsim: {steps: 1e3}\n") ==
+        "sim.steps: expected an integer, got 1e3 (line 2)");
+  CHECK(problem_of("schema_version: 1\ndynamics:\n  sigma: big\n") ==
+        "dynamics.sigma: expected a number, got \"big\" (line 3)");
+  CHECK(problem_of("schema_version: 1\ndynamics:\n  sigma: \"3.5\"\n") ==
+        "dynamics.sigma: expected a number, got \"3.5\" (line 3)");
+  CHECK(problem_of("schema_version: 1\ndynamics:\n  sigma: [1, 2]\n") ==
+        "dynamics.sigma: expected a number, got a list (line 3)");
+  CHECK(problem_of("schema_version: 1\ndynamics:\n  sigma:\n") ==
+        "dynamics.sigma: expected a number, got null (line 3)");
+  CHECK(problem_of("schema_version: 1\nshape:\n  centre: {x: 1, y: 2}\n") ==
+        "shape.centre: expected a list of 2 numbers [x1, x2], got a map (line 3)");
+  CHECK(problem_of("schema_version: 1\nshape:\n  centre: [1, 2, 3]\n") ==
+        "shape.centre: expected a list of 2 numbers [x1, x2], got a list of 3 (line 3)");
+  CHECK(problem_of("schema_version: 1\nshape:\n  centre: [1, x]\n") ==
+        "shape.centre[1]: expected a number, got \"x\" (line 3)");
+  CHECK(problem_of("schema_version: 1\ntracking: {enabled: yes}\n") ==
+        "tracking.enabled: expected true or false, got \"yes\" (line 2)");
+  CHECK(problem_of("schema_version: 1\nshape: 5\n") == "shape: expected a map, got 5 (line 2)");
+  CHECK(problem_of("schema_version: 1\nname: [a, b]\n") ==
+        "name: expected a string, got a list (line 2)");
+  CHECK(problem_of("schema_version: 1\ntransport:\n  peers: 10.0.0.1\n") ==
+        "transport.peers: expected a list of strings, got \"10.0.0.1\" (line 3)");
+  CHECK(problem_of("schema_version: 1\ntransport:\n  peers:\n    - 10.0.0.1\n    - {a: 1}\n") ==
+        "transport.peers[1]: expected a string, got a map (line 5)");
+}
+
+TEST_CASE("unknown names are reported with the allowed ones") {
+  CHECK(problem_of("schema_version: 1\nshape:\n  kind: hexagon\n") ==
+        "shape.kind: must be one of line, circle, ellipse, square, got \"hexagon\" (line 3)");
+  CHECK(problem_of("schema_version: 1\ntracking:\n  path: spiral\n") ==
+        "tracking.path: must be one of fixed, line, circle, got \"spiral\" (line 3)");
+  CHECK(problem_of("schema_version: 1\nintegration:\n  integrator: rk45\n") ==
+        "integration.integrator: must be one of euler, rk4, got \"rk45\" (line 3)");
+  CHECK(problem_of("schema_version: 1\ntransport:\n  profile: wan\n") ==
+        "transport.profile: must be one of loopback, lan, discovery-server, got \"wan\" (line 3)");
+}
+
+TEST_CASE("out-of-range values are reported with the range") {
+  const auto one = [](const std::string& section, const std::string& key, const std::string& v) {
+    return problem_of("schema_version: 1\n" + section + ":\n  " + key + ": " + v + "\n");
+  };
+  CHECK(one("dynamics", "sigma", "-1") == "dynamics.sigma: must be > 0, got -1 (line 3)");
+  CHECK(one("dynamics", "sigma", "0") == "dynamics.sigma: must be > 0, got 0 (line 3)");
+  CHECK(one("dynamics", "beta", "-0.1") == "dynamics.beta: must be >= 0, got -0.1 (line 3)");
+  CHECK(one("dynamics", "r", "-1") == "dynamics.r: must be >= 0, got -1 (line 3)");
+  CHECK(one("dynamics", "k1", "-1") == "dynamics.k1: must be >= 0, got -1 (line 3)");
+  CHECK(one("dynamics", "max_speed", "-2") == "dynamics.max_speed: must be >= 0, got -2 (line 3)");
+  CHECK(one("swarm", "agents", "0") == "swarm.agents: must be in 1..1000, got 0 (line 3)");
+  CHECK(one("swarm", "agents", "1001") == "swarm.agents: must be in 1..1000, got 1001 (line 3)");
+  CHECK(one("swarm", "agents", "99999999999999999999") ==
+        "swarm.agents: must be in 1..1000, got 99999999999999999999 (line 3)");
+  CHECK(one("swarm", "seed", "-1") == "swarm.seed: must be >= 0, got -1 (line 3)");
+  CHECK(one("swarm", "init_half_width", "0") ==
+        "swarm.init_half_width: must be > 0, got 0 (line 3)");
+  CHECK(one("shape", "r0", "0") == "shape.r0: must be > 0, got 0 (line 3)");
+  CHECK(one("shape", "b", "-2") == "shape.b: must be > 0, got -2 (line 3)");
+  CHECK(one("tracking", "radius", "-1") == "tracking.radius: must be >= 0, got -1 (line 3)");
+  CHECK(one("tracking", "period", "0") == "tracking.period: must be > 0, got 0 (line 3)");
+  CHECK(one("integration", "dt", "0") == "integration.dt: must be in (0, 10], got 0 (line 3)");
+  CHECK(one("integration", "dt", "10.5") ==
+        "integration.dt: must be in (0, 10], got 10.5 (line 3)");
+  CHECK(one("sim", "steps", "-1") == "sim.steps: must be in 0..10000000, got -1 (line 3)");
+  CHECK(one("sim", "steps", "10000001") ==
+        "sim.steps: must be in 0..10000000, got 10000001 (line 3)");
+  CHECK(one("agent", "rate_hz", "0") == "agent.rate_hz: must be in (0, 1000], got 0 (line 3)");
+  CHECK(one("agent", "rate_hz", "1001") ==
+        "agent.rate_hz: must be in (0, 1000], got 1001 (line 3)");
+  CHECK(one("agent", "neighbour_timeout_periods", "0.5") ==
+        "agent.neighbour_timeout_periods: must be >= 1, got 0.5 (line 3)");
+  CHECK(one("agent", "status_rate_hz", "0") == "agent.status_rate_hz: must be > 0, got 0 (line 3)");
+  CHECK(one("supervisor", "metrics_rate_hz", "-10") ==
+        "supervisor.metrics_rate_hz: must be > 0, got -10 (line 3)");
+  CHECK(one("supervisor", "agent_timeout_s", "0") ==
+        "supervisor.agent_timeout_s: must be > 0, got 0 (line 3)");
+  CHECK(one("supervisor", "flush_s", "0") == "supervisor.flush_s: must be > 0, got 0 (line 3)");
+  CHECK(one("transport", "domain", "233") ==
+        "transport.domain: must be in 0..232, got 233 (line 3)");
+  CHECK(one("transport", "max_participants", "0") ==
+        "transport.max_participants: must be in 1..230, got 0 (line 3)");
+  CHECK(one("transport", "lease_s", "0") == "transport.lease_s: must be > 0, got 0 (line 3)");
+  CHECK(one("transport", "socket_buffer_bytes", "-1") ==
+        "transport.socket_buffer_bytes: must be in 0..2147483647, got -1 (line 3)");
+  CHECK(problem_of("schema_version: 1\nsupervisor:\n  converge:\n    gap_cv_max: 0\n") ==
+        "supervisor.converge.gap_cv_max: must be > 0, got 0 (line 4)");
+  CHECK(problem_of("schema_version: 1\nsupervisor:\n  converge:\n    hold: -1\n") ==
+        "supervisor.converge.hold: must be >= 0, got -1 (line 4)");
+}
+
+TEST_CASE("announce_s must be below lease_s") {
+  CHECK(problem_of("schema_version: 1\ntransport:\n  lease_s: 1\n  announce_s: 1\n") ==
+        "transport.announce_s: must be < transport.lease_s (1), got 1 (line 4)");
+  CHECK(problem_of("schema_version: 1\ntransport:\n  lease_s: 0.25\n") ==
+        "transport.lease_s: must be > transport.announce_s (0.5), got 0.25 (line 3)");
+}
+
+TEST_CASE("discovery_server must be host and port") {
+  for (const std::string bad :
+       {"localhost", ":11811", "host:0", "host:65536", "host:port", "host:"}) {
+    INFO(bad);
+    CHECK(problem_of("schema_version: 1\ntransport: {discovery_server: \"" + bad + "\"}\n") ==
+          "transport.discovery_server: must be host:port with port 1..65535, got \"" + bad +
+              "\" (line 2)");
+  }
+  CHECK(load_string("schema_version: 1\ntransport: {discovery_server: \"10.1.2.3:65535\"}\n")
+            .transport.discovery_server == "10.1.2.3:65535");
+}
+
+TEST_CASE("non-finite numbers are rejected") {
+  CHECK(problem_of("schema_version: 1\ndynamics:\n  k1: .nan\n") ==
+        "dynamics.k1: must be finite, got .nan (line 3)");
+  CHECK(problem_of("schema_version: 1\nshape:\n  m: .inf\n") ==
+        "shape.m: must be finite, got .inf (line 3)");
+  CHECK(problem_of("schema_version: 1\nshape:\n  c: -.inf\n") ==
+        "shape.c: must be finite, got -.inf (line 3)");
+  CHECK(problem_of("schema_version: 1\ntracking:\n  phase: 1e999\n") ==
+        "tracking.phase: must be finite, got 1e999 (line 3)");
+  CHECK(problem_of("schema_version: 1\ntracking:\n  point: [0, .NaN]\n") ==
+        "tracking.point[1]: must be finite, got .NaN (line 3)");
+}
+
+TEST_CASE("schema_version is required in a file and must be 1") {
+  CHECK(problem_of("name: x\n") == "schema_version: missing (required, must be 1)");
+  CHECK(problem_of("") == "schema_version: missing (required, must be 1)");
+  CHECK(problem_of("schema_version: 2\n") == "schema_version: must be 1, got 2 (line 1)");
+  CHECK(problem_of("name: x\nschema_version: one\n") ==
+        "schema_version: expected an integer, got \"one\" (line 2)");
+}
+
+TEST_CASE("a missing or unreadable file is reported") {
+  const auto missing = problems_of_load("/nonexistent/shapeform.yaml");
+  REQUIRE(missing.size() == 1);
+  CHECK(missing[0] == "config file '/nonexistent/shapeform.yaml': cannot open");
+  const auto dir = problems_of_load(kSourceDir + "/config");
+  REQUIRE(dir.size() == 1);
+  CHECK(dir[0] == "config file '" + kSourceDir + "/config': cannot open");
+}
+
+TEST_CASE("a YAML syntax error is reported with its line") {
+  const TempFile f("schema_version: 1\nshape:\n  centre: [1, 2\nsim: {steps: 3}\n");
+  const auto p = problems_of_load(f.path);
+  REQUIRE(p.size() == 1);
+  CHECK(p[0] == "config file '" + f.path +
+                    "': YAML syntax error at line 4: end of sequence flow not found");
+}
+
+TEST_CASE("the top level must be a map") {
+  CHECK(problem_of("- 1\n- 2\n") ==
+        "config file '<string>': top level must be a map, got a list (line 1)");
+}
+
+TEST_CASE("every problem is collected and not only the first") {
+  const std::string text = R"(schema_version: 1
+swarm:
+  agents: many
+  colour: red
+dynamics:
+  sigma: -1
+  beta: .nan
+shape: {kind: blob, centre: [1]}
+transport: {domain: 300}
+)";
+  const std::vector<std::string> expected = {
+      "swarm.colour: unknown key (line 4)",
+      "swarm.agents: expected an integer, got \"many\" (line 3)",
+      "shape.kind: must be one of line, circle, ellipse, square, got \"blob\" (line 8)",
+      "shape.centre: expected a list of 2 numbers [x1, x2], got a list of 1 (line 8)",
+      "dynamics.sigma: must be > 0, got -1 (line 6)",
+      "dynamics.beta: must be finite, got .nan (line 7)",
+      "transport.domain: must be in 0..232, got 300 (line 9)",
+  };
+  CHECK(problems_of(text) == expected);
+  try {
+    load_string(text);
+  } catch (const ConfigError& e) {
+    std::string joined;
+    for (const auto& p : expected) joined += (joined.empty() ? "" : "\n") + p;
+    CHECK(std::string(e.what()) == joined);
+  }
+}
+
+// ----------------------------------------------------------------------------------------------
+// --set overrides
+
+TEST_CASE("overrides replace file values and lists in order") {
+  const Config c =
+      load(scenario("ellipse"), {"dynamics.r=0", "shape.centre=[1, -2]", "shape.kind=square",
+                                 "shape.a=3", "shape.a=6", "transport.peers=[10.0.0.2, 10.0.0.3]"});
+  CHECK(c.command.gains.r == 0.0);
+  require_vec(c.command.shape.centre, 1.0, -2.0);
+  CHECK(c.command.shape.kind == core::ShapeKind::Square);
+  CHECK(c.command.shape.a == 6.0);
+  CHECK(c.transport.peers == std::vector<std::string>{"10.0.0.2", "10.0.0.3"});
+  CHECK(c.command.gains.sigma == 3.5);  // untouched keys keep the file's values
+  CHECK(c.name == "ellipse");
+}
+
+TEST_CASE("overrides work without a file and create missing sections") {
+  const Config c = load("", {"tracking.enabled=true", "supervisor.converge.hold=20", "name=run 7"});
+  CHECK(c.command.tracking.enabled);
+  CHECK(c.supervisor.converge.hold == 20.0);
+  CHECK(c.name == "run 7");
+  CHECK(load("", {"schema_version=1"}).schema_version == 1);
+}
+
+TEST_CASE("an override may replace a whole section") {
+  const Config c =
+      load_string("schema_version: 1\nswarm: {agents: 5, seed: 9}\n", {"swarm={agents: 3}"});
+  CHECK(c.swarm.agents == 3);
+  CHECK(c.swarm.seed == 1);
+}
+
+TEST_CASE("an override fills a section left empty in the file") {
+  CHECK(load_string("schema_version: 1\nshape:\n", {"shape.r0=2"}).command.shape.r0 == 2.0);
+}
+
+TEST_CASE("malformed overrides are reported") {
+  CHECK(problem_of("schema_version: 1\n", {"shape.radius=3"}) ==
+        "--set shape.radius=3: unknown key shape.radius");
+  CHECK(problem_of("schema_version: 1\n", {"shape.kind"}) ==
+        "--set shape.kind: expected dotted.key=value");
+  CHECK(problem_of("schema_version: 1\n", {"=3"}) == "--set =3: expected dotted.key=value");
+  CHECK(problem_of("schema_version: 1\n", {"nosuch=1"}) == "--set nosuch=1: unknown key nosuch");
+  CHECK(problem_of("schema_version: 1\n", {"shape.centre.x=1"}) ==
+        "--set shape.centre.x=1: unknown key shape.centre.x");
+  CHECK(problem_of("schema_version: 1\n", {"shape.centre=[1, 2"}) ==
+        "--set shape.centre=[1, 2: YAML syntax error: end of sequence flow not found");
+}
+
+TEST_CASE("a bad override value is marked --set instead of a line") {
+  CHECK(problem_of("schema_version: 1\ndynamics:\n  sigma: 3.5\n", {"dynamics.sigma=-1"}) ==
+        "dynamics.sigma: must be > 0, got -1 (--set)");
+  CHECK(problem_of("schema_version: 1\n", {"shape.centre=[1]"}) ==
+        "shape.centre: expected a list of 2 numbers [x1, x2], got a list of 1 (--set)");
+  CHECK(problem_of("schema_version: 1\n", {"swarm={agents: 0}"}) ==
+        "swarm.agents: must be in 1..1000, got 0 (--set)");
+  const auto p = problems_of_load("", {"swarm.agents=many", "schema_version=2"});
+  CHECK(p == std::vector<std::string>{"schema_version: must be 1, got 2 (--set)",
+                                      "swarm.agents: expected an integer, got \"many\" (--set)"});
+}
+
+TEST_CASE("override problems and file problems are reported together") {
+  const auto p = problems_of("schema_version: 1\nshape:\n  r0: -4\n", {"bad", "dynamics.r=-1"});
+  CHECK(p == std::vector<std::string>{"--set bad: expected dotted.key=value",
+                                      "shape.r0: must be > 0, got -4 (line 3)",
+                                      "dynamics.r: must be >= 0, got -1 (--set)"});
+}
+
+TEST_CASE("an override does not write through a YAML alias") {
+  const Config c = load_string("schema_version: 1\ntracking:\n  point: &p [1, 1]\n  origin: *p\n",
+                               {"tracking.point=[2, 2]"});
+  require_vec(c.command.tracking.path.point, 2.0, 2.0);
+  require_vec(c.command.tracking.path.origin, 1.0, 1.0);
+}
+
+// ----------------------------------------------------------------------------------------------
+// to_yaml
+
+TEST_CASE("to_yaml of the defaults loads back to the defaults") {
+  require_equal(load_string(to_yaml(Config{})), Config{});
+}
+
+TEST_CASE("to_yaml round-trips every field") {
+  Config c;
+  c.name = "true";  // would read back as a boolean if not quoted
+  c.swarm.agents = 999;
+  c.swarm.seed = 12345678901234567890ULL;
+  c.swarm.init_half_width = 0.1 + 0.2;  // not a short decimal: needs every digit
+  c.command.shape.kind = core::ShapeKind::Line;
+  c.command.shape.m = -1.0 / 3.0;
+  c.command.shape.c = 1e-300;
+  c.command.shape.r0 = 1e20;
+  c.command.shape.a = 7;
+  c.command.shape.b = 0.7;
+  c.command.shape.centre = core::Vec2(-1.5, 2.25);
+  c.command.tracking.enabled = true;
+  c.command.tracking.feedforward = true;
+  c.command.tracking.path.kind = core::CentrePath::Kind::Line;
+  c.command.tracking.path.point = core::Vec2(-10, -10);
+  c.command.tracking.path.velocity = core::Vec2(0.1, 0.1);
+  c.command.tracking.path.origin = core::Vec2(3, 4);
+  c.command.tracking.path.radius = 0;
+  c.command.tracking.path.period = 123.456;
+  c.command.tracking.path.phase = 3.141592653589793;
+  c.command.gains = {0.01, 3.0, 1.25, 0.0, 0.0};
+  c.command.integrator = core::Integrator::RK4;
+  c.command.dt = 0.05;
+  c.command.max_speed = 1.5;
+  c.sim.steps = 10000000;
+  c.agent = {200.0, 2.5, 4.0};
+  c.supervisor.metrics_rate_hz = 25;
+  c.supervisor.target_rate_hz = 100;
+  c.supervisor.agent_timeout_s = 2.5;
+  c.supervisor.flush_s = 0.25;
+  c.supervisor.converge = {0.5, 0.25, 0.2, 12.5};
+  c.transport.profile = "discovery-server";
+  c.transport.domain = 17;
+  c.transport.max_participants = 4;
+  c.transport.interfaces = {"127.0.0.1", "10.0.0.1"};
+  c.transport.peers = {"host-a", "null", "1.5"};
+  c.transport.discovery_server = "ds.example:7400";
+  c.transport.lease_s = 5;
+  c.transport.announce_s = 1;
+  c.transport.socket_buffer_bytes = 1 << 20;
+
+  const std::string text = to_yaml(c);
+  INFO(text);
+  const Config back = load_string(text);
+  require_equal(back, c);
+  CHECK(to_yaml(back) == text);
+}
+
+TEST_CASE("to_yaml writes the documented schema") {
+  const std::string text = to_yaml(load(scenario("track_line")));
+  CHECK(text.rfind("schema_version: 1\nname: track_line\n", 0) == 0);
+  CHECK(text.find("  centre: [0.0, 0.0]\n") != std::string::npos);
+  CHECK(text.find("  point: [-10.0, -10.0]\n") != std::string::npos);
+  CHECK(text.find("  r: 0.1\n") != std::string::npos);
+  CHECK(text.find("  interfaces: []\n") != std::string::npos);
+  CHECK(text.find("  discovery_server: 127.0.0.1:11811\n") != std::string::npos);
+}

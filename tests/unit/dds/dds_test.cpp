@@ -1,0 +1,653 @@
+// Unit tests of common/dds: conversions, validation, the transport profiles' QoS, the topic table, and
+// an in-process loopback pub/sub between two nodes (each test case on its own DDS domain).
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <set>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastrtps/utils/IPLocator.h>
+#include <fastrtps/xmlparser/XMLProfileManager.h>
+
+#include "dds/convert.hpp"
+#include "dds/node.hpp"
+#include "dds/participant.hpp"
+#include "dds/topics.hpp"
+
+// Everything lives in namespace shapeform: Fast DDS's Topic.hpp declares a global ::dds namespace, so
+// `using namespace shapeform; dds::...` would be ambiguous.
+namespace shapeform {
+namespace fdds = eprosima::fastdds::dds;
+namespace frtps = eprosima::fastrtps::rtps;
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+/// A domain of its own for each pub/sub test case and each test process (ctest may run the cases as
+/// parallel processes): 150 + 4 * (pid % 20) + offset, offset 0..3, always within 150..229.
+int test_domain(int offset) { return 150 + 4 * static_cast<int>(::getpid() % 20) + offset; }
+
+/// Fast DDS short-cuts endpoints of one process (intraprocess delivery). Switch that off so the
+/// pub/sub tests really go through the loopback UDP transport the profile builds.
+void force_transport() {
+  eprosima::fastrtps::LibrarySettingsAttributes settings;
+  settings.intraprocess_delivery = eprosima::fastrtps::INTRAPROCESS_OFF;
+  eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings(settings);
+}
+
+config::TransportConfig loopback(int domain) {
+  force_transport();
+  config::TransportConfig t;
+  t.profile = "loopback";
+  t.domain = domain;
+  t.max_participants = 16;
+  return t;
+}
+
+/// Polls pred until true or timeout_s passes; returns the last verdict.
+template <class Pred>
+bool wait_for(Pred pred, double timeout_s = 10.0) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  while (std::chrono::steady_clock::now() < end) {
+    if (pred()) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return pred();
+}
+
+core::Command sample_command() {
+  core::Command c;
+  c.shape.kind = core::ShapeKind::Ellipse;
+  c.shape.m = -0.5;
+  c.shape.c = 1.25;
+  c.shape.r0 = 3.5;
+  c.shape.a = 6.0;
+  c.shape.b = 2.5;
+  c.shape.centre = core::Vec2(1.0, -2.0);
+  c.tracking.enabled = true;
+  c.tracking.path.kind = core::CentrePath::Kind::Circle;
+  c.tracking.path.point = core::Vec2(0.5, 0.25);
+  c.tracking.path.velocity = core::Vec2(0.01, -0.02);
+  c.tracking.path.origin = core::Vec2(-1.0, 3.0);
+  c.tracking.path.radius = 7.0;
+  c.tracking.path.period = 150.0;
+  c.tracking.path.phase = 0.75;
+  c.tracking.feedforward = true;
+  c.gains.k1 = 0.2;
+  c.gains.k2 = 1.5;
+  c.gains.sigma = 2.5;
+  c.gains.beta = 1.1;
+  c.gains.r = 0.05;
+  c.integrator = core::Integrator::RK4;
+  c.dt = 0.5;
+  c.max_speed = 3.0;
+  return c;
+}
+
+void require_same(const core::Command& a, const core::Command& b) {
+  CHECK(a.shape.kind == b.shape.kind);
+  CHECK(a.shape.m == b.shape.m);
+  CHECK(a.shape.c == b.shape.c);
+  CHECK(a.shape.r0 == b.shape.r0);
+  CHECK(a.shape.a == b.shape.a);
+  CHECK(a.shape.b == b.shape.b);
+  CHECK(a.shape.centre == b.shape.centre);
+  CHECK(a.tracking.enabled == b.tracking.enabled);
+  CHECK(a.tracking.path.kind == b.tracking.path.kind);
+  CHECK(a.tracking.path.point == b.tracking.path.point);
+  CHECK(a.tracking.path.velocity == b.tracking.path.velocity);
+  CHECK(a.tracking.path.origin == b.tracking.path.origin);
+  CHECK(a.tracking.path.radius == b.tracking.path.radius);
+  CHECK(a.tracking.path.period == b.tracking.path.period);
+  CHECK(a.tracking.path.phase == b.tracking.path.phase);
+  CHECK(a.tracking.feedforward == b.tracking.feedforward);
+  CHECK(a.gains.k1 == b.gains.k1);
+  CHECK(a.gains.k2 == b.gains.k2);
+  CHECK(a.gains.sigma == b.gains.sigma);
+  CHECK(a.gains.beta == b.gains.beta);
+  CHECK(a.gains.r == b.gains.r);
+  CHECK(a.integrator == b.integrator);
+  CHECK(a.dt == b.dt);
+  CHECK(a.max_speed == b.max_speed);
+}
+
+/// from_msg of a valid command with one mutation; returns the error ("" when accepted).
+template <class Mutate>
+std::string reject(Mutate mutate) {
+  msg::ShapeCommand m = dds::to_msg(sample_command(), 1);
+  mutate(m);
+  core::Command out;
+  out.dt = 123.0;  // sentinel: must stay untouched on failure
+  std::string error;
+  const bool ok = dds::from_msg(m, out, error);
+  if (!ok) CHECK(out.dt == 123.0);
+  return ok ? std::string() : error;
+}
+
+msg::AgentState good_state() {
+  msg::AgentState s;
+  s.id(3);
+  s.seq(10);
+  s.stamp_ns(123456789);
+  s.epoch(2);
+  s.model_time(42.0);
+  s.x(1.5);
+  s.y(-2.5);
+  s.vx(0.1);
+  s.vy(-0.2);
+  return s;
+}
+
+std::string state_problem(const msg::AgentState& s) {
+  std::string why;
+  return dds::valid_state(s, why) ? std::string() : why;
+}
+
+std::shared_ptr<eprosima::fastdds::rtps::UDPv4TransportDescriptor> only_udp(const fdds::DomainParticipantQos& q) {
+  REQUIRE(q.transport().user_transports.size() == 1);
+  auto udp = std::dynamic_pointer_cast<eprosima::fastdds::rtps::UDPv4TransportDescriptor>(
+      q.transport().user_transports.front());
+  REQUIRE(udp != nullptr);
+  return udp;
+}
+
+bool is_loopback_locator(const frtps::Locator_t& l) {
+  return l.kind == LOCATOR_KIND_UDPv4 && frtps::IPLocator::toIPv4string(l) == "127.0.0.1";
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------------
+// Conversions and validation
+
+TEST_CASE("ShapeCommand round trip keeps every field", "[dds][convert]") {
+  const core::Command in = sample_command();
+  const msg::ShapeCommand m = dds::to_msg(in, 7);
+  CHECK(m.epoch() == 7u);
+  CHECK(m.shape_kind() == "ellipse");
+  CHECK(m.path_kind() == "circle");
+  CHECK(m.integrator() == "rk4");
+  CHECK(m.law() == "paper");
+
+  core::Command out;
+  std::string error;
+  REQUIRE(dds::from_msg(m, out, error));
+  CHECK(error.empty());
+  require_same(in, out);
+
+  SECTION("every shape, path and integrator name survives") {
+    for (auto kind : {core::ShapeKind::Line, core::ShapeKind::Circle, core::ShapeKind::Ellipse,
+                      core::ShapeKind::Square}) {
+      for (auto path : {core::CentrePath::Kind::Fixed, core::CentrePath::Kind::Line,
+                        core::CentrePath::Kind::Circle}) {
+        for (auto integ : {core::Integrator::Euler, core::Integrator::RK4}) {
+          core::Command c = in;
+          c.shape.kind = kind;
+          c.tracking.path.kind = path;
+          c.integrator = integ;
+          core::Command back;
+          REQUIRE(dds::from_msg(dds::to_msg(c, 1), back, error));
+          CHECK(back.shape.kind == kind);
+          CHECK(back.tracking.path.kind == path);
+          CHECK(back.integrator == integ);
+        }
+      }
+    }
+  }
+  SECTION("the default command is accepted") {
+    core::Command back;
+    REQUIRE(dds::from_msg(dds::to_msg(core::Command{}, 1), back, error));
+    require_same(core::Command{}, back);
+  }
+}
+
+TEST_CASE("ShapeCommand rejections name the field", "[dds][convert]") {
+  using M = msg::ShapeCommand;
+  // Non-positive where > 0 is required.
+  CHECK(reject([](M& m) { m.sigma(-1); }) == "command.sigma: must be > 0, got -1");
+  CHECK(reject([](M& m) { m.r0(0); }) == "command.r0: must be > 0, got 0");
+  CHECK(reject([](M& m) { m.a(-2); }) == "command.a: must be > 0, got -2");
+  CHECK(reject([](M& m) { m.b(0); }) == "command.b: must be > 0, got 0");
+  CHECK(reject([](M& m) { m.dt(0); }) == "command.dt: must be > 0, got 0");
+  CHECK(reject([](M& m) { m.path_period(-5); }) == "command.path_period: must be > 0, got -5");
+  // Negative where >= 0 is required.
+  CHECK(reject([](M& m) { m.beta(-0.5); }) == "command.beta: must be >= 0, got -0.5");
+  CHECK(reject([](M& m) { m.r(-0.1); }) == "command.r: must be >= 0, got -0.1");
+  CHECK(reject([](M& m) { m.k1(-1); }) == "command.k1: must be >= 0, got -1");
+  CHECK(reject([](M& m) { m.k2(-1); }) == "command.k2: must be >= 0, got -1");
+  CHECK(reject([](M& m) { m.max_speed(-3); }) == "command.max_speed: must be >= 0, got -3");
+  CHECK(reject([](M& m) { m.path_radius(-1); }) == "command.path_radius: must be >= 0, got -1");
+  // Non-finite anywhere.
+  CHECK(reject([](M& m) { m.k1(kNaN); }) == "command.k1: must be finite, got nan");
+  CHECK(reject([](M& m) { m.cx(kInf); }) == "command.cx: must be finite, got inf");
+  CHECK(reject([](M& m) { m.m(-kInf); }) == "command.m: must be finite, got -inf");
+  CHECK(reject([](M& m) { m.sigma(kNaN); }) == "command.sigma: must be finite, got nan");
+  CHECK(reject([](M& m) { m.path_phase(kNaN); }) == "command.path_phase: must be finite, got nan");
+  // Unknown names.
+  CHECK(reject([](M& m) { m.shape_kind("triangle"); }).find("command.shape_kind: unknown shape \"triangle\"") == 0);
+  CHECK(reject([](M& m) { m.path_kind("spiral"); }).find("command.path_kind: unknown path \"spiral\"") == 0);
+  CHECK(reject([](M& m) { m.integrator("rk45"); }).find("command.integrator: unknown integrator \"rk45\"") == 0);
+  CHECK(reject([](M& m) { m.law("boids"); }).find("command.law: unknown law \"boids\"") == 0);
+  CHECK(reject([](M& m) { m.shape_kind(""); }).find("command.shape_kind:") == 0);
+
+  SECTION("several problems are all reported") {
+    const std::string e = reject([](M& m) {
+      m.sigma(-1);
+      m.dt(kNaN);
+    });
+    CHECK(e.find("command.sigma: must be > 0, got -1") != std::string::npos);
+    CHECK(e.find("command.dt: must be finite, got nan") != std::string::npos);
+  }
+}
+
+TEST_CASE("valid_state rejects non-finite and absurd samples", "[dds][convert]") {
+  CHECK(state_problem(good_state()).empty());
+
+  auto s = good_state();
+  s.id(-1);
+  CHECK(state_problem(s) == "state.id: must be >= 0, got -1");
+  s = good_state();
+  s.x(kNaN);
+  CHECK(state_problem(s) == "state.x: must be finite, got nan");
+  s = good_state();
+  s.vy(kInf);
+  CHECK(state_problem(s) == "state.vy: must be finite, got inf");
+  s = good_state();
+  s.model_time(kNaN);
+  CHECK(state_problem(s) == "state.model_time: must be finite, got nan");
+  s = good_state();
+  s.y(2e6);
+  CHECK(state_problem(s) == "state.y: |y| must be <= 1e6, got 2000000");
+  s = good_state();
+  s.x(-1e6);  // the limit itself is accepted
+  CHECK(state_problem(s).empty());
+  s = good_state();
+  s.vx(8e5);
+  s.vy(8e5);  // each component fine, speed 1.13e6 is not
+  CHECK(state_problem(s).find("state.v: speed must be <= 1e6") == 0);
+}
+
+TEST_CASE("SwarmMetrics carries undefined values as -1", "[dds][convert]") {
+  core::Metrics m;
+  m.agents = 12;
+  m.shape_error_mean = 0.25;
+  m.gap_cv = 0.0;
+  m.clusters = 1;
+  const msg::SwarmMetrics w = dds::to_msg(m, 4, 100.0, 99, true);
+  CHECK(w.epoch() == 4u);
+  CHECK(w.agents_alive() == 12);
+  CHECK(w.shape_error_mean() == 0.25);
+  CHECK(w.shape_error_max() == -1.0);
+  CHECK(w.gap_cv() == 0.0);
+  CHECK(w.ring_error() == -1.0);
+  CHECK(w.clusters() == 1);
+  CHECK(w.converged());
+
+  const core::Metrics back = dds::from_msg(w);
+  CHECK(back.agents == 12);
+  CHECK(back.shape_error_mean == std::optional<double>(0.25));
+  CHECK_FALSE(back.shape_error_max.has_value());
+  CHECK(back.gap_cv == std::optional<double>(0.0));
+  CHECK_FALSE(back.centroid_error.has_value());
+  CHECK(back.clusters == std::optional<int>(1));
+
+  core::Metrics none;
+  CHECK_FALSE(dds::from_msg(dds::to_msg(none, 1, 0.0, 0, false)).clusters.has_value());
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Transport profiles
+
+TEST_CASE("loopback profile has no builtin transports and only unicast UDPv4 on 127.0.0.1", "[dds][qos]") {
+  config::TransportConfig cfg;  // defaults: loopback
+  REQUIRE(cfg.profile == "loopback");
+  cfg.max_participants = 40;
+  cfg.lease_s = 2.0;
+  cfg.announce_s = 0.5;
+  const fdds::DomainParticipantQos q = dds::participant_qos(cfg, "agent-3");
+
+  CHECK_FALSE(q.transport().use_builtin_transports);
+  auto udp = only_udp(q);
+  CHECK(udp->interfaceWhiteList == std::vector<std::string>{"127.0.0.1"});
+  CHECK(udp->maxInitialPeersRange == 40u);
+  CHECK(udp->sendBufferSize == 0u);
+  CHECK(udp->receiveBufferSize == 0u);
+
+  const auto& b = q.wire_protocol().builtin;
+  REQUIRE(b.initialPeersList.size() == 1);
+  CHECK(is_loopback_locator(*b.initialPeersList.begin()));
+  CHECK(b.initialPeersList.begin()->port == 0u);
+  REQUIRE(b.metatrafficUnicastLocatorList.size() == 1);
+  CHECK(is_loopback_locator(*b.metatrafficUnicastLocatorList.begin()));
+  CHECK(b.metatrafficMulticastLocatorList.empty());
+  REQUIRE(q.wire_protocol().default_unicast_locator_list.size() == 1);
+  CHECK(is_loopback_locator(*q.wire_protocol().default_unicast_locator_list.begin()));
+  CHECK(q.wire_protocol().default_multicast_locator_list.empty());
+
+  CHECK(b.discovery_config.discoveryProtocol == frtps::DiscoveryProtocol_t::SIMPLE);
+  CHECK(b.discovery_config.leaseDuration == eprosima::fastrtps::Duration_t(2.0));
+  CHECK(b.discovery_config.leaseDuration_announcementperiod == eprosima::fastrtps::Duration_t(0.5));
+  CHECK(std::string(q.name().c_str()) == "agent-3");
+
+  SECTION("socket buffers") {
+    cfg.socket_buffer_bytes = 4 << 20;
+    auto u = only_udp(dds::participant_qos(cfg, "x"));
+    CHECK(u->sendBufferSize == (4u << 20));
+    CHECK(u->receiveBufferSize == (4u << 20));
+  }
+}
+
+TEST_CASE("lan profile: interfaces and peers", "[dds][qos]") {
+  config::TransportConfig cfg;
+  cfg.profile = "lan";
+  SECTION("no peers: multicast discovery on all interfaces") {
+    const auto q = dds::participant_qos(cfg, "sup");
+    CHECK_FALSE(q.transport().use_builtin_transports);
+    CHECK(only_udp(q)->interfaceWhiteList.empty());
+    CHECK(q.wire_protocol().builtin.initialPeersList.empty());
+    CHECK(q.wire_protocol().builtin.metatrafficUnicastLocatorList.empty());
+  }
+  SECTION("interfaces and peers") {
+    cfg.interfaces = {"192.168.1.10"};
+    cfg.peers = {"192.168.1.10", "192.168.1.11"};
+    cfg.max_participants = 30;
+    const auto q = dds::participant_qos(cfg, "sup");
+    auto udp = only_udp(q);
+    CHECK(udp->interfaceWhiteList == std::vector<std::string>{"192.168.1.10"});
+    CHECK(udp->maxInitialPeersRange == 30u);
+    const auto& peers = q.wire_protocol().builtin.initialPeersList;
+    REQUIRE(peers.size() == 2);
+    auto it = peers.begin();
+    CHECK(frtps::IPLocator::toIPv4string(*it) == "192.168.1.10");
+    CHECK(it->port == 0u);
+    ++it;
+    CHECK(frtps::IPLocator::toIPv4string(*it) == "192.168.1.11");
+  }
+}
+
+TEST_CASE("discovery-server profile: client of server id 0", "[dds][qos]") {
+  config::TransportConfig cfg;
+  cfg.profile = "discovery-server";
+  cfg.discovery_server = "127.0.0.1:11811";
+  auto q = dds::participant_qos(cfg, "agent-0");
+  const auto& d = q.wire_protocol().builtin.discovery_config;
+  CHECK(d.discoveryProtocol == frtps::DiscoveryProtocol_t::CLIENT);
+  CHECK(d.discoveryServer_client_syncperiod == eprosima::fastrtps::Duration_t(0.1));
+  REQUIRE(d.m_DiscoveryServers.size() == 1);
+  const auto& server = d.m_DiscoveryServers.front();
+  frtps::GuidPrefix_t expected;
+  frtps::get_server_client_default_guidPrefix(0, expected);
+  CHECK(server.guidPrefix == expected);
+  REQUIRE(server.metatrafficUnicastLocatorList.size() == 1);
+  CHECK(is_loopback_locator(*server.metatrafficUnicastLocatorList.begin()));
+  CHECK(server.metatrafficUnicastLocatorList.begin()->port == 11811u);
+  CHECK_FALSE(q.transport().use_builtin_transports);
+  CHECK(only_udp(q)->interfaceWhiteList == std::vector<std::string>{"127.0.0.1"});
+
+  cfg.discovery_server = "localhost:12000";
+  q = dds::participant_qos(cfg, "agent-0");
+  CHECK(q.wire_protocol().builtin.discovery_config.m_DiscoveryServers.front()
+            .metatrafficUnicastLocatorList.begin()->port == 12000u);
+
+  cfg.discovery_server = "10.0.0.5:11811";  // remote server: no loopback whitelist
+  CHECK(only_udp(dds::participant_qos(cfg, "agent-0"))->interfaceWhiteList.empty());
+}
+
+TEST_CASE("bad transport configs are refused with the field named", "[dds][qos]") {
+  auto problem = [](config::TransportConfig cfg) {
+    try {
+      dds::participant_qos(cfg, "x");
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  config::TransportConfig cfg;
+  auto c = cfg;
+  c.domain = 233;
+  CHECK(problem(c) == "transport.domain: must be in 0..232, got 233");
+  c = cfg;
+  c.domain = -1;
+  CHECK(problem(c).find("transport.domain:") == 0);
+  c = cfg;
+  c.profile = "wifi";
+  CHECK(problem(c).find("transport.profile:") == 0);
+  c = cfg;
+  c.max_participants = 0;
+  CHECK(problem(c).find("transport.max_participants:") == 0);
+  c = cfg;
+  c.lease_s = 0;
+  CHECK(problem(c).find("transport.lease_s:") == 0);
+  c = cfg;
+  c.announce_s = c.lease_s;
+  CHECK(problem(c).find("transport.announce_s:") == 0);
+  c = cfg;
+  c.socket_buffer_bytes = -1;
+  CHECK(problem(c).find("transport.socket_buffer_bytes:") == 0);
+  c = cfg;
+  c.profile = "lan";
+  c.peers = {"10.0.0.1", "host.example"};
+  CHECK(problem(c).find("transport.peers[1]:") == 0);
+  c = cfg;
+  c.profile = "lan";
+  c.interfaces = {"eth0"};
+  CHECK(problem(c).find("transport.interfaces[0]:") == 0);
+  for (const char* bad : {"127.0.0.1", "127.0.0.1:", ":11811", "127.0.0.1:0", "127.0.0.1:70000", "h:1"}) {
+    c = cfg;
+    c.profile = "discovery-server";
+    c.discovery_server = bad;
+    INFO(bad);
+    CHECK(problem(c).find("transport.discovery_server:") == 0);
+  }
+  // create_participant refuses the same way, before touching DDS.
+  c = cfg;
+  c.domain = 500;
+  CHECK_THROWS_AS(dds::create_participant(c, "x"), std::runtime_error);
+}
+
+TEST_CASE("parse_ipv4 is strict", "[dds][qos]") {
+  std::array<std::uint8_t, 4> ip{};
+  CHECK(dds::parse_ipv4("127.0.0.1", ip));
+  CHECK(ip == std::array<std::uint8_t, 4>{127, 0, 0, 1});
+  CHECK(dds::parse_ipv4("255.255.255.255", ip));
+  for (const char* bad : {"", "1.2.3", "1.2.3.4.5", "256.1.1.1", "1.2.3.x", "01.2.3.4", " 1.2.3.4", "1..2.3"}) {
+    INFO(bad);
+    CHECK_FALSE(dds::parse_ipv4(bad, ip));
+  }
+}
+
+TEST_CASE("describe gives a one-line summary", "[dds][qos]") {
+  config::TransportConfig cfg;
+  const std::string d = dds::describe(cfg);
+  CHECK(d.find("loopback") == 0);
+  CHECK(d.find("127.0.0.1") != std::string::npos);
+  CHECK(d.find('\n') == std::string::npos);
+  cfg.profile = "discovery-server";
+  CHECK(dds::describe(cfg).find("127.0.0.1:11811") != std::string::npos);
+  cfg.profile = "bogus";
+  CHECK_NOTHROW(dds::describe(cfg));
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Topic table
+
+TEST_CASE("topic table gives names and keys and QoS", "[dds][topics]") {
+  CHECK(std::string(dds::topic_name(dds::TopicId::State)) == "shapeform/state");
+  CHECK(std::string(dds::topic_name(dds::TopicId::Command)) == "shapeform/command");
+  CHECK(std::string(dds::topic_name(dds::TopicId::Target)) == "shapeform/target");
+  CHECK(std::string(dds::topic_name(dds::TopicId::Metrics)) == "shapeform/metrics");
+  CHECK(std::string(dds::topic_name(dds::TopicId::Status)) == "shapeform/status");
+
+  // The table's type names are the generated ones.
+  CHECK(std::string(dds::type_name(dds::TopicId::State)) == msg::AgentStatePubSubType().getName());
+  CHECK(std::string(dds::type_name(dds::TopicId::Command)) == msg::ShapeCommandPubSubType().getName());
+  CHECK(std::string(dds::type_name(dds::TopicId::Target)) == msg::TrackingTargetPubSubType().getName());
+  CHECK(std::string(dds::type_name(dds::TopicId::Metrics)) == msg::SwarmMetricsPubSubType().getName());
+  CHECK(std::string(dds::type_name(dds::TopicId::Status)) == msg::AgentStatusPubSubType().getName());
+  CHECK(msg::AgentStatePubSubType().m_isGetKeyDefined);
+  CHECK(msg::AgentStatusPubSubType().m_isGetKeyDefined);
+  CHECK_FALSE(msg::ShapeCommandPubSubType().m_isGetKeyDefined);
+
+  for (dds::TopicId id : dds::kAllTopics) {
+    INFO(dds::topic_name(id));
+    const fdds::DataWriterQos w = dds::writer_qos(id);
+    const fdds::DataReaderQos r = dds::reader_qos(id);
+    CHECK(w.data_sharing().kind() == fdds::OFF);
+    CHECK(r.data_sharing().kind() == fdds::OFF);
+    CHECK(w.history().kind == fdds::KEEP_LAST_HISTORY_QOS);
+    CHECK(w.history().depth == 1);
+    CHECK(r.history().kind == fdds::KEEP_LAST_HISTORY_QOS);
+    CHECK(r.history().depth == 1);
+    CHECK(w.reliability().kind == r.reliability().kind);
+    CHECK(w.durability().kind == r.durability().kind);
+    CHECK(dds::is_keyed(id) == (id == dds::TopicId::State || id == dds::TopicId::Status));
+    if (dds::is_keyed(id)) {
+      CHECK(r.resource_limits().max_instances == 0);
+      CHECK(r.resource_limits().max_samples == 0);
+      CHECK(r.resource_limits().max_samples_per_instance == 1);
+      CHECK(w.resource_limits().max_instances == 0);
+    }
+  }
+  using dds::TopicId;
+  CHECK(dds::reader_qos(TopicId::State).reliability().kind == fdds::BEST_EFFORT_RELIABILITY_QOS);
+  CHECK(dds::reader_qos(TopicId::Target).reliability().kind == fdds::BEST_EFFORT_RELIABILITY_QOS);
+  CHECK(dds::reader_qos(TopicId::Command).reliability().kind == fdds::RELIABLE_RELIABILITY_QOS);
+  CHECK(dds::reader_qos(TopicId::Command).durability().kind == fdds::TRANSIENT_LOCAL_DURABILITY_QOS);
+  CHECK(dds::reader_qos(TopicId::Metrics).reliability().kind == fdds::RELIABLE_RELIABILITY_QOS);
+  CHECK(dds::reader_qos(TopicId::Metrics).durability().kind == fdds::VOLATILE_DURABILITY_QOS);
+  CHECK(dds::reader_qos(TopicId::Status).reliability().kind == fdds::RELIABLE_RELIABILITY_QOS);
+  CHECK(dds::reader_qos(TopicId::State).durability().kind == fdds::VOLATILE_DURABILITY_QOS);
+}
+
+// ---------------------------------------------------------------------------------------------------
+// In-process pub/sub over loopback UDP, two participants
+
+TEST_CASE("loopback pub-sub delivers 12 keyed instances and a dispose", "[dds][node][pubsub]") {
+  const auto cfg = loopback(test_domain(0));
+  dds::Node pub(cfg, "test-pub");
+  dds::Node sub(cfg, "test-sub");
+  auto writer = pub.writer<msg::AgentState>(dds::TopicId::State);
+  auto reader = sub.reader<msg::AgentState>(dds::TopicId::State);
+  REQUIRE(wait_for([&] { return writer.matched() >= 1 && reader.matched() >= 1; }));
+
+  constexpr int kAgents = 12;  // more than Fast DDS's default max_instances (10)
+  std::set<std::int32_t> seen;
+  std::vector<dds::Received<msg::AgentState>> batch;
+  std::uint64_t seq = 0;
+  bool write_ok = true;
+  const bool all = wait_for([&] {
+    ++seq;
+    for (int id = 0; id < kAgents; ++id) {
+      msg::AgentState s = good_state();
+      s.id(id);
+      s.seq(seq);
+      s.x(id);
+      s.stamp_ns(dds::steady_now_ns());
+      write_ok = writer.write(s) && write_ok;
+    }
+    reader.drain(batch);
+    for (const auto& r : batch) {
+      REQUIRE(r.valid_data);
+      CHECK(r.instance == dds::InstanceState::Alive);
+      CHECK(r.key_id == r.msg.id());
+      CHECK(r.msg.x() == r.msg.id());
+      CHECK(r.receive_stamp_ns >= r.msg.stamp_ns());
+      std::string why;
+      CHECK(dds::valid_state(r.msg, why));
+      seen.insert(r.msg.id());
+    }
+    return static_cast<int>(seen.size()) == kAgents;
+  });
+  CHECK(write_ok);
+  INFO("instances seen: " << seen.size());
+  REQUIRE(all);
+  CHECK(reader.overflowed() == 0u);
+
+  // Dispose one instance; best effort, so repeat (write + dispose) until the reader reports it.
+  msg::AgentState gone = good_state();
+  gone.id(5);
+  bool disposed = false;
+  auto last_try = std::chrono::steady_clock::now() - std::chrono::seconds(1);
+  REQUIRE(wait_for([&] {
+    if (std::chrono::steady_clock::now() - last_try > std::chrono::milliseconds(500)) {
+      last_try = std::chrono::steady_clock::now();
+      writer.write(gone);
+      CHECK(writer.dispose(gone));
+    }
+    reader.drain(batch);
+    for (const auto& r : batch) {
+      if (r.instance == dds::InstanceState::Disposed) {
+        CHECK_FALSE(r.valid_data);
+        CHECK(r.key_id == 5);
+        disposed = true;
+      }
+    }
+    return disposed;
+  }));
+}
+
+TEST_CASE("command is reliable and transient local so a late reader gets the newest", "[dds][node][pubsub]") {
+  const auto cfg = loopback(test_domain(1));
+  dds::Node sup(cfg, "test-supervisor");
+  auto writer = sup.writer<msg::ShapeCommand>(dds::TopicId::Command);
+  const core::Command cmd = sample_command();
+  REQUIRE(writer.write(dds::to_msg(core::Command{}, 1)));
+  REQUIRE(writer.write(dds::to_msg(cmd, 2)));  // KEEP_LAST 1: only this one is kept for late joiners
+
+  dds::Node agent(cfg, "test-agent");
+  auto reader = agent.reader<msg::ShapeCommand>(dds::TopicId::Command);
+  std::vector<dds::Received<msg::ShapeCommand>> got;
+  std::vector<dds::Received<msg::ShapeCommand>> batch;
+  REQUIRE(wait_for([&] {
+    reader.drain(batch);
+    got.insert(got.end(), batch.begin(), batch.end());
+    return !got.empty();
+  }));
+  REQUIRE(got.size() == 1);
+  CHECK(got.front().valid_data);
+  CHECK(got.front().key_id == -1);
+  CHECK(got.front().msg.epoch() == 2u);
+  core::Command out;
+  std::string error;
+  REQUIRE(dds::from_msg(got.front().msg, out, error));
+  require_same(cmd, out);
+}
+
+TEST_CASE("node refuses a topic of another type and handles survive their node", "[dds][node]") {
+  const auto cfg = loopback(test_domain(2));
+  auto node = std::make_unique<dds::Node>(cfg, "test-node");
+  CHECK(node->participant() != nullptr);
+  CHECK(node->name() == "test-node");
+  CHECK_THROWS_AS(node->writer<msg::AgentState>(dds::TopicId::Command), std::logic_error);
+  CHECK_THROWS_AS(node->reader<msg::AgentStatus>(dds::TopicId::State), std::logic_error);
+
+  // Several endpoints on one topic share the topic; an early handle destruction deletes its endpoint.
+  auto w1 = node->writer<msg::AgentStatus>(dds::TopicId::Status);
+  {
+    auto w2 = node->writer<msg::AgentStatus>(dds::TopicId::Status);
+    CHECK(w2.valid());
+  }
+  auto r = node->reader<msg::AgentStatus>(dds::TopicId::Status);
+  auto moved = std::move(r);
+  CHECK(moved.valid());
+  CHECK_FALSE(r.valid());
+
+  node.reset();  // deletes every entity; handles now do nothing
+  CHECK_FALSE(w1.valid());
+  CHECK_FALSE(w1.write(msg::AgentStatus{}));
+  CHECK(w1.matched() == -1);
+  std::vector<dds::Received<msg::AgentStatus>> batch;
+  CHECK(moved.drain(batch) == 0u);
+  CHECK(moved.matched() == -1);
+}
+
+}  // namespace shapeform

@@ -1,0 +1,267 @@
+#include "recorder.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+using namespace shapeform;
+using namespace shapeform::supervisor;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// A fresh directory under the system temp dir, removed at scope end.
+class TempDir {
+ public:
+  TempDir() {
+    static int counter = 0;
+    path_ = fs::temp_directory_path() / ("shapeform_recorder_test_" + std::to_string(::getpid()) +
+                                         "_" + std::to_string(counter++));
+    fs::remove_all(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+std::vector<std::string> read_lines(const fs::path& p) {
+  std::ifstream in(p);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+MetricsRow full_row() {
+  MetricsRow row;
+  row.wall_s = 12.25;
+  row.model_time = 300.0;
+  row.epoch = 4;
+  row.agents_alive = 20;
+  row.metrics.agents = 20;
+  row.metrics.shape_error_mean = 0.1;
+  row.metrics.shape_error_max = 0.5;
+  row.metrics.gap_cv = 0.05;
+  row.metrics.nn_cv = 0.125;
+  row.metrics.min_separation = 1.5;
+  row.metrics.clusters = 1;
+  row.metrics.extent = 8.0;
+  row.metrics.centroid_error = 1e-05;
+  row.metrics.ring_error = 2.0;
+  row.converged = true;
+  return row;
+}
+
+}  // namespace
+
+TEST_CASE("open creates the directory and writes both headers", "[supervisor][recorder]") {
+  TempDir tmp;
+  const fs::path dir = tmp.path() / "nested" / "run1";
+  Recorder rec;
+  CHECK_FALSE(rec.is_open());
+  rec.open(dir);
+  CHECK(rec.is_open());
+  CHECK(rec.dir() == dir);
+  rec.close();
+  CHECK(fs::is_directory(dir));
+  CHECK(read_lines(dir / "metrics.csv") ==
+        std::vector<std::string>{"wall_s,model_time,epoch,agents_alive,shape_error_mean,"
+                                 "shape_error_max,gap_cv,nn_cv,min_separation,clusters,extent,"
+                                 "centroid_error,ring_error,converged"});
+  CHECK(read_lines(dir / "positions.csv") ==
+        std::vector<std::string>{"wall_s,model_time,step,agent,x1,x2"});
+}
+
+TEST_CASE("metrics rows: values, empty fields for undefined values", "[supervisor][recorder]") {
+  TempDir tmp;
+  Recorder rec;
+  rec.open(tmp.path());
+  rec.write_metrics(full_row());
+
+  MetricsRow empty;
+  empty.wall_s = 1.5;
+  empty.model_time = 10.0;
+  empty.epoch = 3;
+  empty.agents_alive = 1;
+  rec.write_metrics(empty);
+
+  MetricsRow partial = empty;
+  partial.metrics.clusters = 2;
+  partial.metrics.shape_error_mean = std::numeric_limits<double>::quiet_NaN();  // non-finite
+  partial.metrics.extent = std::numeric_limits<double>::infinity();
+  partial.metrics.ring_error = -0.75;
+  partial.model_time = std::numeric_limits<double>::quiet_NaN();
+  rec.write_metrics(partial);
+  CHECK(rec.metrics_rows() == 3);
+  rec.close();
+
+  const auto lines = read_lines(tmp.path() / "metrics.csv");
+  REQUIRE(lines.size() == 4);
+  CHECK(lines[1] == "12.25,300,4,20,0.1,0.5,0.05,0.125,1.5,1,8,1e-05,2,1");
+  CHECK(lines[2] == "1.5,10,3,1,,,,,,,,,,0");
+  CHECK(lines[3] == "1.5,,3,1,,,,,,2,,,-0.75,0");
+  // Every row has as many fields as the header.
+  for (const std::string& line : lines) {
+    CHECK(std::count(line.begin(), line.end(), ',') == 13);
+  }
+}
+
+TEST_CASE("position rows, with and without a step", "[supervisor][recorder]") {
+  TempDir tmp;
+  Recorder rec;
+  rec.open(tmp.path());
+  rec.write_positions(0.5, 12.0, 12, 3, 1.25, -4.0);
+  rec.write_positions(0.5, 12.0, std::nullopt, 17, 0.1, 1e-300);
+  rec.write_positions(0.75, 13.0, std::int64_t{1} << 40, 0, 0.0, -0.0);
+  CHECK(rec.position_rows() == 3);
+  rec.close();
+  const auto lines = read_lines(tmp.path() / "positions.csv");
+  REQUIRE(lines.size() == 4);
+  CHECK(lines[1] == "0.5,12,12,3,1.25,-4");
+  CHECK(lines[2] == "0.5,12,,17,0.1,1e-300");
+  CHECK(lines[3] == "0.75,13,1099511627776,0,0,-0");
+}
+
+TEST_CASE("numbers round-trip exactly", "[supervisor][recorder]") {
+  TempDir tmp;
+  Recorder rec;
+  rec.open(tmp.path());
+  const double x = 0.1 + 0.2;  // 0.30000000000000004
+  rec.write_positions(1.0 / 3.0, 2.0 / 3.0, 1, 1, x, -x);
+  rec.close();
+  const auto lines = read_lines(tmp.path() / "positions.csv");
+  REQUIRE(lines.size() == 2);
+  std::istringstream fields(lines[1]);
+  std::vector<double> v;
+  for (std::string f; std::getline(fields, f, ',');) v.push_back(std::stod(f));
+  REQUIRE(v.size() == 6);
+  CHECK(v[0] == 1.0 / 3.0);
+  CHECK(v[1] == 2.0 / 3.0);
+  CHECK(v[4] == x);
+  CHECK(v[5] == -x);
+}
+
+TEST_CASE("flush_if_due flushes once flush_s has passed", "[supervisor][recorder]") {
+  TempDir tmp;
+  Recorder rec(2.0);
+  const auto t0 = Recorder::Clock::now();
+  rec.open(tmp.path());
+  rec.write_positions(0.0, 1.0, 1, 1, 2.0, 3.0);
+  const fs::path file = tmp.path() / "positions.csv";
+
+  // Not due yet: the row stays in the stream buffer (small rows are buffered by std::filebuf).
+  rec.flush_if_due(t0);
+  CHECK(read_lines(file).size() == 1);
+  // Due: the row reaches the file while the recorder stays open.
+  rec.flush_if_due(t0 + std::chrono::seconds(3));
+  CHECK(rec.is_open());
+  CHECK(read_lines(file).size() == 2);
+
+  // flush() always flushes.
+  rec.write_metrics(full_row());
+  rec.flush();
+  CHECK(read_lines(tmp.path() / "metrics.csv").size() == 2);
+  CHECK(rec.write_errors() == 0);
+}
+
+TEST_CASE("close flushes; closing twice and writing after close are harmless",
+          "[supervisor][recorder]") {
+  TempDir tmp;
+  Recorder rec;
+  rec.close();  // never opened
+  rec.open(tmp.path());
+  rec.write_metrics(full_row());
+  rec.close();
+  rec.close();
+  CHECK_FALSE(rec.is_open());
+  rec.write_metrics(full_row());  // ignored
+  rec.write_positions(0.0, 0.0, 0, 0, 0.0, 0.0);
+  rec.flush();
+  rec.flush_if_due(Recorder::Clock::now() + std::chrono::hours(1));
+  CHECK(read_lines(tmp.path() / "metrics.csv").size() == 2);
+  CHECK(read_lines(tmp.path() / "positions.csv").size() == 1);
+}
+
+TEST_CASE("the destructor flushes and closes", "[supervisor][recorder]") {
+  TempDir tmp;
+  {
+    Recorder rec;
+    rec.open(tmp.path());
+    rec.write_positions(0.0, 1.0, 1, 1, 2.0, 3.0);
+  }
+  CHECK(read_lines(tmp.path() / "positions.csv").size() == 2);
+}
+
+TEST_CASE("reopening starts new files; the old recording is closed", "[supervisor][recorder]") {
+  TempDir tmp;
+  Recorder rec;
+  rec.open(tmp.path() / "a");
+  rec.write_metrics(full_row());
+  rec.open(tmp.path() / "b");  // closes a
+  CHECK(read_lines(tmp.path() / "a" / "metrics.csv").size() == 2);
+  CHECK(rec.metrics_rows() == 0);
+  rec.close();
+  rec.open(tmp.path() / "a");  // truncates
+  rec.close();
+  CHECK(read_lines(tmp.path() / "a" / "metrics.csv").size() == 1);
+}
+
+TEST_CASE("open failures throw naming the path", "[supervisor][recorder]") {
+  TempDir tmp;
+  fs::create_directories(tmp.path());
+  Recorder rec;
+
+  // A regular file where a directory is needed.
+  const fs::path blocker = tmp.path() / "blocker";
+  std::ofstream(blocker) << "x";
+  try {
+    rec.open(blocker / "run");
+    FAIL("no exception");
+  } catch (const std::runtime_error& e) {
+    CHECK_THAT(e.what(), Catch::Contains((blocker / "run").string()));
+  }
+  CHECK_FALSE(rec.is_open());
+
+  // metrics.csv exists as a directory.
+  const fs::path dir = tmp.path() / "run";
+  fs::create_directories(dir / "metrics.csv");
+  try {
+    rec.open(dir);
+    FAIL("no exception");
+  } catch (const std::runtime_error& e) {
+    CHECK(std::string(e.what()) ==
+          "cannot open " + (dir / "metrics.csv").string() + " for writing");
+  }
+  CHECK_FALSE(rec.is_open());
+  rec.close();
+
+  // positions.csv fails after metrics.csv opened: nothing stays open.
+  const fs::path dir2 = tmp.path() / "run2";
+  fs::create_directories(dir2 / "positions.csv");
+  CHECK_THROWS_WITH(rec.open(dir2),
+                    "cannot open " + (dir2 / "positions.csv").string() + " for writing");
+  CHECK_FALSE(rec.is_open());
+
+  // The recorder is still usable afterwards.
+  rec.open(tmp.path() / "ok");
+  CHECK(rec.is_open());
+}
+
+TEST_CASE("flush period must be positive", "[supervisor][recorder]") {
+  CHECK_THROWS_AS(Recorder(0.0), std::invalid_argument);
+  CHECK_THROWS_AS(Recorder(-1.0), std::invalid_argument);
+  CHECK_THROWS_AS(Recorder(std::numeric_limits<double>::quiet_NaN()), std::invalid_argument);
+  CHECK_NOTHROW(Recorder(0.001));
+}
