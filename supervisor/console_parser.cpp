@@ -328,7 +328,7 @@ Action parse_max_speed(const Tokens& t, const core::Command& current) {
 }
 
 Action parse_wait(const Tokens& t) {
-  const std::string& what = sub_word(t, "wait", "converged or agents");
+  const std::string& what = sub_word(t, "wait", "converged, agents or time");
   const std::string name = "wait " + what;
   if (what == "converged") {
     const Args a(name, t, 2, {"timeout"}, 0);
@@ -344,7 +344,13 @@ Action parse_wait(const Tokens& t) {
     }
     return WaitAgents{static_cast<int>(n), a.number_or("timeout", Bound::NonNegative, 30.0)};
   }
-  fail("wait: unknown condition '" + what + "' (expected converged, agents)");
+  if (what == "time") {
+    const Args a(name, t, 2, {"timeout"}, 1);
+    if (a.positionals() == 0) fail(name + ": missing model time T");
+    const double when = a.check_number("T", a.positional(0), Bound::NonNegative);
+    return WaitTime{when, a.number_or("timeout", Bound::NonNegative, 600.0)};
+  }
+  fail("wait: unknown condition '" + what + "' (expected converged, agents, time)");
 }
 
 Action parse_record(const Tokens& t) {
@@ -468,11 +474,14 @@ const HelpEntry kHelp[] = {
    "  Prints the latest metrics (shape error, gap CV, clusters, ...).\n"},
   {"wait",
    "wait converged [timeout=S]                                  wait for convergence\n"
-   "wait agents N [timeout=S]                                   wait for N agents alive\n",
+   "wait agents N [timeout=S]                                   wait for N agents alive\n"
+   "wait time T [timeout=S]                                     wait for model time T\n",
    "wait converged [timeout=S]\n"
    "wait agents N [timeout=S]\n"
+   "wait time T [timeout=S]\n"
    "  Holds further input until the condition holds or the timeout (wall seconds, >= 0;\n"
-   "  default 60 for converged, 30 for agents) runs out. N is an integer >= 1.\n"},
+   "  default 60 for converged, 30 for agents, 600 for time) runs out. N is an integer >= 1;\n"
+   "  T is model time since the current command was published (one paper iteration = dt).\n"},
   {"sleep",
    "sleep S                                                     pause input for S seconds\n",
    "sleep S\n"

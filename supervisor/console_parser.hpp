@@ -40,6 +40,11 @@ struct WaitAgents {
   int count = 1;
   double timeout_s = 30.0;
 };
+/// `wait time T [timeout=S]`: block further input until the current epoch's model time reaches T.
+struct WaitTime {
+  double model_time = 0.0;
+  double timeout_s = 600.0;
+};
 /// `sleep S`: block further input for S seconds of wall time.
 struct Sleep {
   double seconds = 0.0;
@@ -60,7 +65,7 @@ struct Quit {};
 struct StartScenario {};
 
 using Action = std::variant<NoOp, SetCommand, TrackStop, Status, ShowMetrics, WaitConverged,
-                            WaitAgents, Sleep, RecordStart, RecordStop, Help, Quit, StartScenario>;
+                            WaitAgents, WaitTime, Sleep, RecordStart, RecordStop, Help, Quit, StartScenario>;
 
 /// Either an action (error empty) or an error (action is NoOp).
 struct ParseResult {

@@ -237,6 +237,15 @@ bool Supervisor::pending_done(std::int64_t now) {
     }
     return false;
   }
+  if (const auto* w = std::get_if<WaitTime>(&*pending_)) {
+    if (epoch_ != 0 && model_time(now) >= w->model_time) return true;
+    if (timed_out) {
+      out_ << "wait time: timed out after " << w->timeout_s << " s" << std::endl;
+      exit_status_ = kExitWaitTimedOut;
+      return true;
+    }
+    return false;
+  }
   return timed_out;  // Sleep
 }
 
@@ -269,6 +278,8 @@ void Supervisor::execute(const Action& a, std::int64_t now) {
         } else if constexpr (std::is_same_v<T, WaitConverged>) {
           block(act.timeout_s);
         } else if constexpr (std::is_same_v<T, WaitAgents>) {
+          block(act.timeout_s);
+        } else if constexpr (std::is_same_v<T, WaitTime>) {
           block(act.timeout_s);
         } else if constexpr (std::is_same_v<T, Sleep>) {
           block(act.seconds);

@@ -257,6 +257,11 @@ TEST_CASE("wait converged and wait agents", "[supervisor][parser]") {
   CHECK(b.count == 3);
   CHECK(b.timeout_s == 10.0);
   CHECK(parse_as<WaitAgents>("wait agents 1").count == 1);
+  const WaitTime w = parse_as<WaitTime>("wait time 500 timeout=20");
+  CHECK(w.model_time == 500.0);
+  CHECK(w.timeout_s == 20.0);
+  CHECK(parse_as<WaitTime>("wait time 5").timeout_s == 600.0);
+  CHECK(error_of("wait time") == "wait time: missing model time T");
   CHECK(parse_as<WaitAgents>("wait agents 2.0").count == 2);
 }
 
@@ -297,9 +302,9 @@ TEST_CASE("errors: unknown command words", "[supervisor][parser]") {
   CHECK(error_of("track") == "track: expected line, circle, point or stop");
   CHECK(error_of("track spiral") ==
         "track: unknown path 'spiral' (expected line, circle, point, stop)");
-  CHECK(error_of("wait") == "wait: expected converged or agents");
+  CHECK(error_of("wait") == "wait: expected converged, agents or time");
   CHECK(error_of("wait forever") ==
-        "wait: unknown condition 'forever' (expected converged, agents)");
+        "wait: unknown condition 'forever' (expected converged, agents, time)");
   CHECK(error_of("record") == "record: expected start DIR or stop");
   CHECK(error_of("record pause") == "record: unknown action 'pause' (expected start, stop)");
   CHECK(error_of("integrator rk5") == "integrator: unknown method 'rk5' (expected euler or rk4)");
