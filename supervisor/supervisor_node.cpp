@@ -48,12 +48,24 @@ std::string describe_command(const core::Command& c) {
     case core::ShapeKind::Circle: o << " r=" << s.r0; break;
     case core::ShapeKind::Ellipse: o << " a=" << s.a << " b=" << s.b; break;
     case core::ShapeKind::Square: o << " a=" << s.a; break;
+    case core::ShapeKind::Polar: o << " r=\"" << s.r_expr << '"'; break;
+    case core::ShapeKind::Parametric:
+      o << " x=\"" << s.x_expr << "\" y=\"" << s.y_expr << '"' << (s.closed ? " closed" : " open");
+      break;
+    case core::ShapeKind::Implicit: o << " f=\"" << s.f_expr << '"'; break;
+    case core::ShapeKind::Polygon: o << " with " << s.vertices.size() << (s.closed ? " vertices, closed" : " vertices, open"); break;
   }
+  if (s.rotation != 0.0) o << " rotated " << s.rotation * 180.0 / 3.14159265358979323846 << " deg";
+  if (s.scale != 1.0) o << " scaled " << s.scale;
   if (c.tracking.enabled)
     o << ", tracking on a " << core::to_string(c.tracking.path.kind) << " path"
       << (c.tracking.feedforward ? " with feed-forward" : "");
-  else if (core::is_closed(s.kind))
+  else if (core::is_closed(s))
     o << " centre (" << s.centre.x() << ", " << s.centre.y() << ")";
+  if (c.law == core::Law::Arc) {
+    o << "; law arc k_normal=" << c.arc.k_normal << " k_tangent=" << c.arc.k_tangent;
+    if (s.kind == core::ShapeKind::Line) o << " spacing=" << c.arc.spacing;
+  }
   o << "; k1=" << c.gains.k1 << " k2=" << c.gains.k2 << " sigma=" << c.gains.sigma << " beta=" << c.gains.beta
     << " r=" << c.gains.r << ", " << core::to_string(c.integrator) << " dt=" << c.dt;
   if (c.max_speed > 0) o << ", max_speed=" << c.max_speed;

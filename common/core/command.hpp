@@ -8,6 +8,21 @@
 
 namespace shapeform::core {
 
+/// Which control law the agents run.
+enum class Law {
+  Paper,  ///< Goswami et al. eq. 2 (the default, untouched)
+  Arc     ///< arc-length slots: exact, evenly spaced, chatter-free (docs/LAW.md)
+};
+std::string_view to_string(Law l);
+bool parse_law(std::string_view name, Law& out);
+
+/// Parameters of the arc law.
+struct ArcParams {
+  double k_normal = 0.5;   ///< rate toward the curve point ahead (1/model time; k_normal dt <= 1)
+  double k_tangent = 1.0;  ///< fraction of the slot error taken per step along the curve
+  double spacing = 1.0;    ///< gap between agents on an infinite line (shape units)
+};
+
 /// Tracking: the shape's centre follows a path; the shape is drawn around C(t).
 struct Tracking {
   bool enabled = false;
@@ -23,7 +38,14 @@ struct Command {
   Integrator integrator = Integrator::Euler;
   double dt = 1.0;         ///< model time per step (one paper iteration = 1)
   double max_speed = 0.0;  ///< speed limit in units per model time; 0 = none
+  Law law = Law::Paper;
+  ArcParams arc;
 };
+
+/// The arc law's velocity for agent self_id at x on shape s (placed at its current centre).
+/// Neighbours' arc lengths are used when given (finite), else computed from their positions.
+Vec2 arc_velocity(const ShapeSpec& s, const Curve& curve, const ArcParams& p, std::int32_t self_id,
+                  const Vec2& x, const std::vector<Neighbour>& nbrs);
 
 /// The shape in force at model time t (tracked shapes are centred on C(t)).
 ShapeSpec shape_at(const Command& cmd, double t);

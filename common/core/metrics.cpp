@@ -19,21 +19,48 @@ std::optional<double> coefficient_of_variation(const std::vector<double>& v) {
   return std::sqrt(ss / n) / mean;
 }
 
+namespace {
+bool angle_ordered(ShapeKind k) {
+  return k == ShapeKind::Circle || k == ShapeKind::Ellipse || k == ShapeKind::Square || k == ShapeKind::Polar;
+}
+
+/// Agents' indices ordered by the arc length of their closest points, with those arc lengths.
+std::vector<std::pair<double, std::size_t>> arc_order(const ShapeSpec& shape, const Curve& curve,
+                                                      const std::vector<Vec2>& x) {
+  std::vector<std::pair<double, std::size_t>> order(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i) order[i] = {closest_point(shape, curve, x[i]).s, i};
+  std::sort(order.begin(), order.end());
+  return order;
+}
+}  // namespace
+
 std::vector<double> consecutive_gaps(const ShapeSpec& shape, const std::vector<Vec2>& x) {
   const std::size_t n = x.size();
   std::vector<double> gaps;
   if (n < 2) return gaps;
   std::vector<std::pair<double, std::size_t>> order(n);
-  const bool closed = is_closed(shape.kind);
-  const Vec2 along = Vec2(1.0, shape.m).normalized();
-  for (std::size_t i = 0; i < n; ++i) {
-    const Vec2 y = x[i] - shape.centre;
-    order[i] = {closed ? std::atan2(y.y(), y.x()) : x[i].dot(along), i};
+  if (angle_ordered(shape.kind)) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec2 y = x[i] - shape.centre;
+      order[i] = {std::atan2(y.y(), y.x()), i};
+    }
+    std::sort(order.begin(), order.end());
+  } else {
+    order = arc_order(shape, *curve_of(shape), x);
   }
-  std::sort(order.begin(), order.end());
   gaps.reserve(n);
   for (std::size_t k = 0; k + 1 < n; ++k) gaps.push_back((x[order[k + 1].second] - x[order[k].second]).norm());
-  if (closed) gaps.push_back((x[order.front().second] - x[order.back().second]).norm());
+  if (is_closed(shape)) gaps.push_back((x[order.front().second] - x[order.back().second]).norm());
+  return gaps;
+}
+
+std::vector<double> arc_gaps(const ShapeSpec& shape, const std::vector<Vec2>& x) {
+  std::vector<double> gaps;
+  if (x.size() < 2) return gaps;
+  const auto curve = curve_of(shape);
+  const auto order = arc_order(shape, *curve, x);
+  for (std::size_t k = 0; k + 1 < order.size(); ++k) gaps.push_back(order[k + 1].first - order[k].first);
+  if (curve->closed()) gaps.push_back(shape.scale * curve->length() - (order.back().first - order.front().first));
   return gaps;
 }
 
@@ -66,14 +93,20 @@ Metrics compute_metrics(const Command& cmd, const std::vector<Vec2>& x, double t
   if (n == 0) return m;
   const ShapeSpec s = shape_at(cmd, t);
 
-  double err_sum = 0.0, err_max = 0.0;
+  const auto curve = curve_of(s);
+  double err_sum = 0.0, err_max = 0.0, cerr_sum = 0.0, cerr_max = 0.0;
   for (const Vec2& xi : x) {
     const double e = (xi - target_point(s, xi)).norm();
     err_sum += e;
     err_max = std::max(err_max, e);
+    const double ce = closest_point(s, *curve, xi).distance;
+    cerr_sum += ce;
+    cerr_max = std::max(cerr_max, ce);
   }
   m.shape_error_mean = err_sum / static_cast<double>(n);
   m.shape_error_max = err_max;
+  m.curve_error_mean = cerr_sum / static_cast<double>(n);
+  m.curve_error_max = cerr_max;
   if (n == 1) m.clusters = 1;
 
   if (cmd.tracking.enabled) {
@@ -89,6 +122,7 @@ Metrics compute_metrics(const Command& cmd, const std::vector<Vec2>& x, double t
   }
   if (n < 2) return m;
   m.gap_cv = coefficient_of_variation(consecutive_gaps(s, x));
+  m.arc_gap_cv = coefficient_of_variation(arc_gaps(s, x));
   if (!pairwise) return m;
 
   m.clusters = count_clusters(x);

@@ -19,6 +19,9 @@ struct Metrics {
   std::optional<double> extent;            ///< largest pairwise distance
   std::optional<double> centroid_error;    ///< tracking: |mean(x) - C(t)|
   std::optional<double> ring_error;        ///< tracking: mean | |x_i - C(t)| - r0 |
+  std::optional<double> curve_error_mean;  ///< mean distance to the true closest point of the shape
+  std::optional<double> curve_error_max;   ///< max distance to the true closest point
+  std::optional<double> arc_gap_cv;        ///< std/mean of arc-length gaps between consecutive agents
 };
 
 /// Single-linkage distance under which agents count as one cluster.
@@ -28,9 +31,14 @@ inline constexpr double kClusterLink = 0.05;
 /// (below 1e-12: every value zero up to rounding).
 std::optional<double> coefficient_of_variation(const std::vector<double>& v);
 
-/// Gaps between consecutive agents along the shape: closed shapes ordered by angle about their centre
-/// (with wrap-around, N gaps), the line ordered along its direction (N - 1 gaps).
+/// Euclidean gaps between consecutive agents along the shape: the paper's star-shaped closed shapes
+/// (circle, ellipse, square, polar) ordered by angle about their centre (with wrap-around, N gaps);
+/// every other shape ordered by the arc length of the agents' closest points (wrap-around when closed).
 std::vector<double> consecutive_gaps(const ShapeSpec& shape, const std::vector<Vec2>& x);
+
+/// Arc-length gaps between consecutive agents' closest points along the curve (N gaps when closed,
+/// N - 1 when open).
+std::vector<double> arc_gaps(const ShapeSpec& shape, const std::vector<Vec2>& x);
 
 /// Number of single-linkage clusters at distance `link`.
 int count_clusters(const std::vector<Vec2>& x, double link = kClusterLink);

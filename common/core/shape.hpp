@@ -1,15 +1,19 @@
 #pragma once
 /// Shapes and their target vectors x_T(x): the point of the shape an agent at x is attracted to.
+#include <memory>
 #include <string>
 #include <string_view>
+#include <vector>
 
+#include "curve.hpp"
 #include "types.hpp"
 
 namespace shapeform::core {
 
-enum class ShapeKind { Line, Circle, Ellipse, Square };
+enum class ShapeKind { Line, Circle, Ellipse, Square, Polar, Parametric, Implicit, Polygon };
 
-/// Name used in config files, console commands and JSON ("line", "circle", "ellipse", "square").
+/// Name used in config files, console commands and JSON ("line", "circle", "ellipse", "square",
+/// "polar", "parametric", "implicit", "polygon").
 std::string_view to_string(ShapeKind kind);
 /// Parses a shape name; returns false when unknown.
 bool parse_shape_kind(std::string_view name, ShapeKind& out);
@@ -22,20 +26,46 @@ struct ShapeSpec {
   double r0 = 4.0;  ///< circle radius (> 0)
   double a = 4.0;   ///< ellipse semi-axis along x1, or square half side (> 0)
   double b = 2.0;   ///< ellipse semi-axis along x2 (> 0)
-  Vec2 centre = Vec2::Zero();  ///< centre of closed shapes (ignored by the line)
+  Vec2 centre = Vec2::Zero();  ///< where the shape's origin is placed (the centre of closed shapes)
+  double rotation = 0.0;       ///< counter-clockwise rotation about the centre, radians
+  double scale = 1.0;          ///< uniform scale about the centre (> 0)
+  std::string r_expr;          ///< polar: r(phi), phi in [0, 2 pi)
+  std::string x_expr, y_expr;  ///< parametric: x(s), y(s), s in [0, 1]
+  std::string f_expr;          ///< implicit: f(x, y) = 0
+  std::vector<Vec2> vertices;  ///< polygon vertices (local frame)
+  bool closed = true;          ///< parametric and polygon: closed or open curve
+  /// The compiled curve in the shape's local frame. Analytic kinds are built by ensure_curve();
+  /// expression kinds by shapes::compile() (common/shapes, muparser). Shared, immutable.
+  std::shared_ptr<const Curve> curve;
 };
 
-/// True for closed curves (circle, ellipse, square); false for the line.
-bool is_closed(ShapeKind kind);
+/// Builds spec.curve for the analytic kinds and polygons when missing. Expression kinds must already
+/// be compiled (throws ShapeError naming the kind otherwise). Throws ShapeError on bad parameters.
+void ensure_curve(ShapeSpec& s);
+/// The curve of a shape (ensure_curve() on a copy when spec.curve is missing).
+std::shared_ptr<const Curve> curve_of(const ShapeSpec& s);
 
-/// Characteristic size of the shape (radius, larger semi-axis, half side; 1 for the line).
+/// World <-> shape-local coordinates (translation, rotation, scale).
+Vec2 to_local(const ShapeSpec& s, const Vec2& x);
+Vec2 to_world(const ShapeSpec& s, const Vec2& y);
+
+/// The true closest point of the shape in world coordinates (arc length scaled, tangent rotated).
+Projection closest_point(const ShapeSpec& s, const Curve& c, const Vec2& x);
+
+/// True for closed curves (circle, ellipse, square, polar, closed parametric or polygon, implicit
+/// when its traced contour closes); false for the line and open curves.
+bool is_closed(const ShapeSpec& s);
+
+/// Characteristic size of the shape (radius, larger semi-axis, half side; 1 for the line), scaled.
 double shape_size(const ShapeSpec& s);
 
-/// Target vector x_T(x), as the paper defines it:
+/// Target vector x_T(x), as the paper defines it (y = x in the shape's local frame):
 ///  - line: orthogonal projection onto x2 = m x1 + c;
-///  - circle: radial projection centre + r0 (x - centre)/|x - centre|;
-///  - ellipse: radial projection (a cos th, b sin th), th = atan2(a y2, b y1), y = x - centre;
-///  - square: radial projection a y / max(|y1|, |y2|).
+///  - circle: radial projection r0 y/|y|;
+///  - ellipse: radial projection (a cos th, b sin th), th = atan2(a y2, b y1);
+///  - square: radial projection a y / max(|y1|, |y2|);
+///  - polar: radial projection r(phi) y/|y|;
+///  - parametric, polygon: the closest point; implicit: Newton steps along grad f.
 /// At the centre of a closed shape (singular) the direction (1, 0) is used. Always finite.
 Vec2 target_point(const ShapeSpec& s, const Vec2& x);
 

@@ -1,5 +1,6 @@
 #include "swarm.hpp"
 
+#include <limits>
 #include <random>
 #include <utility>
 
@@ -18,16 +19,27 @@ std::vector<Vec2> uniform_start(int n, std::uint64_t seed, double half_width) {
 }
 
 Swarm::Swarm(Command cmd, std::vector<Vec2> start)
-    : cmd_(std::move(cmd)), x_(std::move(start)), next_(x_.size()) {
+    : x_(std::move(start)), next_(x_.size()), arc_(x_.size()) {
+  set_command(cmd);
   nbrs_.reserve(x_.size());
+}
+
+void Swarm::set_command(const Command& cmd) {
+  cmd_ = cmd;
+  ensure_curve(cmd_.shape);
 }
 
 void Swarm::step() {
   const int n = static_cast<int>(x_.size());
+  if (cmd_.law == Law::Arc) {
+    // Each agent publishes its own arc length; the others use it (as agent processes do).
+    const ShapeSpec s = shape_at(cmd_, t_);
+    for (int j = 0; j < n; ++j) arc_[j] = closest_point(s, *s.curve, x_[j]).s;
+  }
   for (int i = 0; i < n; ++i) {
     nbrs_.clear();
     for (int j = 0; j < n; ++j)
-      if (j != i) nbrs_.push_back({j, x_[j]});
+      if (j != i) nbrs_.push_back({j, x_[j], cmd_.law == Law::Arc ? arc_[j] : std::numeric_limits<double>::quiet_NaN()});
     next_[i] = agent_step(cmd_, i, x_[i], nbrs_, t_).x;
   }
   std::swap(x_, next_);

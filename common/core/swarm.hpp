@@ -15,7 +15,8 @@ class Swarm {
   Swarm(Command cmd, std::vector<Vec2> start);
   /// Advances every agent by one step from the same snapshot (synchronous update).
   void step();
-  void set_command(const Command& cmd) { cmd_ = cmd; }
+  /// Throws ShapeError when the command's shape cannot be built (expression shapes must be compiled).
+  void set_command(const Command& cmd);
   const Command& command() const { return cmd_; }
   const std::vector<Vec2>& positions() const { return x_; }
   double time() const { return t_; }
@@ -26,6 +27,7 @@ class Swarm {
   std::vector<Vec2> x_;
   std::vector<Vec2> next_;
   std::vector<Neighbour> nbrs_;
+  std::vector<double> arc_;  ///< each agent's arc length this step (arc law)
   double t_ = 0.0;
   long steps_ = 0;
 };

@@ -2,6 +2,7 @@
 /// Basic types of the pure core. The core includes only Eigen and the standard library.
 #include <Eigen/Core>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace shapeform::core {
@@ -13,6 +14,9 @@ using Vec2 = Eigen::Vector2d;
 struct Neighbour {
   std::int32_t id = 0;
   Vec2 x = Vec2::Zero();
+  /// The neighbour's arc length along the current shape, when it published one for the same command
+  /// (NaN when unknown: the arc law then projects x itself).
+  double s = std::numeric_limits<double>::quiet_NaN();
 };
 
 }  // namespace shapeform::core

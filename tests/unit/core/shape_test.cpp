@@ -27,10 +27,11 @@ std::vector<Vec2> sample_points(int n, double w, unsigned seed) {
 double on_shape_residual(const ShapeSpec& s, const Vec2& p) {
   const Vec2 y = p - s.centre;
   switch (s.kind) {
-    case ShapeKind::Line: return p.y() - (s.m * p.x() + s.c);
+    case ShapeKind::Line: return y.y() - (s.m * y.x() + s.c);  // translated like every shape
     case ShapeKind::Circle: return y.norm() - s.r0;
     case ShapeKind::Ellipse: return std::pow(y.x() / s.a, 2) + std::pow(y.y() / s.b, 2) - 1.0;
     case ShapeKind::Square: return std::max(std::abs(y.x()), std::abs(y.y())) - s.a;
+    default: break;
   }
   return 1e9;
 }
@@ -87,7 +88,7 @@ TEST_CASE("line projection: residual orthogonal to the line, closest point", "[s
 
 TEST_CASE("closed projections are radial about the centre", "[shape]") {
   for (const ShapeSpec& s : paper_shapes(Vec2(0.5, 0.25))) {
-    if (!is_closed(s.kind)) continue;
+    if (!is_closed(s)) continue;
     for (const Vec2& p : sample_points(100, 10.0, 11)) {
       const Vec2 y = p - s.centre;
       if (y.norm() < 1e-9) continue;
@@ -124,7 +125,7 @@ TEST_CASE("ellipse uses theta = atan2(a x2, b x1)", "[shape]") {
 
 TEST_CASE("singular points: an agent at a centre goes to direction (1, 0)", "[shape][singular]") {
   for (const ShapeSpec& s : paper_shapes(Vec2(-1, 2))) {
-    if (!is_closed(s.kind)) continue;
+    if (!is_closed(s)) continue;
     const Vec2 t = target_point(s, s.centre);
     REQUIRE(std::isfinite(t.x()));
     REQUIRE(std::isfinite(t.y()));
