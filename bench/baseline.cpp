@@ -45,7 +45,10 @@
 namespace {
 
 namespace fdds = eprosima::fastdds::dds;
-using namespace shapeform;
+namespace sdds = shapeform::dds;
+namespace msg = shapeform::msg;
+namespace util = shapeform::util;
+namespace config = shapeform::config;
 
 /// Largest agent id the listener books (agent ids are 0..9999).
 constexpr std::size_t kMaxIds = 10000;
@@ -121,25 +124,25 @@ void register_type(fdds::DomainParticipant* p) {
 int run(std::int32_t id, const config::Config& cfg) {
   util::log_init("baseline", id);
   util::install_stop_signals();
-  util::log_info(std::to_string(cfg.agent.rate_hz) + " Hz, " + dds::describe(cfg.transport));
+  util::log_info(std::to_string(cfg.agent.rate_hz) + " Hz, " + sdds::describe(cfg.transport));
 
   fdds::DomainParticipant* participant = nullptr;
   try {
-    participant = dds::create_participant(cfg.transport, "shapeform_bench_baseline_" + std::to_string(id));
+    participant = sdds::create_participant(cfg.transport, "shapeform_bench_baseline_" + std::to_string(id));
     register_type<msg::AgentStatePubSubType>(participant);
     register_type<msg::AgentStatusPubSubType>(participant);
-    auto* state_topic = participant->create_topic(dds::topic_name(dds::TopicId::State),
-                                                  dds::type_name(dds::TopicId::State), fdds::TopicQos());
-    auto* status_topic = participant->create_topic(dds::topic_name(dds::TopicId::Status),
-                                                   dds::type_name(dds::TopicId::Status), fdds::TopicQos());
+    auto* state_topic = participant->create_topic(sdds::topic_name(sdds::TopicId::State),
+                                                  sdds::type_name(sdds::TopicId::State), fdds::TopicQos());
+    auto* status_topic = participant->create_topic(sdds::topic_name(sdds::TopicId::Status),
+                                                   sdds::type_name(sdds::TopicId::Status), fdds::TopicQos());
     auto* publisher = participant->create_publisher(fdds::PublisherQos());
     auto* subscriber = participant->create_subscriber(fdds::SubscriberQos());
     if (!state_topic || !status_topic || !publisher || !subscriber)
       throw std::runtime_error("create_topic/publisher/subscriber failed");
-    auto* state_writer = publisher->create_datawriter(state_topic, dds::writer_qos(dds::TopicId::State));
-    auto* status_writer = publisher->create_datawriter(status_topic, dds::writer_qos(dds::TopicId::Status));
+    auto* state_writer = publisher->create_datawriter(state_topic, sdds::writer_qos(sdds::TopicId::State));
+    auto* status_writer = publisher->create_datawriter(status_topic, sdds::writer_qos(sdds::TopicId::Status));
     StateListener listener(id);
-    auto* state_reader = subscriber->create_datareader(state_topic, dds::reader_qos(dds::TopicId::State), &listener,
+    auto* state_reader = subscriber->create_datareader(state_topic, sdds::reader_qos(sdds::TopicId::State), &listener,
                                                        fdds::StatusMask::data_available());
     if (!state_writer || !status_writer || !state_reader) throw std::runtime_error("create endpoint failed");
 
@@ -182,10 +185,10 @@ int run(std::int32_t id, const config::Config& cfg) {
     state_writer->dispose(&out, fdds::HANDLE_NIL);
     state_reader->set_listener(nullptr);
     util::log_info("stopping after " + std::to_string(ticks) + " ticks");
-    dds::delete_participant(participant);
+    sdds::delete_participant(participant);
   } catch (const std::exception& e) {
     util::log_error(e.what());
-    dds::delete_participant(participant);
+    sdds::delete_participant(participant);
     return 1;
   }
   return 0;

@@ -25,7 +25,10 @@
 
 namespace {
 
-using namespace shapeform;
+namespace dds = shapeform::dds;
+namespace msg = shapeform::msg;
+namespace util = shapeform::util;
+namespace config = shapeform::config;
 
 int run(const config::Config& cfg, const std::filesystem::path& dir) {
   util::log_init("probe");

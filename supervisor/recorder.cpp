@@ -93,7 +93,8 @@ void Recorder::write_metrics(const MetricsRow& row) {
   }
   line += ',';
   append(line, m.clusters);
-  for (const std::optional<double>* v : {&m.extent, &m.centroid_error, &m.ring_error}) {
+  for (const std::optional<double>* v : {&m.extent, &m.centroid_error, &m.ring_error, &m.curve_error_mean,
+                                         &m.curve_error_max, &m.arc_gap_cv}) {
     line += ',';
     append(line, *v);
   }

@@ -25,7 +25,8 @@ struct MetricsRow {
 /// Header line of metrics.csv (without the newline).
 inline constexpr const char* kMetricsHeader =
     "wall_s,model_time,epoch,agents_alive,shape_error_mean,shape_error_max,gap_cv,nn_cv,"
-    "min_separation,clusters,extent,centroid_error,ring_error,converged";
+    "min_separation,clusters,extent,centroid_error,ring_error,curve_error_mean,curve_error_max,"
+    "arc_gap_cv,converged";
 /// Header line of positions.csv (without the newline). The simulator writes the last four columns.
 inline constexpr const char* kPositionsHeader = "wall_s,model_time,step,agent,x1,x2";
 

@@ -17,6 +17,8 @@
 #include <string_view>
 #include <system_error>
 
+#include "shapes/shapes.hpp"
+
 namespace shapeform::config {
 
 namespace {
@@ -38,7 +40,12 @@ struct Name {
 constexpr Name<core::ShapeKind> kShapeNames[] = {{core::ShapeKind::Line, "line"},
                                                  {core::ShapeKind::Circle, "circle"},
                                                  {core::ShapeKind::Ellipse, "ellipse"},
-                                                 {core::ShapeKind::Square, "square"}};
+                                                 {core::ShapeKind::Square, "square"},
+                                                 {core::ShapeKind::Polar, "polar"},
+                                                 {core::ShapeKind::Parametric, "parametric"},
+                                                 {core::ShapeKind::Implicit, "implicit"},
+                                                 {core::ShapeKind::Polygon, "polygon"}};
+constexpr Name<core::Law> kLawNames[] = {{core::Law::Paper, "paper"}, {core::Law::Arc, "arc"}};
 constexpr Name<core::CentrePath::Kind> kPathNames[] = {{core::CentrePath::Kind::Fixed, "fixed"},
                                                        {core::CentrePath::Kind::Line, "line"},
                                                        {core::CentrePath::Kind::Circle, "circle"}};
@@ -78,11 +85,14 @@ const std::map<std::string, std::vector<std::string>>& schema_sections() {
        {"schema_version", "name", "swarm", "shape", "tracking", "dynamics", "integration", "sim",
         "agent", "supervisor", "transport"}},
       {"swarm", {"agents", "seed", "init_half_width"}},
-      {"shape", {"kind", "m", "c", "r0", "a", "b", "centre"}},
+      {"shape",
+       {"kind", "m", "c", "r0", "a", "b", "centre", "rotation_deg", "scale", "r_expr", "x_expr",
+        "y_expr", "f_expr", "vertices", "closed"}},
       {"tracking",
        {"enabled", "path", "point", "velocity", "origin", "radius", "period", "phase",
         "feedforward"}},
-      {"dynamics", {"k1", "k2", "sigma", "beta", "r", "max_speed"}},
+      {"dynamics",
+       {"k1", "k2", "sigma", "beta", "r", "max_speed", "law", "k_normal", "k_tangent", "spacing"}},
       {"integration", {"integrator", "dt"}},
       {"sim", {"steps"}},
       {"agent", {"rate_hz", "neighbour_timeout_periods", "status_rate_hz"}},
@@ -193,6 +203,32 @@ std::string format_real(double v) {
   std::string s = format_number(v);
   if (std::isfinite(v) && s.find_first_of(".e") == std::string::npos) s += ".0";
   return s;
+}
+
+constexpr double kRadPerDeg = 3.14159265358979323846 / 180.0;
+
+double radians(double degrees) { return degrees * kRadPerDeg; }
+
+/// The degrees d that read back (radians(d)) as exactly `rad`, in the shortest spelling found near
+/// rad / kRadPerDeg; so to_yaml's rotation_deg round-trips the stored radians bit for bit.
+double degrees_for(double rad) {
+  const double d0 = rad / kRadPerDeg;
+  double best = d0;
+  std::size_t best_len = std::string::npos;
+  double lo = d0;
+  double hi = d0;
+  for (int k = 0; k < 16; ++k) {
+    for (const double d : {lo, hi}) {
+      const std::size_t len = format_number(d).size();
+      if (radians(d) == rad && len < best_len) {
+        best = d;
+        best_len = len;
+      }
+    }
+    lo = std::nextafter(lo, -kInf);
+    hi = std::nextafter(hi, kInf);
+  }
+  return best;
 }
 
 std::string quote(const std::string& s) {
@@ -451,6 +487,27 @@ class Reader {
     return ok ? std::optional<core::Vec2>(out) : std::nullopt;
   }
 
+  /// A list of [x, y] pairs (each checked like vec2, named "key[i]"); null means empty.
+  std::optional<std::vector<core::Vec2>> vec2_list(const Entry& e) {
+    if (!e.present) return std::nullopt;
+    if (e.value.IsNull()) return std::vector<core::Vec2>{};
+    if (!e.value.IsSequence()) {
+      bad(e, "expected a list of [x, y] pairs");
+      return std::nullopt;
+    }
+    std::vector<core::Vec2> out;
+    bool ok = true;
+    for (std::size_t i = 0; i < e.value.size(); ++i) {
+      Entry item = e;
+      item.path = e.path + "[" + std::to_string(i) + "]";
+      item.value = e.value[i];
+      const auto v = vec2(item);
+      if (v) out.push_back(*v);
+      ok = ok && v.has_value();
+    }
+    return ok ? std::optional<std::vector<core::Vec2>>(std::move(out)) : std::nullopt;
+  }
+
   /// A list of non-empty strings; null means empty.
   std::optional<std::vector<std::string>> text_list(const Entry& e) {
     if (!e.present) return std::nullopt;
@@ -563,6 +620,36 @@ std::vector<std::string> apply_overrides(YAML::Node& root,
   return applied;
 }
 
+/// Where the shape's own keys were found, so a compile problem can name the key and its line.
+struct ShapeKeys {
+  Entry r_expr, x_expr, y_expr, f_expr, vertices;
+};
+
+/// shapes::compile on the converted command; a ShapeError becomes one problem naming the key that
+/// holds the faulty expression (shape.r_expr, shape.x_expr / shape.y_expr, shape.f_expr) or
+/// shape.vertices for polygons.
+void compile_shape(core::Command& cmd, const ShapeKeys& keys, Reader& rd) {
+  try {
+    shapes::compile(cmd);
+  } catch (const core::ShapeError& ex) {
+    const std::string what = ex.what();
+    const Entry* e = nullptr;
+    switch (cmd.shape.kind) {
+      case core::ShapeKind::Polar: e = &keys.r_expr; break;
+      case core::ShapeKind::Parametric:
+        e = what.find("y(s)") != std::string::npos ? &keys.y_expr : &keys.x_expr;
+        break;
+      case core::ShapeKind::Implicit: e = &keys.f_expr; break;
+      case core::ShapeKind::Polygon: e = &keys.vertices; break;
+      default: break;
+    }
+    if (e == nullptr)
+      rd.problems.push_back("shape: " + what);
+    else
+      rd.problems.push_back(e->path + ": " + what + rd.where(e->path, e->anchor()));
+  }
+}
+
 /// The checked conversion of a (map) tree.
 Config convert(const YAML::Node& root, bool version_required, Reader& rd) {
   Config c;
@@ -593,6 +680,11 @@ Config convert(const YAML::Node& root, bool version_required, Reader& rd) {
     assign(rd.unsigned64(get(m, s, "seed")), c.swarm.seed);
     assign(rd.real(get(m, s, "init_half_width"), above(0)), c.swarm.init_half_width);
   }
+  // The shape is compiled (expressions parsed, curve built) once every key is read; its problems
+  // name the key that holds the faulty expression or vertices.
+  ShapeKeys shape_keys;
+  bool shape_ok = false;
+  const std::size_t problems_before_shape = rd.problems.size();
   {
     const std::string s = "shape";
     auto& shape = c.command.shape;
@@ -604,6 +696,20 @@ Config convert(const YAML::Node& root, bool version_required, Reader& rd) {
     assign(rd.real(get(m, s, "a"), above(0)), shape.a);
     assign(rd.real(get(m, s, "b"), above(0)), shape.b);
     assign(rd.vec2(get(m, s, "centre")), shape.centre);
+    if (const auto deg = rd.real(get(m, s, "rotation_deg"), Bound{})) shape.rotation = radians(*deg);
+    assign(rd.real(get(m, s, "scale"), above(0)), shape.scale);
+    shape_keys.r_expr = get(m, s, "r_expr");
+    shape_keys.x_expr = get(m, s, "x_expr");
+    shape_keys.y_expr = get(m, s, "y_expr");
+    shape_keys.f_expr = get(m, s, "f_expr");
+    shape_keys.vertices = get(m, s, "vertices");
+    assign(rd.text(shape_keys.r_expr), shape.r_expr);
+    assign(rd.text(shape_keys.x_expr), shape.x_expr);
+    assign(rd.text(shape_keys.y_expr), shape.y_expr);
+    assign(rd.text(shape_keys.f_expr), shape.f_expr);
+    assign(rd.vec2_list(shape_keys.vertices), shape.vertices);
+    assign(rd.boolean(get(m, s, "closed")), shape.closed);
+    shape_ok = rd.problems.size() == problems_before_shape;
   }
   {
     const std::string s = "tracking";
@@ -629,6 +735,10 @@ Config convert(const YAML::Node& root, bool version_required, Reader& rd) {
     assign(rd.real(get(m, s, "beta"), at_least(0)), gains.beta);
     assign(rd.real(get(m, s, "r"), at_least(0)), gains.r);
     assign(rd.real(get(m, s, "max_speed"), at_least(0)), c.command.max_speed);
+    assign(rd.choice(get(m, s, "law"), kLawNames), c.command.law);
+    assign(rd.real(get(m, s, "k_normal"), above_up_to(0, 10)), c.command.arc.k_normal);
+    assign(rd.real(get(m, s, "k_tangent"), above_up_to(0, 1)), c.command.arc.k_tangent);
+    assign(rd.real(get(m, s, "spacing"), above(0)), c.command.arc.spacing);
   }
   {
     const std::string s = "integration";
@@ -697,6 +807,7 @@ Config convert(const YAML::Node& root, bool version_required, Reader& rd) {
     assign(rd.integer(get(m, s, "socket_buffer_bytes"), 0, std::numeric_limits<int>::max()),
            tr.socket_buffer_bytes);
   }
+  if (shape_ok) compile_shape(c.command, shape_keys, rd);
   return c;
 }
 
@@ -805,6 +916,21 @@ std::string to_yaml(const Config& c) {
   put_real(e, "a", shape.a);
   put_real(e, "b", shape.b);
   put_vec2(e, "centre", shape.centre);
+  put_real(e, "rotation_deg", degrees_for(shape.rotation));
+  put_real(e, "scale", shape.scale);
+  e << YAML::Key << "r_expr" << YAML::Value;
+  put_text(e, shape.r_expr);
+  e << YAML::Key << "x_expr" << YAML::Value;
+  put_text(e, shape.x_expr);
+  e << YAML::Key << "y_expr" << YAML::Value;
+  put_text(e, shape.y_expr);
+  e << YAML::Key << "f_expr" << YAML::Value;
+  put_text(e, shape.f_expr);
+  e << YAML::Key << "vertices" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+  for (const auto& v : shape.vertices)
+    e << YAML::Flow << YAML::BeginSeq << format_real(v.x()) << format_real(v.y()) << YAML::EndSeq;
+  e << YAML::EndSeq;
+  e << YAML::Key << "closed" << YAML::Value << shape.closed;
   e << YAML::EndMap;
 
   const auto& tracking = c.command.tracking;
@@ -828,6 +954,10 @@ std::string to_yaml(const Config& c) {
   put_real(e, "beta", gains.beta);
   put_real(e, "r", gains.r);
   put_real(e, "max_speed", c.command.max_speed);
+  e << YAML::Key << "law" << YAML::Value << name_of(kLawNames, c.command.law);
+  put_real(e, "k_normal", c.command.arc.k_normal);
+  put_real(e, "k_tangent", c.command.arc.k_tangent);
+  put_real(e, "spacing", c.command.arc.spacing);
   e << YAML::EndMap;
 
   e << YAML::Key << "integration" << YAML::Value << YAML::BeginMap;

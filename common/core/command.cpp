@@ -69,10 +69,11 @@ Vec2 arc_velocity(const ShapeSpec& s, const Curve& curve, const ArcParams& p, st
       error = rank * slot - me.s;
     }
   }
-  // Move toward the curve point a bounded step ahead along the curve: the step never exceeds half a
-  // slot (so agents keep their order) nor a quarter of the shape (so the chord stays near the curve).
+  // Move toward the curve point a bounded step ahead along the curve: on a curved shape the step never
+  // exceeds half a slot (so agents keep their order) nor a quarter of the shape (so the chord stays
+  // near the curve). On the infinite line the chord is the curve: no bound is needed.
   double step = p.k_tangent * error;
-  if (count > 1) {
+  if (count > 1 && !infinite) {
     const double cap = std::min(0.5 * slot, 0.25 * shape_size(s));
     step = std::clamp(step, -cap, cap);
   }

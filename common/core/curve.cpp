@@ -245,6 +245,27 @@ double polyline_size(const Polyline& p) {
   return std::max(0.5 * (hi - lo).norm(), 1e-9);
 }
 
+/// Newton steps along the gradient toward f = 0 from y. False when the gradient vanishes, a value is
+/// not finite, or it does not converge.
+bool newton_project(const std::function<double(double, double)>& f, const Vec2& y, double tol, Vec2& out) {
+  Vec2 x = y;
+  for (int it = 0; it < 30; ++it) {
+    const double h = 1e-6 * (1.0 + x.norm());
+    const double fx = f(x.x(), x.y());
+    const Vec2 g((f(x.x() + h, x.y()) - f(x.x() - h, x.y())) / (2 * h),
+                 (f(x.x(), x.y() + h) - f(x.x(), x.y() - h)) / (2 * h));
+    const double g2 = g.squaredNorm();
+    if (!std::isfinite(fx) || !std::isfinite(g2) || g2 < 1e-24) return false;
+    const Vec2 step = (fx / g2) * g;
+    x -= step;
+    if (step.norm() <= tol) {
+      out = x;
+      return std::isfinite(x.norm());
+    }
+  }
+  return false;
+}
+
 class ImplicitCurve final : public SampledCurve {
  public:
   ImplicitCurve(std::function<double(double, double)> f, Polyline contour)
@@ -253,25 +274,12 @@ class ImplicitCurve final : public SampledCurve {
   }
   Vec2 target(const Vec2& y) const override {
     // Newton steps along the gradient: y <- y - f grad f / |grad f|^2 (the paper's Cartesian equation).
-    Vec2 x = y;
-    const double tol = 1e-12 * (1.0 + size_);
-    for (int it = 0; it < 30; ++it) {
-      const double h = 1e-6 * (1.0 + x.norm());
-      const double fx = f_(x.x(), x.y());
-      const Vec2 g((f_(x.x() + h, x.y()) - f_(x.x() - h, x.y())) / (2 * h),
-                   (f_(x.x(), x.y() + h) - f_(x.x(), x.y() - h)) / (2 * h));
-      const double g2 = g.squaredNorm();
-      if (!std::isfinite(fx) || !std::isfinite(g2) || g2 < 1e-24) break;  // vanishing gradient: fall back
-      const Vec2 step = (fx / g2) * g;
-      x -= step;
-      if (step.norm() <= tol) {
-        // Accept only a zero near the query (not a far branch reached by a wild step).
-        const Projection c = poly_.closest(y);
-        if (std::isfinite(x.norm()) && (x - y).norm() <= 2.0 * c.distance + 1e-3 * size_) return x;
-        break;
-      }
-    }
-    return poly_.closest(y).point;  // fallback: the closest point of the traced contour
+    // Accepted only when they converge to a zero near the query (not a far branch reached by a wild
+    // step); otherwise, and where the gradient vanishes, the closest point of the traced contour.
+    const Projection c = poly_.closest(y);
+    Vec2 x;
+    if (newton_project(f_, y, 1e-12 * (1.0 + size_), x) && (x - y).norm() <= 2.0 * c.distance + 1e-3 * size_) return x;
+    return c.point;
   }
 
  private:
@@ -433,8 +441,18 @@ std::shared_ptr<const Curve> make_sampled(std::vector<Vec2> points, bool closed)
 }
 std::shared_ptr<const Curve> make_implicit(std::function<double(double, double)> f, double half_box, int grid) {
   if (!(half_box > 0) || grid < 8) throw ShapeError("implicit: bad tracing box");
-  Polyline contour = trace_contour(f, half_box, grid);
-  return std::make_shared<ImplicitCurve>(std::move(f), std::move(contour));
+  const Polyline traced = trace_contour(f, half_box, grid);
+  // Marching squares is only accurate to a fraction of a cell: resample the contour finely by arc
+  // length and move every sample onto f = 0 with Newton steps.
+  const int n = traced.closed() ? kSamples : kSamples + 1;
+  std::vector<Vec2> pts(static_cast<std::size_t>(n));
+  const double step = traced.length() / (traced.closed() ? n : n - 1);
+  for (int k = 0; k < n; ++k) {
+    const Vec2 p = traced.at(k * step);
+    Vec2 q;
+    pts[static_cast<std::size_t>(k)] = newton_project(f, p, 1e-13 * (1.0 + p.norm()), q) && (q - p).norm() < 2.0 * step + 2.0 * half_box / grid ? q : p;
+  }
+  return std::make_shared<ImplicitCurve>(std::move(f), Polyline(std::move(pts), traced.closed()));
 }
 
 }  // namespace shapeform::core

@@ -101,6 +101,8 @@ int main(int argc, char** argv) {
   j["dt"] = cmd.dt;
   j["model_time"] = r.model_time;
   j["integrator"] = std::string(core::to_string(cmd.integrator));
+  j["law"] = std::string(core::to_string(cmd.law));
+  j["max_step"] = r.max_step;
   j["seed"] = init_path.empty() ? nlohmann::json(cfg.swarm.seed) : nlohmann::json(nullptr);
   j["init"] = init_path.empty() ? nlohmann::json(nullptr) : nlohmann::json(init_path);
   j["settle_step"] = r.settle_step ? nlohmann::json(*r.settle_step) : nlohmann::json(nullptr);

@@ -1,5 +1,6 @@
 #include "simulation.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <ostream>
@@ -26,14 +27,16 @@ nlohmann::json opt_json(const std::optional<T>& v) {
 const std::vector<std::string>& metric_columns() {
   static const std::vector<std::string> cols = {
       "shape_error_mean", "shape_error_max", "gap_cv", "nn_cv",          "min_separation",
-      "clusters",         "extent",          "centroid_error", "ring_error"};
+      "clusters",         "extent",          "centroid_error", "ring_error",     "curve_error_mean",
+      "curve_error_max",  "arc_gap_cv"};
   return cols;
 }
 
 std::string metric_csv_values(const core::Metrics& m) {
   return opt_str(m.shape_error_mean) + "," + opt_str(m.shape_error_max) + "," + opt_str(m.gap_cv) + "," +
          opt_str(m.nn_cv) + "," + opt_str(m.min_separation) + "," + opt_str(m.clusters) + "," +
-         opt_str(m.extent) + "," + opt_str(m.centroid_error) + "," + opt_str(m.ring_error);
+         opt_str(m.extent) + "," + opt_str(m.centroid_error) + "," + opt_str(m.ring_error) + "," +
+         opt_str(m.curve_error_mean) + "," + opt_str(m.curve_error_max) + "," + opt_str(m.arc_gap_cv);
 }
 
 nlohmann::json metrics_json(const core::Metrics& m) {
@@ -48,12 +51,16 @@ nlohmann::json metrics_json(const core::Metrics& m) {
   j["extent"] = opt_json(m.extent);
   j["centroid_error"] = opt_json(m.centroid_error);
   j["ring_error"] = opt_json(m.ring_error);
+  j["curve_error_mean"] = opt_json(m.curve_error_mean);
+  j["curve_error_max"] = opt_json(m.curve_error_max);
+  j["arc_gap_cv"] = opt_json(m.arc_gap_cv);
   return j;
 }
 
 SimResult run_simulation(const core::Command& cmd, std::vector<core::Vec2> start, long steps,
                          const SimOptions& opt) {
   core::Swarm swarm(cmd, std::move(start));
+  std::vector<core::Vec2> last = swarm.positions();
   std::vector<double> err;
   std::vector<std::optional<double>> gap;
   err.reserve(static_cast<std::size_t>(steps) + 1);
@@ -75,12 +82,15 @@ SimResult run_simulation(const core::Command& cmd, std::vector<core::Vec2> start
       for (std::size_t i = 0; i < x.size(); ++i)
         *opt.positions_csv << k << ',' << i << ',' << fmt(x[i].x()) << ',' << fmt(x[i].y()) << '\n';
     if (k == steps) break;
+    if (k + 1 == steps) last = x;
     swarm.step();
   }
   SimResult r;
   r.metrics = core::compute_metrics(cmd, swarm.positions(), swarm.time());
   r.settle_step = core::settle_index(err, gap, opt.settle);
   r.final_positions = swarm.positions();
+  for (std::size_t i = 0; i < last.size() && steps > 0; ++i)
+    r.max_step = std::max(r.max_step, (r.final_positions[i] - last[i]).norm());
   r.steps = swarm.steps();
   r.model_time = swarm.time();
   return r;

@@ -24,6 +24,7 @@ struct SimResult {
   std::vector<core::Vec2> final_positions;
   long steps = 0;
   double model_time = 0.0;
+  double max_step = 0.0;  ///< largest displacement of any agent in the last step (chatter)
 };
 
 /// Runs `steps` synchronous steps from `start` (the start itself is step 0 of every series).

@@ -60,6 +60,9 @@ MetricsRow full_row() {
   row.metrics.extent = 8.0;
   row.metrics.centroid_error = 1e-05;
   row.metrics.ring_error = 2.0;
+  row.metrics.curve_error_mean = 0.25;
+  row.metrics.curve_error_max = 0.75;
+  row.metrics.arc_gap_cv = 0.03125;
   row.converged = true;
   return row;
 }
@@ -79,7 +82,8 @@ TEST_CASE("open creates the directory and writes both headers", "[supervisor][re
   CHECK(read_lines(dir / "metrics.csv") ==
         std::vector<std::string>{"wall_s,model_time,epoch,agents_alive,shape_error_mean,"
                                  "shape_error_max,gap_cv,nn_cv,min_separation,clusters,extent,"
-                                 "centroid_error,ring_error,converged"});
+                                 "centroid_error,ring_error,curve_error_mean,curve_error_max,"
+                                 "arc_gap_cv,converged"});
   CHECK(read_lines(dir / "positions.csv") ==
         std::vector<std::string>{"wall_s,model_time,step,agent,x1,x2"});
 }
@@ -109,12 +113,12 @@ TEST_CASE("metrics rows: values, empty fields for undefined values", "[superviso
 
   const auto lines = read_lines(tmp.path() / "metrics.csv");
   REQUIRE(lines.size() == 4);
-  CHECK(lines[1] == "12.25,300,4,20,0.1,0.5,0.05,0.125,1.5,1,8,1e-05,2,1");
-  CHECK(lines[2] == "1.5,10,3,1,,,,,,,,,,0");
-  CHECK(lines[3] == "1.5,,3,1,,,,,,2,,,-0.75,0");
+  CHECK(lines[1] == "12.25,300,4,20,0.1,0.5,0.05,0.125,1.5,1,8,1e-05,2,0.25,0.75,0.03125,1");
+  CHECK(lines[2] == "1.5,10,3,1,,,,,,,,,,,,,0");
+  CHECK(lines[3] == "1.5,,3,1,,,,,,2,,,-0.75,,,,0");
   // Every row has as many fields as the header.
   for (const std::string& line : lines) {
-    CHECK(std::count(line.begin(), line.end(), ',') == 13);
+    CHECK(std::count(line.begin(), line.end(), ',') == 16);
   }
 }
 

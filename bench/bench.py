@@ -1,0 +1,748 @@
+#!/usr/bin/env python3
+"""shapeform benchmark driver (run it through scripts/bench.sh).
+
+Starts real processes on loopback, reads the figures the processes publish about themselves
+(AgentStatus through shapeform_bench_probe, SwarmMetrics for convergence, the supervisor's JSON
+summary) plus kernel counters (/proc), takes the median over runs, stores the results in
+docs/figures/bench_results.json and renders docs/BENCHMARKS.md from that file.
+
+Every run gets its own DDS domain (--domain-base upwards) and stops only the processes it started.
+"""
+from __future__ import annotations
+
+import argparse
+import datetime as dt
+import json
+import math
+import os
+import platform
+import signal
+import statistics
+import subprocess
+import sys
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+CLK_TCK = os.sysconf("SC_CLK_TCK")
+
+# --------------------------------------------------------------------------------------------
+# What can be run.
+
+# Transport presets: --set overrides given to every process of a run (agents, supervisor, probe,
+# baseline). "ds" additionally starts a discovery server on 127.0.0.1 for the run.
+PRESETS: dict[str, dict] = {
+    "default": {"sets": [], "ds": False,
+                "about": "project defaults (loopback profile: unicast UDPv4 on 127.0.0.1, OS socket buffers)"},
+}
+
+
+def add_preset(name: str, sets: list[str], about: str, ds: bool = False) -> None:
+    PRESETS[name] = {"sets": sets, "ds": ds, "about": about}
+
+
+@dataclass
+class Row:
+    """One benchmark row: `kind` processes of N agents at `rate` Hz with a transport preset."""
+    kind: str            # baseline | agents | group
+    n: int
+    rate: float
+    preset: str = "default"
+    stagger_s: float = 0.0
+    group: int = 0       # agents per process (kind == group)
+    section: str = "main"
+    note: str = ""
+
+    @property
+    def id(self) -> str:
+        r = f"{self.rate:g}"
+        s = f"{self.kind}-n{self.n}-r{r}"
+        if self.kind == "group":
+            s += f"-g{self.group}"
+        if self.preset != "default":
+            s += f"-{self.preset}"
+        if self.stagger_s > 0:
+            s += f"-st{int(round(self.stagger_s * 1000))}"
+        return s
+
+    def baseline_id(self) -> str:
+        return Row("baseline", self.n, self.rate, self.preset, self.stagger_s).id
+
+
+MAIN_ROWS: list[Row] = []
+LEVER_ROWS: list[Row] = []
+
+
+def main_rows() -> list[Row]:
+    rows = []
+    for n in (10, 25, 50, 100):
+        for rate in ((20.0, 50.0) if n <= 25 else (20.0,)):
+            rows.append(Row("baseline", n, rate, MAIN_PRESET, MAIN_STAGGER))
+            rows.append(Row("agents", n, rate, MAIN_PRESET, MAIN_STAGGER))
+    return rows
+
+
+MAIN_PRESET = "default"
+MAIN_STAGGER = 0.0
+
+# Levers: each a list of rows measured side by side (filled in below the presets they use).
+LEVERS: list[dict] = []
+
+# --------------------------------------------------------------------------------------------
+# Small helpers.
+
+
+def now_ns() -> int:
+    # CLOCK_MONOTONIC: the same clock as std::chrono::steady_clock and every *_stamp_ns.
+    return time.monotonic_ns()
+
+
+def median(xs):
+    xs = [x for x in xs if x is not None]
+    if not xs:
+        return None
+    return statistics.median(xs)
+
+
+def read_proc_cpu_ticks(pid: int) -> int | None:
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            parts = f.read().rsplit(")", 1)[1].split()
+        return int(parts[11]) + int(parts[12])  # utime + stime
+    except (OSError, IndexError, ValueError):
+        return None
+
+
+def read_proc_rss_mb(pid: int) -> float | None:
+    try:
+        with open(f"/proc/{pid}/statm") as f:
+            return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
+    except (OSError, IndexError, ValueError):
+        return None
+
+
+def read_host_cpu() -> tuple[int, int]:
+    with open("/proc/stat") as f:
+        vals = [int(v) for v in f.readline().split()[1:]]
+    idle = vals[3] + vals[4]
+    return sum(vals), idle
+
+
+def read_udp_counters() -> dict[str, int]:
+    with open("/proc/net/snmp") as f:
+        lines = [l.split() for l in f if l.startswith("Udp:")]
+    return dict(zip(lines[0][1:], (int(v) for v in lines[1][1:])))
+
+
+class Sampler(threading.Thread):
+    """Samples host CPU, UDP counters and the CPU of a few named processes every 0.5 s."""
+
+    def __init__(self):
+        super().__init__(daemon=True)
+        self.pids: dict[str, int] = {}
+        self.samples: list[dict] = []
+        self._stop = threading.Event()
+
+    def run(self):
+        while not self._stop.is_set():
+            s = {"t": now_ns()}
+            s["host_total"], s["host_idle"] = read_host_cpu()
+            s["udp"] = read_udp_counters()
+            for name, pid in list(self.pids.items()):
+                s[name] = read_proc_cpu_ticks(pid)
+                s[name + "_rss"] = read_proc_rss_mb(pid)
+            self.samples.append(s)
+            self._stop.wait(0.5)
+
+    def stop(self):
+        self._stop.set()
+        self.join()
+
+    def window(self, t0: int, t1: int):
+        inside = [s for s in self.samples if t0 <= s["t"] <= t1]
+        return (inside[0], inside[-1]) if len(inside) >= 2 else (None, None)
+
+
+def read_csv(path: Path) -> list[dict]:
+    if not path.exists():
+        return []
+    with open(path) as f:
+        header = f.readline().strip().split(",")
+        rows = []
+        for line in f:
+            parts = line.strip().split(",")
+            if len(parts) != len(header):
+                continue  # a line cut by a kill
+            try:
+                rows.append({k: float(v) for k, v in zip(header, parts)})
+            except ValueError:
+                continue
+    return rows
+
+
+# --------------------------------------------------------------------------------------------
+# One run.
+
+
+@dataclass
+class Ctx:
+    bin: Path
+    runs_dir: Path
+    window_s: float
+    disc_timeout_s: float
+    conv_timeout_s: float
+    scenario: Path
+    scenario_sets: list[str]
+    status_rate_hz: float
+    domain_base: int
+    domain_count: int = 30
+    next_domain: int = 0
+    verbose: bool = True
+
+    def domain(self) -> int:
+        d = self.domain_base + self.next_domain % self.domain_count
+        self.next_domain += 1
+        return d
+
+
+def log(msg: str) -> None:
+    print(f"[bench] {msg}", file=sys.stderr, flush=True)
+
+
+def ds_xml(path: Path, port: int) -> None:
+    path.write_text(f"""<?xml version="1.0" encoding="UTF-8"?>
+<dds><profiles xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles">
+  <transport_descriptors>
+    <transport_descriptor><transport_id>udp_lo</transport_id><type>UDPv4</type>
+      <interfaceWhiteList><address>127.0.0.1</address></interfaceWhiteList>
+    </transport_descriptor>
+  </transport_descriptors>
+  <participant profile_name="bench_ds" is_default_profile="true"><rtps>
+    <userTransports><transport_id>udp_lo</transport_id></userTransports>
+    <useBuiltinTransports>false</useBuiltinTransports>
+    <builtin>
+      <discovery_config><discoveryProtocol>SERVER</discoveryProtocol></discovery_config>
+      <metatrafficUnicastLocatorList><locator><udpv4><address>127.0.0.1</address><port>{port}</port></udpv4></locator></metatrafficUnicastLocatorList>
+    </builtin>
+  </rtps></participant>
+</profiles></dds>
+""")
+
+
+def udp_port_bound(port: int) -> bool:
+    try:
+        with open("/proc/net/udp") as f:
+            next(f)
+            for line in f:
+                local = line.split()[1]
+                if int(local.split(":")[1], 16) == port:
+                    return True
+    except OSError:
+        pass
+    return False
+
+
+def wait_for(cond, timeout_s: float, step_s: float = 0.05) -> bool:
+    end = time.monotonic() + timeout_s
+    while time.monotonic() < end:
+        if cond():
+            return True
+        time.sleep(step_s)
+    return cond()
+
+
+def stop_processes(procs: list[subprocess.Popen], spacing_s: float, grace_s: float) -> list[int | None]:
+    """SIGTERM each (spaced, so dozens of participants do not leave at the same instant), then wait,
+    then SIGKILL whatever is left. Returns the exit codes (None = had to be killed)."""
+    for p in procs:
+        if p.poll() is None:
+            try:
+                p.send_signal(signal.SIGTERM)
+            except ProcessLookupError:
+                pass
+            if spacing_s > 0:
+                time.sleep(spacing_s)
+    end = time.monotonic() + grace_s
+    codes: list[int | None] = []
+    for p in procs:
+        try:
+            codes.append(p.wait(timeout=max(0.1, end - time.monotonic())))
+        except subprocess.TimeoutExpired:
+            p.kill()
+            p.wait()
+            codes.append(None)
+    return codes
+
+
+def run_once(ctx: Ctx, row: Row, run_idx: int) -> dict:
+    domain = ctx.domain()
+    rdir = ctx.runs_dir / row.id / f"run{run_idx}"
+    rdir.mkdir(parents=True, exist_ok=True)
+    preset = PRESETS[row.preset]
+    tsets = list(preset["sets"])
+    ds_proc = None
+    if preset["ds"]:
+        port = 12000 + domain
+        tsets += ["transport.profile=discovery-server", f"transport.discovery_server=127.0.0.1:{port}"]
+    common = ["--domain", str(domain)] + [a for s in tsets for a in ("--set", s)]
+    rate_sets = [f"agent.rate_hz={row.rate:g}", f"agent.status_rate_hz={ctx.status_rate_hz:g}",
+                 f"swarm.agents={row.n}"]
+
+    sampler = Sampler()
+    files = []
+
+    def spawn(name: str, argv: list[str], **kw) -> subprocess.Popen:
+        out = open(rdir / f"{name}.out", "w")
+        err = open(rdir / f"{name}.err", "w")
+        files.extend([out, err])
+        return subprocess.Popen(argv, stdout=kw.get("stdout", out), stderr=err, stdin=subprocess.DEVNULL,
+                                cwd=rdir)
+
+    result: dict = {"row": row.id, "run": run_idx, "domain": domain, "dir": str(rdir)}
+    load_before = os.getloadavg()[0]
+    result["load_before"] = load_before
+    try:
+        if preset["ds"]:
+            xml = rdir / "ds.xml"
+            ds_xml(xml, port)
+            ds_proc = spawn("ds", ["fast-discovery-server", "-i", "0", "-l", "127.0.0.1", "-p", str(port),
+                                   "-x", str(xml)])
+            if not wait_for(lambda: udp_port_bound(port), 10):
+                raise RuntimeError(f"discovery server did not bind 127.0.0.1:{port}")
+            sampler.pids["ds"] = ds_proc.pid
+        probe = spawn("probe", [str(ctx.bin / "shapeform_bench_probe"), "--out", str(rdir)] + common,
+                      stdout=subprocess.PIPE)
+        line = probe.stdout.readline().decode()
+        if not line.startswith("ready"):
+            raise RuntimeError(f"probe did not start: {line!r}")
+        sampler.start()
+        t0 = now_ns()
+        result["t0"] = t0
+        sup = None
+        if row.kind in ("agents", "group"):
+            script = rdir / "script.txt"
+            script.write_text(f"wait agents {row.n} timeout={ctx.disc_timeout_s:g}\nstart\n"
+                              f"wait converged timeout={ctx.conv_timeout_s:g}\nsleep {ctx.window_s:g}\nquit\n")
+            sup = spawn("supervisor", [str(ctx.bin / "shapeform_supervisor"), "--config", str(ctx.scenario),
+                                       "--script", str(script), "--json"] + common +
+                        [a for s in rate_sets + ctx.scenario_sets for a in ("--set", s)])
+            sampler.pids["sup"] = sup.pid
+        workers: list[subprocess.Popen] = []
+        if row.kind == "group":
+            for first in range(0, row.n, row.group):
+                last = min(row.n, first + row.group) - 1
+                workers.append(spawn(f"group{first}", [
+                    str(ctx.bin / "shapeform_agent_group"), "--ids", f"{first}-{last}", "--config",
+                    str(ctx.scenario), "--seed", "1"] + common +
+                    [a for s in rate_sets + ctx.scenario_sets for a in ("--set", s)]))
+                if row.stagger_s > 0:
+                    time.sleep(row.stagger_s)
+        else:
+            for i in range(row.n):
+                if row.kind == "agents":
+                    argv = [str(ctx.bin / "shapeform_agent"), "--id", str(i), "--config", str(ctx.scenario),
+                            "--seed", "1"] + common + [a for s in rate_sets + ctx.scenario_sets for a in ("--set", s)]
+                else:
+                    argv = [str(ctx.bin / "shapeform_bench_baseline"), "--id", str(i)] + common + \
+                        [a for s in rate_sets for a in ("--set", s)]
+                workers.append(spawn(f"p{i}", argv))
+                if row.stagger_s > 0:
+                    time.sleep(row.stagger_s)
+        result["launch_s"] = (now_ns() - t0) / 1e9
+
+        if sup is not None:
+            limit = ctx.disc_timeout_s + ctx.conv_timeout_s + ctx.window_s + 60
+            try:
+                sup.wait(timeout=limit)
+            except subprocess.TimeoutExpired:
+                log(f"{row.id}: supervisor still running after {limit:.0f} s; stopping it")
+            t_end = now_ns()
+        else:
+            # Baseline: wait until every process hears all others (or the discovery timeout), then the window.
+            def all_heard() -> bool:
+                rows = read_csv(rdir / "status.csv")
+                full = {int(r["id"]) for r in rows if r["neighbours_heard"] >= row.n - 1}
+                return len(full) >= row.n
+            wait_for(all_heard, ctx.disc_timeout_s, 0.5)
+            time.sleep(ctx.window_s)
+            t_end = now_ns()
+        result["t_end"] = t_end
+        early = [i for i, p in enumerate(workers) if p.poll() is not None]
+        codes = stop_processes(workers, 0.01, 20)
+        result["exit_codes"] = codes
+        result["died_early"] = early
+        if sup is not None:
+            sc = stop_processes([sup], 0, 10)[0]
+            result["supervisor_exit"] = sc
+        stop_processes([probe], 0, 10)
+    finally:
+        if sampler.is_alive():
+            sampler.stop()
+        if ds_proc is not None:
+            stop_processes([ds_proc], 0, 5)
+        for f in files:
+            f.close()
+    analyse(ctx, row, rdir, result, sampler)
+    return result
+
+
+# --------------------------------------------------------------------------------------------
+# Figures of one run.
+
+
+def interp_counter(statuses: list[dict], key: str, t: float) -> float | None:
+    """Linear interpolation of a cumulative counter at steady time t (ns); None outside the range."""
+    if not statuses or t < statuses[0]["stamp_ns"] or t > statuses[-1]["stamp_ns"]:
+        return None
+    for a, b in zip(statuses, statuses[1:]):
+        if a["stamp_ns"] <= t <= b["stamp_ns"]:
+            span = b["stamp_ns"] - a["stamp_ns"]
+            f = 0.0 if span <= 0 else (t - a["stamp_ns"]) / span
+            return a[key] + f * (b[key] - a[key])
+    return statuses[-1][key]
+
+
+def analyse(ctx: Ctx, row: Row, rdir: Path, res: dict, sampler: Sampler) -> None:
+    n = row.n
+    t0 = res["t0"]
+    t_end = res["t_end"]
+    w1 = t_end - 0.5e9
+    w0 = max(t0, t_end - ctx.window_s * 1e9 + 0.5e9)
+    res["window_s"] = (w1 - w0) / 1e9
+    status = read_csv(rdir / "status.csv")
+    by_id: dict[int, list[dict]] = {}
+    for s in status:
+        by_id.setdefault(int(s["id"]), []).append(s)
+    for v in by_id.values():
+        v.sort(key=lambda s: s["stamp_ns"])
+    res["agents_reporting"] = len(by_id)
+
+    # Everyone hears everyone: per agent, the first status reporting all n-1 others; the latest of those.
+    firsts = []
+    for i in range(n):
+        f = next((s["stamp_ns"] for s in by_id.get(i, []) if s["neighbours_heard"] >= n - 1), None)
+        firsts.append(f)
+    res["all_heard_s"] = None if any(f is None for f in firsts) else (max(firsts) - t0) / 1e9
+    res["heard_min"] = min((max((s["neighbours_heard"] for s in by_id.get(i, [])), default=0) for i in range(n)),
+                           default=0)
+
+    # Delivery over the window: each receiver's received count against the senders' publication rates.
+    rates = {}
+    recv = {}
+    for i, ss in by_id.items():
+        a, b = interp_counter(ss, "ticks", w0), interp_counter(ss, "ticks", w1)
+        if a is not None and b is not None:
+            rates[i] = (b - a) / ((w1 - w0) / 1e9)
+        ra, rb = interp_counter(ss, "samples_received", w0), interp_counter(ss, "samples_received", w1)
+        if ra is not None and rb is not None:
+            recv[i] = rb - ra
+    win = (w1 - w0) / 1e9
+    expected = 0.0
+    got = 0.0
+    for i in range(n):
+        exp_i = sum(r for j, r in rates.items() if j != i) * win
+        # A sender that never reported is still owed to everyone: assume the nominal rate.
+        exp_i += sum(row.rate for j in range(n) if j != i and j not in rates) * win
+        expected += exp_i
+        got += recv.get(i, 0.0)
+    res["delivery"] = got / expected if expected > 0 else None
+    lost = [interp_counter(ss, "samples_lost", w1) - interp_counter(ss, "samples_lost", w0)
+            for ss in by_id.values() if interp_counter(ss, "samples_lost", w0) is not None
+            and interp_counter(ss, "samples_lost", w1) is not None]
+    res["seq_gaps_per_s"] = sum(lost) / win if lost else None
+
+    inwin = [s for s in status if w0 <= s["stamp_ns"] <= w1]
+    p50s = [s["age_p50_us"] for s in inwin if s["age_p50_us"] >= 0]
+    p99s = [s["age_p99_us"] for s in inwin if s["age_p99_us"] >= 0]
+    res["age_p50_ms"] = median(p50s) / 1e3 if p50s else None
+    res["age_p99_ms"] = median(p99s) / 1e3 if p99s else None
+    res["age_p99_worst_ms"] = max(p99s) / 1e3 if p99s else None
+    res["age_p99_p90_ms"] = (sorted(p99s)[int(0.9 * (len(p99s) - 1))] / 1e3) if p99s else None
+
+    # Loop lateness: each agent's p99 over its last 1024 ticks, at the end of the window.
+    lat = []
+    over = 0.0
+    ticks = 0.0
+    cpu = []
+    rss = []
+    for i, ss in by_id.items():
+        last = [s for s in ss if s["stamp_ns"] <= w1]
+        if last:
+            lat.append(last[-1]["lateness_p99_us"])
+            rss.append(last[-1]["rss_mb"])
+        oa, ob = interp_counter(ss, "overruns", w0), interp_counter(ss, "overruns", w1)
+        ta, tb = interp_counter(ss, "ticks", w0), interp_counter(ss, "ticks", w1)
+        if None not in (oa, ob, ta, tb):
+            over += ob - oa
+            ticks += tb - ta
+        c = [s["cpu_percent"] for s in ss if w0 <= s["stamp_ns"] <= w1]
+        if c:
+            cpu.append(sum(c) / len(c))
+    res["lateness_p99_ms"] = median(lat) / 1e3 if lat else None
+    res["lateness_p99_worst_ms"] = max(lat) / 1e3 if lat else None
+    res["overruns"] = over
+    res["overrun_pct"] = 100 * over / (over + ticks) if ticks > 0 else None
+    res["cpu_pct"] = statistics.mean(cpu) if cpu else None
+    res["cpu_pct_total"] = sum(cpu) if cpu else None
+    res["rss_mb"] = median(rss)
+    res["rss_mb_max"] = max(rss) if rss else None
+
+    a, b = sampler.window(w0, w1)
+    if a is not None:
+        span_s = (b["t"] - a["t"]) / 1e9
+        dt_total = b["host_total"] - a["host_total"]
+        res["host_busy_pct"] = 100 * (1 - (b["host_idle"] - a["host_idle"]) / dt_total) if dt_total else None
+        for name in ("sup", "ds"):
+            if a.get(name) is not None and b.get(name) is not None:
+                res[f"{name}_cpu_pct"] = 100 * (b[name] - a[name]) / CLK_TCK / span_s
+                res[f"{name}_rss_mb"] = b.get(name + "_rss")
+        ua, ub = a["udp"], b["udp"]
+        res["udp_in_per_s"] = (ub["InDatagrams"] - ua["InDatagrams"]) / span_s
+        res["udp_rcvbuf_errors_per_s"] = (ub["RcvbufErrors"] - ua["RcvbufErrors"]) / span_s
+        res["udp_out_per_s"] = (ub["OutDatagrams"] - ua["OutDatagrams"]) / span_s
+
+    # Convergence (agents): the first SwarmMetrics sample with converged set.
+    metrics = read_csv(rdir / "metrics.csv")
+    started = next((m["recv_ns"] for m in metrics if m["epoch"] >= 1), None)
+    conv = next((m["recv_ns"] for m in metrics if m["epoch"] >= 1 and m["converged"] >= 1), None)
+    res["start_s"] = (started - t0) / 1e9 if started else None
+    res["converge_s"] = (conv - t0) / 1e9 if conv else None
+    sup_out = rdir / "supervisor.out"
+    if sup_out.exists():
+        lines = [l for l in sup_out.read_text().splitlines() if l.startswith("{")]
+        if lines:
+            try:
+                j = json.loads(lines[-1])
+                res["sup_converged"] = j.get("converged")
+                res["shape_error_mean"] = j.get("shape_error_mean")
+                res["gap_cv"] = j.get("gap_cv")
+                res["agents_seen"] = j.get("agents_seen")
+            except json.JSONDecodeError:
+                pass
+
+    codes = res.get("exit_codes", [])
+    res["aborts"] = sum(1 for c in codes if c is not None and c < 0 and c != -signal.SIGTERM)
+    res["bad_exits"] = sum(1 for c in codes if c is None or c != 0)
+    asserts = 0
+    for f in rdir.glob("*.err"):
+        try:
+            if "Assertion" in f.read_text(errors="replace"):
+                asserts += 1
+        except OSError:
+            pass
+    res["assert_lines"] = asserts
+
+
+# --------------------------------------------------------------------------------------------
+# Aggregation over runs and the report.
+
+TIME_KEYS = ("all_heard_s", "converge_s")
+
+
+def aggregate(runs: list[dict]) -> dict:
+    agg: dict = {"runs": len(runs)}
+    keys = sorted({k for r in runs for k, v in r.items() if isinstance(v, (int, float)) and not isinstance(v, bool)})
+    for k in keys:
+        if k in ("run", "domain", "t0", "t_end"):
+            continue
+        vals = [r.get(k) for r in runs]
+        if k in TIME_KEYS:
+            vals = [math.inf if v is None else v for v in vals]
+        vals = [v for v in vals if v is not None]
+        if not vals:
+            continue
+        agg[k] = statistics.median(vals)
+        agg[k + "_range"] = [min(vals), max(vals)]
+    for k in ("aborts", "bad_exits", "assert_lines"):
+        agg[k + "_total"] = sum(r.get(k, 0) for r in runs)
+    agg["sup_converged_runs"] = sum(1 for r in runs if r.get("sup_converged"))
+    return agg
+
+
+def machine_info() -> dict:
+    info = {"host_cpus": os.cpu_count(), "kernel": platform.release()}
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                info["cpu"] = line.split(":", 1)[1].strip()
+                break
+        for line in open("/proc/meminfo"):
+            if line.startswith("MemTotal"):
+                info["mem_gb"] = round(int(line.split()[1]) / 2**20, 1)
+    except OSError:
+        pass
+    try:
+        info["os"] = [l.split("=", 1)[1].strip().strip('"') for l in open("/etc/os-release")
+                      if l.startswith("PRETTY_NAME")][0]
+    except (OSError, IndexError):
+        pass
+    for k in ("rmem_max", "wmem_max", "rmem_default"):
+        try:
+            info[k] = int(open(f"/proc/sys/net/core/{k}").read())
+        except OSError:
+            pass
+    try:
+        out = subprocess.run(["dpkg-query", "-W", "-f=${Version}", "libfastrtps2.9"], capture_output=True, text=True)
+        info["fastdds"] = out.stdout.strip() or None
+    except OSError:
+        pass
+    return info
+
+
+def git_commit() -> str:
+    try:
+        c = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
+                           text=True).stdout.strip()
+        dirty = subprocess.run(["git", "-C", str(ROOT), "status", "--porcelain", "--untracked-files=no"],
+                               capture_output=True, text=True).stdout.strip()
+        return c + ("+local changes" if dirty else "")
+    except OSError:
+        return "unknown"
+
+
+# --------------------------------------------------------------------------------------------
+
+
+def run_rows(ctx: Ctx, rows: list[Row], runs: int, store: dict) -> None:
+    for row in rows:
+        per = []
+        for k in range(runs):
+            log(f"{row.id}: run {k + 1}/{runs} (domain base {ctx.domain_base})")
+            r = run_once(ctx, row, k)
+            per.append(r)
+            log(f"{row.id}: run {k + 1}: heard {fmt(r.get('all_heard_s'), 's')} deliv {fmt(r.get('delivery'), 'r')} "
+                f"age p50 {fmt(r.get('age_p50_ms'), 'ms')} p99 {fmt(r.get('age_p99_ms'), 'ms')} "
+                f"cpu {fmt(r.get('cpu_pct'), '%')} host {fmt(r.get('host_busy_pct'), '%')} "
+                f"rcvbuf err/s {fmt(r.get('udp_rcvbuf_errors_per_s'), 'n')} conv {fmt(r.get('converge_s'), 's')} "
+                f"aborts {r.get('aborts')}")
+        entry = {"row": row.__dict__ | {"id": row.id}, "agg": aggregate(per), "runs": per,
+                 "when": dt.datetime.now().isoformat(timespec="seconds")}
+        store[row.id] = entry
+
+
+def fmt(v, kind: str) -> str:
+    if v is None:
+        return "-"
+    if isinstance(v, float) and math.isinf(v):
+        return "never"
+    if kind == "s":
+        return f"{v:.1f} s"
+    if kind == "r":
+        return f"{100 * v:.2f} %"
+    if kind == "ms":
+        return f"{v:.2f} ms" if v < 10 else f"{v:.0f} ms"
+    if kind == "%":
+        return f"{v:.1f} %"
+    if kind == "n":
+        return f"{v:.0f}"
+    return str(v)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--quick", action="store_true", help="1 run per row and short windows")
+    ap.add_argument("--runs", type=int, help="runs per row (default 3; 1 with --quick)")
+    ap.add_argument("--window", type=float, help="measurement window, s (default: max(30, 1100 ticks); 12 with --quick)")
+    ap.add_argument("--only", action="append", default=[], help="row id or prefix to run (repeatable)")
+    ap.add_argument("--row", action="append", default=[],
+                    help="ad-hoc row KIND:N:RATE[:PRESET[:STAGGER_S[:GROUP]]] (stored, shown under experiments)")
+    ap.add_argument("--levers", action="store_true", help="also run the lever rows")
+    ap.add_argument("--no-main", action="store_true", help="skip the main rows")
+    ap.add_argument("--no-sim", action="store_true", help="skip the simulator rows")
+    ap.add_argument("--build", default=str(ROOT / "build"), help="build directory (default build/)")
+    ap.add_argument("--runs-dir", default=str(ROOT / "runs" / "bench"), help="where process logs and CSVs go")
+    ap.add_argument("--results", default=str(ROOT / "docs" / "figures" / "bench_results.json"))
+    ap.add_argument("--report", default=str(ROOT / "docs" / "BENCHMARKS.md"))
+    ap.add_argument("--domain-base", type=int, default=200, help="first DDS domain id (30 are used in turn)")
+    ap.add_argument("--render-only", action="store_true", help="only re-render the report from the results file")
+    ap.add_argument("--list", action="store_true", help="list the row ids and exit")
+    args = ap.parse_args(argv)
+
+    from bench_report import render, sim_rows  # noqa: E402 (same folder)
+
+    all_rows = main_rows()
+    lever_rows = [r for lv in LEVERS for r in lv["rows"]]
+    if args.list:
+        for r in all_rows:
+            print("main  ", r.id)
+        for r in lever_rows:
+            print("lever ", r.id)
+        return 0
+
+    results_path = Path(args.results)
+    store = json.loads(results_path.read_text()) if results_path.exists() else {}
+    store.setdefault("rows", {})
+    store.setdefault("sim", {})
+    if args.render_only:
+        render(store, Path(args.report))
+        return 0
+
+    bindir = Path(args.build).resolve() / "bin"
+    for exe in ("shapeform_agent", "shapeform_supervisor", "shapeform_bench_baseline", "shapeform_bench_probe"):
+        if not (bindir / exe).exists():
+            print(f"bench: {bindir / exe} missing: run ./scripts/build.sh first", file=sys.stderr)
+            return 2
+    runs = args.runs or (1 if args.quick else 3)
+    ctx = Ctx(bin=bindir, runs_dir=Path(args.runs_dir), window_s=0, disc_timeout_s=60 if not args.quick else 40,
+              conv_timeout_s=120 if not args.quick else 60, scenario=ROOT / "config" / "scenarios" / "circle.yaml",
+              scenario_sets=SCENARIO_SETS, status_rate_hz=2.0, domain_base=args.domain_base)
+
+    selected: list[Row] = []
+    if not args.no_main:
+        selected += all_rows
+    if args.levers:
+        selected += lever_rows
+    for spec in args.row:
+        parts = spec.split(":")
+        r = Row(parts[0], int(parts[1]), float(parts[2]), parts[3] if len(parts) > 3 else "default",
+                float(parts[4]) if len(parts) > 4 else 0.0, int(parts[5]) if len(parts) > 5 else 0, "experiment")
+        if r.preset not in PRESETS:
+            print(f"bench: unknown preset {r.preset}; known: {', '.join(PRESETS)}", file=sys.stderr)
+            return 2
+        selected.append(r)
+    if args.only:
+        pool = all_rows + lever_rows + selected
+        selected = [r for r in dict((r.id, r) for r in pool).values()
+                    if any(r.id == o or r.id.startswith(o) for o in args.only)]
+        if not selected:
+            print("bench: --only matched no row (see --list)", file=sys.stderr)
+            return 2
+    seen = set()
+    selected = [r for r in selected if not (r.id in seen or seen.add(r.id))]
+
+    store["machine"] = machine_info()
+    store["commit"] = git_commit()
+    store["date"] = dt.datetime.now().isoformat(timespec="seconds")
+    store["quick"] = bool(args.quick)
+    for row in selected:
+        ctx.window_s = args.window or (12.0 if args.quick else max(30.0, math.ceil(1100 / row.rate)))
+        run_rows(ctx, [row], runs, store["rows"])
+        store["rows"][row.id]["row"]["section"] = row.section
+        store["rows"][row.id]["command"] = rerun_command(row, args, runs)
+        results_path.parent.mkdir(parents=True, exist_ok=True)
+        results_path.write_text(json.dumps(store, indent=1, default=str))
+    if not args.no_sim and not args.only and not args.row:
+        store["sim"] = sim_rows(bindir, args.quick)
+        results_path.write_text(json.dumps(store, indent=1, default=str))
+    render(store, Path(args.report))
+    log(f"wrote {args.report} and {results_path}")
+    return 0
+
+
+def rerun_command(row: Row, args, runs: int) -> str:
+    cmd = "scripts/bench.sh"
+    if args.quick:
+        cmd += " --quick"
+    if row.section == "experiment":
+        spec = f"{row.kind}:{row.n}:{row.rate:g}:{row.preset}:{row.stagger_s:g}:{row.group}"
+        return f"{cmd} --runs {runs} --row {spec} --only {row.id}"
+    return f"{cmd} --runs {runs} --only {row.id}"
+
+
+SCENARIO_SETS: list[str] = []
+
+if __name__ == "__main__":
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    sys.exit(main())
