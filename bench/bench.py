@@ -43,6 +43,15 @@ def add_preset(name: str, sets: list[str], about: str, ds: bool = False) -> None
     PRESETS[name] = {"sets": sets, "ds": ds, "about": about}
 
 
+BUF = "transport.socket_buffer_bytes=4194304"
+MC = "transport.multicast_data=true"
+add_preset("buf", [BUF], "4 MiB UDP socket send/receive buffers (transport.socket_buffer_bytes)")
+add_preset("mc", [MC], "user data on multicast 239.255.0.1 on lo (transport.multicast_data)")
+add_preset("mcbuf", [MC, BUF], "multicast user data on lo + 4 MiB socket buffers")
+add_preset("ds", [], "discovery server on 127.0.0.1 (transport.profile=discovery-server)", ds=True)
+add_preset("dsmcbuf", [MC, BUF], "discovery server + multicast user data on lo + 4 MiB socket buffers", ds=True)
+
+
 @dataclass
 class Row:
     """One benchmark row: `kind` processes of N agents at `rate` Hz with a transport preset."""
@@ -143,10 +152,10 @@ class Sampler(threading.Thread):
         super().__init__(daemon=True)
         self.pids: dict[str, int] = {}
         self.samples: list[dict] = []
-        self._stop = threading.Event()
+        self._halt = threading.Event()
 
     def run(self):
-        while not self._stop.is_set():
+        while not self._halt.is_set():
             s = {"t": now_ns()}
             s["host_total"], s["host_idle"] = read_host_cpu()
             s["udp"] = read_udp_counters()
@@ -154,10 +163,10 @@ class Sampler(threading.Thread):
                 s[name] = read_proc_cpu_ticks(pid)
                 s[name + "_rss"] = read_proc_rss_mb(pid)
             self.samples.append(s)
-            self._stop.wait(0.5)
+            self._halt.wait(0.5)
 
     def stop(self):
-        self._stop.set()
+        self._halt.set()
         self.join()
 
     def window(self, t0: int, t1: int):

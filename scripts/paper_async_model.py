@@ -19,9 +19,11 @@ GAINS = dict(k1=0.1, k2=2.0, sigma=3.5, beta=1.2, r=0.1)
 GOLDEN = 2.39996322972865332223
 
 
-def target(shape, x):
-    """Targets x_T for positions x (n x 2), as common/core/shape.cpp."""
+def target(shape, x, centre=None):
+    """Targets x_T for positions x (n x 2), as common/core/shape.cpp (closed shapes about centre)."""
     kind = shape["kind"]
+    if centre is not None and kind != "line":
+        return target(shape, x - centre) + centre
     if kind == "line":
         m, c = shape["m"], shape["c"]
         t1 = (x[:, 0] + m * x[:, 1] - m * c) / (1 + m * m)
@@ -63,9 +65,9 @@ def velocity_one(i, xi, others_idx, others_x, xt, g):
     return v
 
 
-def velocities(x, shape, g):
+def velocities(x, shape, g, centre=None):
     n = len(x)
-    xt = target(shape, x)
+    xt = target(shape, x, centre)
     d = x[None, :, :] - x[:, None, :]  # d[i, j] = x_j - x_i
     d2 = (d * d).sum(axis=2)
     w = (g["sigma"] ** 2 + d2) ** (-g["beta"])
@@ -84,8 +86,9 @@ def velocities(x, shape, g):
     return v
 
 
-def metrics(x, shape):
-    xt = target(shape, x)
+def metrics(x, shape, centre=None):
+    c = np.zeros(2) if centre is None else centre
+    xt = target(shape, x, centre)
     err = np.hypot(*(x - xt).T)
     if shape["kind"] == "line":
         u = np.array([1.0, shape["m"]]) / math.hypot(1.0, shape["m"])
@@ -93,33 +96,76 @@ def metrics(x, shape):
         xs = x[order]
         gaps = np.hypot(*(xs[1:] - xs[:-1]).T)
     else:
-        order = np.argsort(np.arctan2(x[:, 1], x[:, 0]), kind="stable")
+        order = np.argsort(np.arctan2(x[:, 1] - c[1], x[:, 0] - c[0]), kind="stable")
         xs = x[order]
         gaps = np.hypot(*(np.roll(xs, -1, axis=0) - xs).T)
     d = np.hypot(*(x[None] - x[:, None]).transpose(2, 0, 1))
     iu = np.triu_indices(len(x), 1)
-    return {"shape_error_mean": float(err.mean()), "shape_error_max": float(err.max()),
-            "gap_cv": float(gaps.std() / gaps.mean()), "min_separation": float(d[iu].min()),
-            "extent": float(d[iu].max())}
+    m = {"shape_error_mean": float(err.mean()), "shape_error_max": float(err.max()),
+         "gap_cv": float(gaps.std() / gaps.mean()) if gaps.mean() > 1e-12 else None,
+         "min_separation": float(d[iu].min()), "extent": float(d[iu].max()), "clusters": clusters(d)}
+    if centre is not None:
+        m["centroid_error"] = float(np.hypot(*(x.mean(axis=0) - c)))
+        m["ring_error"] = float(np.abs(np.hypot(*(x - c).T) - shape["r0"]).mean())
+    return m
 
 
-def run(start, shape, steps, schedule="sync", phases=None, g=GAINS, dt=1.0):
-    """Positions over steps 0..steps (list of arrays) and per-step metrics (list of dicts)."""
+def clusters(d, link=0.05):
+    """Single-linkage clusters at distance link, from the pairwise distance matrix."""
+    n = len(d)
+    parent = list(range(n))
+
+    def find(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    c = n
+    for i, j in zip(*np.nonzero(np.triu(d <= link, 1))):
+        a, b = find(i), find(j)
+        if a != b:
+            parent[a] = b
+            c -= 1
+    return c
+
+
+def centre_at(track, t):
+    """C(t) and dC/dt of a tracking path (common/core/shape.cpp centre_at / centre_velocity)."""
+    if track["path"] == "fixed":
+        return np.array(track["point"], float), np.zeros(2)
+    if track["path"] == "line":
+        v = np.array(track["velocity"], float)
+        return np.array(track["point"], float) + t * v, v
+    w = 2 * math.pi / track["period"]
+    a = track.get("phase", 0.0) + w * t
+    o = np.array(track.get("origin", (0.0, 0.0)), float)
+    R = track["radius"]
+    return o + R * np.array([math.cos(a), math.sin(a)]), R * w * np.array([-math.sin(a), math.cos(a)])
+
+
+def run(start, shape, steps, schedule="sync", phases=None, g=GAINS, dt=1.0, track=None, ff=False):
+    """Positions over steps 0..steps (list of arrays) and per-step metrics (list of dicts).
+    track: None (static shape) or a centre path dict (path fixed|line|circle, ...) for a circle
+    shape around C(t); ff adds dC/dt to every agent's velocity (tracking.feedforward)."""
     x = np.array(start, dtype=float)
     n = len(x)
-    out_x, out_m = [x.copy()], [metrics(x, shape)]
+    cen = (lambda t: centre_at(track, t)) if track else (lambda t: (None, np.zeros(2)))
+    out_x, out_m = [x.copy()], [metrics(x, shape, cen(0.0)[0])]
     order = np.argsort(phases) if schedule == "async" else None
     idx = np.arange(n)
-    for _ in range(steps):
+    for k in range(steps):
+        c, vc = cen(k * dt)
+        add = vc if ff else np.zeros(2)
         if schedule == "sync":
-            x = x + dt * velocities(x, shape, g)
+            x = x + dt * (velocities(x, shape, g, c) + add)
         else:
             for i in order:  # each agent in its phase order sees the others' newest positions
                 others = idx != i
-                xt = target(shape, x[i:i + 1])[0]
-                x[i] = x[i] + dt * velocity_one(i, x[i].copy(), idx[others], x[others], xt, g)
+                xt = target(shape, x[i:i + 1], c)[0]
+                x[i] = x[i] + dt * (velocity_one(i, x[i].copy(), idx[others], x[others], xt, g) + add)
         out_x.append(x.copy())
-        out_m.append(metrics(x, shape))
+        out_m.append(metrics(x, shape, cen((k + 1) * dt)[0]))
     return out_x, out_m
 
 

@@ -10,6 +10,8 @@
 #include <utility>
 #include <vector>
 
+#include "shapes/shapes.hpp"
+
 namespace shapeform::supervisor {
 namespace {
 
@@ -91,6 +93,17 @@ std::optional<double> to_double(const std::string& s) {
 }
 
 enum class Bound { Any, Positive, NonNegative };
+
+/// Degrees -> radians, as the config loader converts shape.rotation_deg (same bits for same input).
+constexpr double kRadPerDeg = 3.14159265358979323846 / 180.0;
+
+std::string trim(const std::string& s) {
+  std::size_t first = 0;
+  std::size_t last = s.size();
+  while (first < last && is_space(s[first])) ++first;
+  while (last > first && is_space(s[last - 1])) --last;
+  return s.substr(first, last - first);
+}
 
 /// Arguments of one command after its command word(s): positionals and key=value pairs.
 class Args {
@@ -182,6 +195,38 @@ class Args {
     return core::Vec2(number_or("cx", Bound::Any, 0.0), number_or("cy", Bound::Any, 0.0));
   }
 
+  /// A required `x,y;x,y;...` parameter (blanks around numbers allowed; empty text: no points).
+  std::vector<core::Vec2> points(const std::string& key) const {
+    const std::string& text = raw(key);
+    std::vector<core::Vec2> out;
+    if (trim(text).empty()) return out;
+    std::size_t begin = 0;
+    for (std::size_t n = 1;; ++n) {
+      const std::size_t semi = text.find(';', begin);
+      const std::string item =
+          trim(text.substr(begin, semi == std::string::npos ? std::string::npos : semi - begin));
+      const std::string label = name_ + ": " + key + ": point " + std::to_string(n);
+      const std::size_t comma = item.find(',');
+      if (comma == std::string::npos || item.find(',', comma + 1) != std::string::npos) {
+        fail(label + " must be x,y, got '" + item + "'");
+      }
+      const std::optional<double> x = to_double(trim(item.substr(0, comma)));
+      const std::optional<double> y = to_double(trim(item.substr(comma + 1)));
+      if (!x || !y) fail(label + ": not a number: '" + item + "'");
+      if (!std::isfinite(*x) || !std::isfinite(*y)) fail(label + " must be finite, got " + item);
+      out.emplace_back(*x, *y);
+      if (semi == std::string::npos) break;
+      begin = semi + 1;
+    }
+    return out;
+  }
+
+  /// Optional rotation rot (degrees, default 0) and scale (> 0, default 1) of every shape.
+  void placement(core::ShapeSpec& s) const {
+    s.rotation = number_or("rot", Bound::Any, 0.0) * kRadPerDeg;
+    s.scale = number_or("scale", Bound::Positive, 1.0);
+  }
+
  private:
   std::string name_;
   std::vector<std::string> positionals_;
@@ -199,36 +244,87 @@ const std::string& sub_word(const Tokens& t, const std::string& cmd, const std::
   return t[1].text;
 }
 
+constexpr const char* kShapeList =
+    "line, circle, ellipse, square, polar, parametric, implicit, polygon";
+
+/// shapes::compile on a parsed shape: a ShapeError becomes the command's one-line error, named
+/// after the command ("shape polar: r(phi) = '4+foo': Unexpected token ...").
+void compile_or_fail(const std::string& name, core::Command& cmd) {
+  try {
+    shapes::compile(cmd);
+  } catch (const core::ShapeError& e) {
+    std::string what = e.what();
+    // "polar: r(phi) ..." under "shape polar" reads "shape polar: r(phi) ...".
+    const std::string kind = std::string(core::to_string(cmd.shape.kind)) + ": ";
+    if (what.rfind(kind, 0) == 0) what.erase(0, kind.size());
+    fail(name + ": " + what);
+  }
+}
+
 Action parse_shape(const Tokens& t, const core::Command& current) {
-  const std::string& kind = sub_word(t, "shape", "a shape (line, circle, ellipse, square)");
+  const std::string& kind = sub_word(t, "shape", std::string("a shape (") + kShapeList + ")");
   const std::string name = "shape " + kind;
   core::Command cmd = current;
   cmd.tracking = core::Tracking{};  // a fixed shape: tracking off, no stale path
+  cmd.shape = core::ShapeSpec{};    // nothing of the previous shape (expressions, curve) lingers
   core::ShapeSpec& s = cmd.shape;
   if (kind == "line") {
-    const Args a(name, t, 2, {"m", "c"}, 0);
+    const Args a(name, t, 2, {"m", "c", "rot", "scale"}, 0);
     s.kind = core::ShapeKind::Line;
     s.m = a.number("m", Bound::Any);
     s.c = a.number("c", Bound::Any);
+    s.centre = core::Vec2::Zero();
+    a.placement(s);
   } else if (kind == "circle") {
-    const Args a(name, t, 2, {"r", "cx", "cy"}, 0);
+    const Args a(name, t, 2, {"r", "cx", "cy", "rot", "scale"}, 0);
     s.kind = core::ShapeKind::Circle;
     s.r0 = a.number("r", Bound::Positive);
     s.centre = a.centre();
+    a.placement(s);
   } else if (kind == "ellipse") {
-    const Args a(name, t, 2, {"a", "b", "cx", "cy"}, 0);
+    const Args a(name, t, 2, {"a", "b", "cx", "cy", "rot", "scale"}, 0);
     s.kind = core::ShapeKind::Ellipse;
     s.a = a.number("a", Bound::Positive);
     s.b = a.number("b", Bound::Positive);
     s.centre = a.centre();
+    a.placement(s);
   } else if (kind == "square") {
-    const Args a(name, t, 2, {"a", "cx", "cy"}, 0);
+    const Args a(name, t, 2, {"a", "cx", "cy", "rot", "scale"}, 0);
     s.kind = core::ShapeKind::Square;
     s.a = a.number("a", Bound::Positive);
     s.centre = a.centre();
+    a.placement(s);
+  } else if (kind == "polar") {
+    const Args a(name, t, 2, {"r", "cx", "cy", "rot", "scale"}, 0);
+    s.kind = core::ShapeKind::Polar;
+    s.r_expr = a.raw("r");
+    s.centre = a.centre();
+    a.placement(s);
+  } else if (kind == "parametric") {
+    const Args a(name, t, 2, {"x", "y", "closed", "cx", "cy", "rot", "scale"}, 0);
+    s.kind = core::ShapeKind::Parametric;
+    s.x_expr = a.raw("x");
+    s.y_expr = a.raw("y");
+    s.closed = a.on_off_or("closed", true);
+    s.centre = a.centre();
+    a.placement(s);
+  } else if (kind == "implicit") {
+    const Args a(name, t, 2, {"f", "cx", "cy", "rot", "scale"}, 0);
+    s.kind = core::ShapeKind::Implicit;
+    s.f_expr = a.raw("f");
+    s.centre = a.centre();
+    a.placement(s);
+  } else if (kind == "polygon") {
+    const Args a(name, t, 2, {"points", "closed", "cx", "cy", "rot", "scale"}, 0);
+    s.kind = core::ShapeKind::Polygon;
+    s.vertices = a.points("points");
+    s.closed = a.on_off_or("closed", true);
+    s.centre = a.centre();
+    a.placement(s);
   } else {
-    fail("shape: unknown shape '" + kind + "' (expected line, circle, ellipse, square)");
+    fail("shape: unknown shape '" + kind + "' (expected " + kShapeList + ")");
   }
+  compile_or_fail(name, cmd);
   return SetCommand{SetCommand::What::Shape, cmd};
 }
 
@@ -268,6 +364,7 @@ Action parse_track(const Tokens& t, const core::Command& current) {
     fail("track: unknown path '" + kind + "' (expected line, circle, point, stop)");
   }
   core::Command cmd = current;
+  cmd.shape = core::ShapeSpec{};  // a plain circle: no rotation, scale 1, no previous curve
   cmd.shape.kind = core::ShapeKind::Circle;
   cmd.shape.r0 = r0;
   // The centre at t = 0 (shape_at() moves it along the path; this keeps the spec consistent).
@@ -280,6 +377,7 @@ Action parse_track(const Tokens& t, const core::Command& current) {
   cmd.tracking.enabled = true;
   cmd.tracking.path = path;
   cmd.tracking.feedforward = ff;
+  compile_or_fail(name, cmd);
   return SetCommand{SetCommand::What::Track, cmd};
 }
 
@@ -325,6 +423,32 @@ Action parse_max_speed(const Tokens& t, const core::Command& current) {
   core::Command cmd = current;
   cmd.max_speed = a.check_number("", a.positional(0), Bound::NonNegative);
   return SetCommand{SetCommand::What::MaxSpeed, cmd};
+}
+
+constexpr double kMaxNormalRate = 10.0;  ///< arc law k_normal bound (1/model time), as in config
+
+Action parse_law(const Tokens& t, const core::Command& current) {
+  const Args a("law", t, 1, {"k_normal", "k_tangent", "spacing"}, 1);
+  if (a.positionals() == 0) fail("law: missing law (paper or arc)");
+  core::Command cmd = current;  // the shape (and its curve) is kept
+  const std::string& law = a.positional(0);
+  if (law == "paper") {
+    for (const char* key : {"k_normal", "k_tangent", "spacing"}) {
+      if (a.has(key)) fail(std::string("law paper: ") + key + " is a parameter of the arc law");
+    }
+    cmd.law = core::Law::Paper;
+  } else if (law == "arc") {
+    cmd.law = core::Law::Arc;
+    core::ArcParams& p = cmd.arc;
+    p.k_normal = a.number_or("k_normal", Bound::Positive, p.k_normal);
+    if (p.k_normal > kMaxNormalRate) fail("law: k_normal must be <= 10, got " + a.raw("k_normal"));
+    p.k_tangent = a.number_or("k_tangent", Bound::Positive, p.k_tangent);
+    if (p.k_tangent > 1.0) fail("law: k_tangent must be <= 1, got " + a.raw("k_tangent"));
+    p.spacing = a.number_or("spacing", Bound::Positive, p.spacing);
+  } else {
+    fail("law: unknown law '" + law + "' (expected paper or arc)");
+  }
+  return SetCommand{SetCommand::What::Law, cmd};
 }
 
 Action parse_wait(const Tokens& t) {
@@ -375,6 +499,7 @@ Action parse_tokens(const Tokens& t, const core::Command& current) {
   if (word == "gains") return parse_gains(t, current);
   if (word == "integrator") return parse_integrator(t, current);
   if (word == "max_speed") return parse_max_speed(t, current);
+  if (word == "law") return parse_law(t, current);
   if (word == "wait") return parse_wait(t);
   if (word == "record") return parse_record(t);
   if (word == "status" || word == "metrics" || word == "quit" || word == "exit" ||
@@ -412,19 +537,39 @@ struct HelpEntry {
 // clang-format off
 const HelpEntry kHelp[] = {
   {"shape",
-   "shape line m=M c=C                 line x2 = m x1 + c\n"
-   "shape circle r=R [cx=X cy=Y]       circle of radius R\n"
-   "shape ellipse a=A b=B [cx=X cy=Y]  ellipse with semi-axes A (x1), B (x2)\n"
-   "shape square a=A [cx=X cy=Y]       square of half side A\n",
+   "shape line m=M c=C                                          line x2 = m x1 + c\n"
+   "shape circle r=R [cx=X cy=Y]                                circle of radius R\n"
+   "shape ellipse a=A b=B [cx=X cy=Y]                           ellipse, semi-axes A (x1), B (x2)\n"
+   "shape square a=A [cx=X cy=Y]                                square of half side A\n"
+   "shape polar r=\"EXPR\" [cx=X cy=Y]                            polar curve r(phi)\n"
+   "shape parametric x=\"EXPR\" y=\"EXPR\" [closed=on|off] [cx= cy=]  x(s), y(s), s in [0, 1]\n"
+   "shape implicit f=\"EXPR\" [cx=X cy=Y]                         curve f(x, y) = 0\n"
+   "shape polygon points=\"x,y;x,y;...\" [closed=on|off] [cx= cy=]  polygon\n"
+   "shape ... [rot=DEG] [scale=S]                               any shape: rotate (deg), scale\n",
    "shape line m=M c=C\n"
    "shape circle r=R [cx=X cy=Y]\n"
    "shape ellipse a=A b=B [cx=X cy=Y]\n"
    "shape square a=A [cx=X cy=Y]\n"
-   "  Commands a fixed shape and turns tracking off. Parameters are required except the centre.\n"
+   "shape polar r=\"EXPR\" [cx=X cy=Y]\n"
+   "shape parametric x=\"EXPR\" y=\"EXPR\" [closed=on|off] [cx=X cy=Y]\n"
+   "shape implicit f=\"EXPR\" [cx=X cy=Y]\n"
+   "shape polygon points=\"x,y;x,y;...\" [closed=on|off] [cx=X cy=Y]\n"
+   "  and on every shape: [rot=DEG] [scale=S]\n"
+   "  Commands a fixed shape and turns tracking off. Parameters are required except the centre,\n"
+   "  closed, rot and scale. The shape is checked (expressions parsed, curve built) before\n"
+   "  anything is sent: a bad one is refused and the swarm keeps its shape.\n"
    "  m, c    line slope and intercept (any finite value)\n"
-   "  r       circle radius (> 0)\n"
+   "  r       circle radius (> 0); polar: the expression r(phi), phi in [0, 2 pi), r > 0\n"
    "  a, b    ellipse semi-axes along x1 and x2 (> 0); for the square, a is the half side (> 0)\n"
-   "  cx, cy  centre of a closed shape (default 0, 0)\n"},
+   "  x, y    parametric: the expressions x(s), y(s), s in [0, 1]\n"
+   "  f       implicit: the expression f(x, y); the curve is f = 0 (traced in [-20, 20]^2)\n"
+   "  points  polygon vertices x,y separated by ';' (closed: >= 3, open: >= 2)\n"
+   "  closed  parametric, polygon: join the last point to the first (default on)\n"
+   "  cx, cy  centre: where the shape's origin is placed (default 0, 0)\n"
+   "  rot     counter-clockwise rotation about the centre, degrees (default 0)\n"
+   "  scale   uniform scale about the centre (> 0, default 1)\n"
+   "  Expressions use muparser syntax (+ - * / ^, sin cos exp sqrt abs min max ..., pi);\n"
+   "  quote them when they contain spaces: r=\"4 + cos(5*phi)\".\n"},
   {"track",
    "track line from=X,Y vel=VX,VY r=R [ff=on|off]               circle following a line\n"
    "track circle radius=RP period=T r=R [cx= cy= phase=] [ff=]  circle following a circle\n"
@@ -457,7 +602,17 @@ const HelpEntry kHelp[] = {
   {"max_speed",
    "max_speed V                                                 speed limit (0 = off)\n",
    "max_speed V\n"
-   "  V  speed limit in units per model time (>= 0; 0 = no limit)\n"},
+   "  V  speed limit in units per model time (>= 0; 0 = no limit), both laws\n"},
+  {"law",
+   "law paper | law arc [k_normal=] [k_tangent=] [spacing=]     control law\n",
+   "law paper\n"
+   "law arc [k_normal=K] [k_tangent=T] [spacing=S]\n"
+   "  Selects the control law; the shape is kept. paper: eq. 2 with the gains (see 'gains').\n"
+   "  arc: arc-length slots, exact and evenly spaced (docs/LAW.md). Parameters not given keep\n"
+   "  their current values.\n"
+   "  k_normal   rate toward the curve, 1/model time (> 0, <= 10; keep k_normal * dt <= 1)\n"
+   "  k_tangent  fraction of the slot error taken per step along the curve (> 0, <= 1)\n"
+   "  spacing    gap between agents on an unbounded curve such as the line (> 0)\n"},
   {"start",
    "start                                                       publish the scenario of --config\n",
    "start\n"

@@ -17,10 +17,12 @@ namespace shapeform::supervisor {
 /// Empty line or comment: nothing to do.
 struct NoOp {};
 
-/// A new command to publish. Produced by shape, track (line/circle/point), gains, integrator and
-/// max_speed; `command` is the caller's current command with the change applied.
+/// A new command to publish. Produced by shape, track (line/circle/point), gains, integrator,
+/// max_speed and law; `command` is the caller's current command with the change applied. Shape and
+/// track results carry their compiled curve (shapes::compile): a shape that cannot be built is a
+/// parse error, so nothing is published.
 struct SetCommand {
-  enum class What { Shape, Track, Gains, Integrator, MaxSpeed };
+  enum class What { Shape, Track, Gains, Integrator, MaxSpeed, Law };
   What what = What::Shape;
   core::Command command;
 };

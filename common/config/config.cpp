@@ -101,7 +101,7 @@ const std::map<std::string, std::vector<std::string>>& schema_sections() {
       {"supervisor.converge", {"band_abs", "band_rel", "gap_cv_max", "hold"}},
       {"transport",
        {"profile", "domain", "max_participants", "interfaces", "peers", "discovery_server",
-        "lease_s", "announce_s", "socket_buffer_bytes"}},
+        "lease_s", "announce_s", "socket_buffer_bytes", "multicast_data"}},
   };
   return sections;
 }
@@ -498,9 +498,11 @@ class Reader {
     std::vector<core::Vec2> out;
     bool ok = true;
     for (std::size_t i = 0; i < e.value.size(); ++i) {
-      Entry item = e;
+      Entry item;
       item.path = e.path + "[" + std::to_string(i) + "]";
-      item.value = e.value[i];
+      item.key.reset(e.key);
+      item.value.reset(e.value[i]);  // reset, not '=': assigning a YAML::Node writes through it
+      item.present = true;
       const auto v = vec2(item);
       if (v) out.push_back(*v);
       ok = ok && v.has_value();
@@ -806,6 +808,7 @@ Config convert(const YAML::Node& root, bool version_required, Reader& rd) {
     }
     assign(rd.integer(get(m, s, "socket_buffer_bytes"), 0, std::numeric_limits<int>::max()),
            tr.socket_buffer_bytes);
+    assign(rd.boolean(get(m, s, "multicast_data")), tr.multicast_data);
   }
   if (shape_ok) compile_shape(c.command, shape_keys, rd);
   return c;
@@ -1001,6 +1004,7 @@ std::string to_yaml(const Config& c) {
   put_real(e, "lease_s", tr.lease_s);
   put_real(e, "announce_s", tr.announce_s);
   e << YAML::Key << "socket_buffer_bytes" << YAML::Value << tr.socket_buffer_bytes;
+  e << YAML::Key << "multicast_data" << YAML::Value << tr.multicast_data;
   e << YAML::EndMap;
 
   e << YAML::EndMap;

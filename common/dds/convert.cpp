@@ -1,9 +1,12 @@
 #include "dds/convert.hpp"
 
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <vector>
+
+#include "shapes/shapes.hpp"
 
 namespace shapeform::dds {
 namespace {
@@ -20,7 +23,7 @@ class Problems {
  public:
   explicit Problems(const char* prefix) : prefix_(prefix) {}
 
-  bool finite(const char* field, double v) {
+  bool finite(const std::string& field, double v) {
     if (std::isfinite(v)) return true;
     add(field, "must be finite, got " + num(v));
     return false;
@@ -31,7 +34,12 @@ class Problems {
   void non_negative(const char* field, double v) {
     if (finite(field, v) && !(v >= 0.0)) add(field, "must be >= 0, got " + num(v));
   }
-  void add(const char* field, const std::string& problem) {
+  /// In (0, hi].
+  void positive_up_to(const char* field, double v, double hi) {
+    if (finite(field, v) && !(v > 0.0 && v <= hi))
+      add(field, "must be in (0, " + num(hi) + "], got " + num(v));
+  }
+  void add(const std::string& field, const std::string& problem) {
     list_.push_back(std::string(prefix_) + "." + field + ": " + problem);
   }
   bool empty() const { return list_.empty(); }
@@ -67,6 +75,20 @@ msg::ShapeCommand to_msg(const core::Command& cmd, std::uint32_t epoch) {
   m.b(s.b);
   m.cx(s.centre.x());
   m.cy(s.centre.y());
+  m.rotation(s.rotation);
+  m.scale(s.scale);
+  m.r_expr(s.r_expr);
+  m.x_expr(s.x_expr);
+  m.y_expr(s.y_expr);
+  m.f_expr(s.f_expr);
+  std::vector<double> flat;
+  flat.reserve(2 * s.vertices.size());
+  for (const core::Vec2& v : s.vertices) {
+    flat.push_back(v.x());
+    flat.push_back(v.y());
+  }
+  m.vertices(std::move(flat));
+  m.closed(s.closed);
 
   const core::Tracking& t = cmd.tracking;
   m.tracking(t.enabled);
@@ -91,7 +113,10 @@ msg::ShapeCommand to_msg(const core::Command& cmd, std::uint32_t epoch) {
 
   m.integrator(std::string(core::to_string(cmd.integrator)));
   m.dt(cmd.dt);
-  m.law(kLawPaper);
+  m.law(std::string(core::to_string(cmd.law)));
+  m.k_normal(cmd.arc.k_normal);
+  m.k_tangent(cmd.arc.k_tangent);
+  m.spacing(cmd.arc.spacing);
   return m;
 }
 
@@ -100,7 +125,8 @@ bool from_msg(const msg::ShapeCommand& m, core::Command& out, std::string& error
   core::Command c;
 
   if (!core::parse_shape_kind(m.shape_kind(), c.shape.kind)) {
-    p.add("shape_kind", "unknown shape " + quoted(m.shape_kind()) + " (line|circle|ellipse|square)");
+    p.add("shape_kind", "unknown shape " + quoted(m.shape_kind()) +
+                            " (line|circle|ellipse|square|polar|parametric|implicit|polygon)");
   }
   p.finite("m", m.m());
   p.finite("c", m.c());
@@ -115,6 +141,25 @@ bool from_msg(const msg::ShapeCommand& m, core::Command& out, std::string& error
   c.shape.a = m.a();
   c.shape.b = m.b();
   c.shape.centre = core::Vec2(m.cx(), m.cy());
+  p.finite("rotation", m.rotation());
+  p.positive("scale", m.scale());
+  c.shape.rotation = m.rotation();
+  c.shape.scale = m.scale();
+  c.shape.r_expr = m.r_expr();
+  c.shape.x_expr = m.x_expr();
+  c.shape.y_expr = m.y_expr();
+  c.shape.f_expr = m.f_expr();
+  const std::vector<double>& flat = m.vertices();
+  if (flat.size() % 2 != 0) {
+    p.add("vertices", "must hold x, y pairs (an even count), got " + std::to_string(flat.size()) +
+                          " numbers");
+  } else {
+    for (std::size_t i = 0; i < flat.size(); ++i) p.finite("vertices[" + std::to_string(i) + "]", flat[i]);
+    c.shape.vertices.reserve(flat.size() / 2);
+    for (std::size_t i = 0; i + 1 < flat.size(); i += 2)
+      c.shape.vertices.emplace_back(flat[i], flat[i + 1]);
+  }
+  c.shape.closed = m.closed();
 
   c.tracking.enabled = m.tracking();
   if (!core::parse_path_kind(m.path_kind(), c.tracking.path.kind)) {
@@ -155,13 +200,26 @@ bool from_msg(const msg::ShapeCommand& m, core::Command& out, std::string& error
   }
   p.positive("dt", m.dt());
   c.dt = m.dt();
-  if (m.law() != kLawPaper) p.add("law", "unknown law " + quoted(m.law()) + " (paper)");
+  if (!core::parse_law(m.law(), c.law)) p.add("law", "unknown law " + quoted(m.law()) + " (paper|arc)");
+  p.positive_up_to("k_normal", m.k_normal(), kMaxNormalRate);
+  p.positive_up_to("k_tangent", m.k_tangent(), 1.0);
+  p.positive("spacing", m.spacing());
+  c.arc.k_normal = m.k_normal();
+  c.arc.k_tangent = m.k_tangent();
+  c.arc.spacing = m.spacing();
 
   if (!p.empty()) {
     error = p.joined();
     return false;
   }
-  out = c;
+  // Only a well-formed command is compiled: a shape that cannot be built is refused as a whole.
+  try {
+    shapes::compile(c);
+  } catch (const core::ShapeError& e) {
+    error = std::string("command: ") + e.what();
+    return false;
+  }
+  out = std::move(c);
   return true;
 }
 
@@ -173,6 +231,7 @@ bool valid_state(const msg::AgentState& s, std::string& why) {
   const bool fy = p.finite("y", s.y());
   const bool fvx = p.finite("vx", s.vx());
   const bool fvy = p.finite("vy", s.vy());
+  p.finite("arc", s.arc());
   if (fx && std::abs(s.x()) > kStateLimit) p.add("x", "|x| must be <= 1e6, got " + num(s.x()));
   if (fy && std::abs(s.y()) > kStateLimit) p.add("y", "|y| must be <= 1e6, got " + num(s.y()));
   if (fvx && fvy) {
@@ -184,6 +243,10 @@ bool valid_state(const msg::AgentState& s, std::string& why) {
     return false;
   }
   return true;
+}
+
+double neighbour_arc(const msg::AgentState& s) {
+  return s.has_arc() ? s.arc() : std::numeric_limits<double>::quiet_NaN();
 }
 
 msg::SwarmMetrics to_msg(const core::Metrics& m, std::uint32_t epoch, double model_time,
@@ -202,6 +265,9 @@ msg::SwarmMetrics to_msg(const core::Metrics& m, std::uint32_t epoch, double mod
   w.centroid_error(m.centroid_error.value_or(-1.0));
   w.ring_error(m.ring_error.value_or(-1.0));
   w.clusters(m.clusters.value_or(-1));
+  w.curve_error_mean(m.curve_error_mean.value_or(-1.0));
+  w.curve_error_max(m.curve_error_max.value_or(-1.0));
+  w.arc_gap_cv(m.arc_gap_cv.value_or(-1.0));
   w.converged(converged);
   return w;
 }
@@ -218,6 +284,9 @@ core::Metrics from_msg(const msg::SwarmMetrics& w) {
   m.centroid_error = undefined_if_negative(w.centroid_error());
   m.ring_error = undefined_if_negative(w.ring_error());
   if (w.clusters() >= 0) m.clusters = w.clusters();
+  m.curve_error_mean = undefined_if_negative(w.curve_error_mean());
+  m.curve_error_max = undefined_if_negative(w.curve_error_max());
+  m.arc_gap_cv = undefined_if_negative(w.arc_gap_cv());
   return m;
 }
 

@@ -13,25 +13,38 @@
 
 namespace shapeform::dds {
 
-/// The only control law understood so far (ShapeCommand.law).
+/// ShapeCommand.law spellings (core::to_string / core::parse_law).
 inline constexpr const char* kLawPaper = "paper";
+inline constexpr const char* kLawArc = "arc";
+
+/// Largest ShapeCommand.k_normal accepted (1/model time; the config's bound).
+inline constexpr double kMaxNormalRate = 10.0;
 
 /// Largest |x|, |y| and speed accepted in an AgentState.
 inline constexpr double kStateLimit = 1e6;
 
-/// core::Command -> wire message with the given epoch (law = "paper").
+/// core::Command -> wire message with the given epoch (every field, the law by name; polygon
+/// vertices flattened x0, y0, x1, y1, ...; the compiled curve is not sent: receivers compile).
 msg::ShapeCommand to_msg(const core::Command& cmd, std::uint32_t epoch);
 
-/// Wire message -> core::Command. On failure returns false, leaves `out` untouched and sets `error`
-/// to every problem found, separated by "; ", each naming its field, e.g.
-/// "command.sigma: must be > 0, got -1". Checks: every number finite; shape_kind, path_kind,
-/// integrator, law known; r0, a, b, sigma, dt, path_period > 0; k1, k2, beta, r, max_speed,
-/// path_radius >= 0. The epoch is not part of core::Command: read m.epoch().
+/// Wire message -> core::Command, its shape compiled (shapes::compile: out.shape.curve is set).
+/// On failure returns false, leaves `out` untouched and sets `error` to every problem found,
+/// separated by "; ", each naming its field, e.g. "command.sigma: must be > 0, got -1". Checks:
+/// every number finite; shape_kind, path_kind, integrator, law known; r0, a, b, scale, sigma, dt,
+/// path_period, k_normal (<= kMaxNormalRate), k_tangent (<= 1), spacing > 0; k1, k2, beta, r,
+/// max_speed, path_radius >= 0; vertices of even length. When all of that passes, the shape is
+/// compiled; a core::ShapeError is reported as "command: <its message>", e.g.
+/// "command: polar: r(phi) = '4+foo': Unexpected token \"foo\" found at position 2.".
+/// The epoch is not part of core::Command: read m.epoch().
 bool from_msg(const msg::ShapeCommand& m, core::Command& out, std::string& error);
 
-/// True when s is plausible: id >= 0, model_time, x, y, vx, vy finite, |x|, |y| <= kStateLimit and
-/// speed |(vx, vy)| <= kStateLimit. Otherwise false with `why` naming the field ("state.x: ...").
+/// True when s is plausible: id >= 0, model_time, x, y, vx, vy, arc finite, |x|, |y| <=
+/// kStateLimit and speed |(vx, vy)| <= kStateLimit. Otherwise false with `why` naming the field
+/// ("state.x: ...").
 bool valid_state(const msg::AgentState& s, std::string& why);
+
+/// The sender's arc length as core::Neighbour::s wants it: s.arc() when has_arc, else NaN.
+double neighbour_arc(const msg::AgentState& s);
 
 /// core::Metrics -> wire message; undefined (nullopt) values become -1.
 msg::SwarmMetrics to_msg(const core::Metrics& m, std::uint32_t epoch, double model_time,

@@ -70,6 +70,9 @@ frtps::Locator_t udp_locator(const std::array<std::uint8_t, 4>& ip, std::uint32_
 
 frtps::Locator_t loopback_locator(std::uint32_t port) { return udp_locator({127, 0, 0, 1}, port); }
 
+/// RTPS well-known discovery multicast port of a domain: PB + DG * domain + d0 = 7400 + 250 d.
+std::uint32_t discovery_multicast_port(int domain) { return 7400u + 250u * static_cast<std::uint32_t>(domain); }
+
 void validate_common(const config::TransportConfig& cfg) {
   if (cfg.domain < 0 || cfg.domain > kMaxDomainId) {
     fail("transport.domain: must be in 0.." + str(kMaxDomainId) + ", got " + str(cfg.domain));
@@ -173,6 +176,20 @@ fdds::DomainParticipantQos participant_qos(const config::TransportConfig& cfg, c
     fail("transport.profile: must be loopback, lan or discovery-server, got " + quoted(cfg.profile));
   }
 
+  if (cfg.multicast_data) {
+    // One multicast locator shared by every participant of the domain, for discovery announcements and
+    // user data: a writer whose matched readers share it sends each sample once
+    // (UDPTransportInterface::select_locators) and the kernel fans it out. Joined and sent on the
+    // whitelisted interfaces only (loopback profile: lo). It is the discovery multicast locator on
+    // purpose: Fast DDS 2.9 registers an output locator with its statistics module only when it is an
+    // initial peer, and sending to an unregistered one trips an assert (OutputTrafficManager.hpp:87).
+    const frtps::Locator_t group = udp_locator(kDataMulticastGroup, discovery_multicast_port(cfg.domain));
+    builtin.initialPeersList.clear();  // announcements: one datagram to the group, not one per peer id
+    builtin.initialPeersList.push_back(group);
+    builtin.metatrafficMulticastLocatorList.push_back(group);
+    pq.wire_protocol().default_multicast_locator_list.push_back(group);
+  }
+
   pq.transport().user_transports.push_back(udp);
   return pq;
 }
@@ -229,6 +246,7 @@ std::string describe(const config::TransportConfig& cfg) {
   os << ", domain " << cfg.domain << ", lease " << cfg.lease_s << " s, announce " << cfg.announce_s
      << " s";
   if (cfg.socket_buffer_bytes > 0) os << ", socket buffers " << cfg.socket_buffer_bytes << " B";
+  if (cfg.multicast_data) os << ", user data multicast 239.255.0.1";
   return os.str();
 }
 

@@ -17,6 +17,9 @@ namespace shapeform::dds {
 inline constexpr const char* kDiscoveryServerPrefix = "44.53.00.5f.45.50.52.4f.53.49.4d.41";
 /// Discovery-server client sync period, seconds (Fast DDS default 0.45 s; 0.1 s discovers faster).
 inline constexpr double kDiscoveryServerSyncPeriod_s = 0.1;
+/// Multicast group of user data when transport.multicast_data is on (administratively scoped,
+/// Fast DDS's default group; on the loopback profile it is joined and sent on lo only).
+inline constexpr std::array<std::uint8_t, 4> kDataMulticastGroup = {239, 255, 0, 1};
 /// Largest valid DDS domain id (ports 7400 + 250 d must stay below 65536).
 inline constexpr int kMaxDomainId = 232;
 
@@ -31,7 +34,8 @@ inline constexpr int kMaxDomainId = 232;
 ///  - "discovery-server": CLIENT of server id 0 at `discovery_server` "host:port" (host an IPv4
 ///    address or "localhost"); UDPv4 whitelisted to 127.0.0.1 when the host is a loopback address.
 /// Lease and announcement period come from lease_s / announce_s; socket_buffer_bytes > 0 sets the
-/// UDP send and receive buffer sizes. Pure: creates nothing.
+/// UDP send and receive buffer sizes; multicast_data adds the user-data multicast locator
+/// 239.255.0.1:(7400 + 250 domain + 1) (any profile; on loopback it stays on lo). Pure: creates nothing.
 /// Throws std::runtime_error naming the offending field ("transport.domain: must be in 0..232, got 300").
 eprosima::fastdds::dds::DomainParticipantQos participant_qos(const config::TransportConfig& cfg,
                                                              const std::string& name);

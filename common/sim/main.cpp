@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   long long seed = -1, steps = -1;
   double dt = 0.0;
   bool verbose = false;
+  std::string kernel = "auto";
   app.add_option("--config", config_path, "scenario YAML file (default: built-in defaults)");
   app.add_option("--agents", agents, "number of agents (overrides swarm.agents)");
   app.add_option("--seed", seed, "seed of the uniform start (overrides swarm.seed)");
@@ -34,6 +35,10 @@ int main(int argc, char** argv) {
   app.add_option("--csv", csv_path, "write per-step metrics to this CSV file");
   app.add_option("--positions", positions_path, "write per-step positions (step,agent,x1,x2) to this CSV file");
   app.add_flag("--verbose", verbose, "print the effective configuration on stderr");
+  app.add_option("--kernel", kernel,
+                 "auto | agent (each agent through agent_step, as agent processes) | batch (paper law + Euler: "
+                 "each pair once, vectorised); auto = batch from 64 agents")
+      ->check(CLI::IsMember({"auto", "agent", "batch"}));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -89,9 +94,17 @@ int main(int argc, char** argv) {
   }
   const auto& cv = cfg.supervisor.converge;
   opt.settle = {cv.band_abs, cv.band_rel, cv.gap_cv_max};
+  opt.kernel = kernel == "agent"   ? core::Kernel::Agent
+               : kernel == "batch" ? core::Kernel::Batch
+                                   : sim::auto_kernel(static_cast<int>(start.size()));
 
   const core::Command& cmd = cfg.command;
-  const sim::SimResult r = sim::run_simulation(cmd, start, cfg.sim.steps, opt);
+  sim::SimResult r;
+  try {
+    r = sim::run_simulation(cmd, start, cfg.sim.steps, opt);
+  } catch (const core::ShapeError& e) {
+    return fail(e.what());
+  }
 
   nlohmann::json j = sim::metrics_json(r.metrics);
   j["name"] = cfg.name;
@@ -102,6 +115,8 @@ int main(int argc, char** argv) {
   j["model_time"] = r.model_time;
   j["integrator"] = std::string(core::to_string(cmd.integrator));
   j["law"] = std::string(core::to_string(cmd.law));
+  j["kernel"] = opt.kernel == core::Kernel::Batch && cmd.law == core::Law::Paper && cmd.integrator == core::Integrator::Euler
+                    ? "batch" : "agent";
   j["max_step"] = r.max_step;
   j["seed"] = init_path.empty() ? nlohmann::json(cfg.swarm.seed) : nlohmann::json(nullptr);
   j["init"] = init_path.empty() ? nlohmann::json(nullptr) : nlohmann::json(init_path);

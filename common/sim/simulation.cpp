@@ -24,6 +24,8 @@ nlohmann::json opt_json(const std::optional<T>& v) {
 }
 }  // namespace
 
+core::Kernel auto_kernel(int agents) { return agents >= 64 ? core::Kernel::Batch : core::Kernel::Agent; }
+
 const std::vector<std::string>& metric_columns() {
   static const std::vector<std::string> cols = {
       "shape_error_mean", "shape_error_max", "gap_cv", "nn_cv",          "min_separation",
@@ -60,6 +62,7 @@ nlohmann::json metrics_json(const core::Metrics& m) {
 SimResult run_simulation(const core::Command& cmd, std::vector<core::Vec2> start, long steps,
                          const SimOptions& opt) {
   core::Swarm swarm(cmd, std::move(start));
+  swarm.set_kernel(opt.kernel);
   std::vector<core::Vec2> last = swarm.positions();
   std::vector<double> err;
   std::vector<std::optional<double>> gap;

@@ -16,7 +16,11 @@ struct SimOptions {
   std::ostream* metrics_csv = nullptr;    ///< per-step metrics (header + one row per step)
   std::ostream* positions_csv = nullptr;  ///< per-step positions: step,agent,x1,x2
   core::SettleParams settle;
+  core::Kernel kernel = core::Kernel::Agent;  ///< see core::Kernel (Batch applies to paper law + Euler)
 };
+
+/// The kernel "auto" picks: the batched one from 64 agents on, where it pays; the agent path below.
+core::Kernel auto_kernel(int agents);
 
 struct SimResult {
   core::Metrics metrics;               ///< at the final step

@@ -19,6 +19,9 @@ namespace {
 
 const std::string kSourceDir = SHAPEFORM_SOURCE_DIR;
 
+/// The loader's degrees -> radians factor (shape.rotation_deg).
+constexpr double kRadPerDeg = 3.14159265358979323846 / 180.0;
+
 std::string scenario(const std::string& name) {
   return kSourceDir + "/config/scenarios/" + name + ".yaml";
 }
@@ -73,6 +76,14 @@ void require_equal(const Config& a, const Config& b) {
   CHECK(sa.a == sb.a);
   CHECK(sa.b == sb.b);
   CHECK(sa.centre == sb.centre);
+  CHECK(sa.rotation == sb.rotation);
+  CHECK(sa.scale == sb.scale);
+  CHECK(sa.r_expr == sb.r_expr);
+  CHECK(sa.x_expr == sb.x_expr);
+  CHECK(sa.y_expr == sb.y_expr);
+  CHECK(sa.f_expr == sb.f_expr);
+  CHECK(sa.vertices == sb.vertices);
+  CHECK(sa.closed == sb.closed);
   const auto& ta = a.command.tracking;
   const auto& tb = b.command.tracking;
   CHECK(ta.enabled == tb.enabled);
@@ -92,6 +103,10 @@ void require_equal(const Config& a, const Config& b) {
   CHECK(ga.beta == gb.beta);
   CHECK(ga.r == gb.r);
   CHECK(a.command.max_speed == b.command.max_speed);
+  CHECK(a.command.law == b.command.law);
+  CHECK(a.command.arc.k_normal == b.command.arc.k_normal);
+  CHECK(a.command.arc.k_tangent == b.command.arc.k_tangent);
+  CHECK(a.command.arc.spacing == b.command.arc.spacing);
   CHECK(a.command.integrator == b.command.integrator);
   CHECK(a.command.dt == b.command.dt);
   CHECK(a.sim.steps == b.sim.steps);
@@ -247,6 +262,94 @@ TEST_CASE("scenario track_circle.yaml") {
   require_paper_dynamics(c);
 }
 
+/// The arc law with its documented parameters.
+void require_arc_law(const Config& c) {
+  CHECK(c.command.law == core::Law::Arc);
+  CHECK(c.command.arc.k_normal == 0.5);
+  CHECK(c.command.arc.k_tangent == 1.0);
+  CHECK(c.command.arc.spacing == 1.0);
+}
+
+TEST_CASE("scenarios arc_circle, arc_ellipse, arc_square, arc_line") {
+  const Config circle = load(scenario("arc_circle"));
+  CHECK(circle.command.shape.kind == core::ShapeKind::Circle);
+  CHECK(circle.command.shape.r0 == 4.0);
+  const Config ellipse = load(scenario("arc_ellipse"));
+  CHECK(ellipse.command.shape.kind == core::ShapeKind::Ellipse);
+  CHECK(ellipse.command.shape.a == 4.0);
+  CHECK(ellipse.command.shape.b == 2.0);
+  const Config square = load(scenario("arc_square"));
+  CHECK(square.command.shape.kind == core::ShapeKind::Square);
+  CHECK(square.command.shape.a == 5.0);
+  const Config line = load(scenario("arc_line"));
+  CHECK(line.command.shape.kind == core::ShapeKind::Line);
+  CHECK(line.command.shape.m == -1.0);
+  CHECK(line.command.shape.c == 5.0);
+  for (const Config* c : {&circle, &ellipse, &square, &line}) {
+    INFO(c->name);
+    CHECK(c->name.rfind("arc_", 0) == 0);
+    CHECK(c->swarm.agents == 12);
+    CHECK(c->sim.steps == 300);
+    CHECK_FALSE(c->command.tracking.enabled);
+    require_paper_dynamics(*c);  // the paper's gains stay in the file, unused by the arc law
+    require_arc_law(*c);
+    CHECK(c->command.shape.curve != nullptr);
+  }
+}
+
+TEST_CASE("scenarios polar_star, polygon, implicit: compiled at load") {
+  const Config star = load(scenario("polar_star"));
+  CHECK(star.name == "polar_star");
+  CHECK(star.command.shape.kind == core::ShapeKind::Polar);
+  CHECK(star.command.shape.r_expr == "4 + cos(5*phi)");
+  REQUIRE(star.command.shape.curve != nullptr);
+  // r(0) = 5 and r(pi/5) = 3: the radial target of far points lands on the star.
+  const core::Vec2 tip = core::target_point(star.command.shape, core::Vec2(20.0, 0.0));
+  CHECK(tip.x() == Approx(5.0).epsilon(1e-6));
+  CHECK(tip.y() == Approx(0.0).margin(1e-9));
+
+  const Config poly = load(scenario("polygon"));
+  CHECK(poly.name == "polygon");
+  CHECK(poly.command.shape.kind == core::ShapeKind::Polygon);
+  CHECK(poly.command.shape.closed);
+  CHECK(poly.command.shape.vertices ==
+        std::vector<core::Vec2>{core::Vec2(-4, -3), core::Vec2(4, -3), core::Vec2(4, 2),
+                                core::Vec2(0, 5), core::Vec2(-4, 2)});
+  REQUIRE(poly.command.shape.curve != nullptr);
+  CHECK(poly.command.shape.curve->length() == Approx(8 + 5 + 2 * 5 + 5));
+
+  const Config imp = load(scenario("implicit"));
+  CHECK(imp.name == "implicit");
+  CHECK(imp.command.shape.kind == core::ShapeKind::Implicit);
+  CHECK(imp.command.shape.f_expr == "x^4 + y^4 - 256");
+  REQUIRE(imp.command.shape.curve != nullptr);
+  const core::Vec2 side = core::target_point(imp.command.shape, core::Vec2(7.0, 0.0));
+  CHECK(side.x() == Approx(4.0).epsilon(1e-6));
+  CHECK(side.y() == Approx(0.0).margin(1e-6));
+
+  for (const Config* c : {&star, &poly, &imp}) {
+    INFO(c->name);
+    CHECK(c->swarm.agents == 12);
+    CHECK(c->sim.steps == 300);
+    require_arc_law(*c);
+  }
+}
+
+TEST_CASE("scenarios track_line_ff and track_circle_ff: the tracking scenarios with feed-forward") {
+  for (const std::string base : {"track_line", "track_circle"}) {
+    INFO(base);
+    const Config plain = load(scenario(base));
+    const Config ff = load(scenario(base + "_ff"));
+    CHECK(ff.name == base + "_ff");
+    CHECK_FALSE(plain.command.tracking.feedforward);
+    CHECK(ff.command.tracking.feedforward);
+    Config same = ff;
+    same.name = plain.name;
+    same.command.tracking.feedforward = false;
+    require_equal(same, plain);  // nothing else differs
+  }
+}
+
 TEST_CASE("every key is read") {
   const Config c = load_string(R"(schema_version: 1
 name: everything
@@ -316,6 +419,194 @@ transport: {profile: lan, domain: 232, max_participants: 230, interfaces: [192.1
   CHECK(c.transport.socket_buffer_bytes == 2147483647);
 }
 
+TEST_CASE("the shape's placement, equations, vertices and the law's keys are read") {
+  const Config c = load_string(R"yaml(schema_version: 1
+shape:
+  kind: polar
+  r_expr: "2 + 0.5*cos(3*phi)"
+  x_expr: "cos(2*pi*s)"
+  y_expr: sin(2*pi*s)
+  f_expr: "x^2 + y^2 - 4"
+  vertices: [[0, 0], [1.5, 0], [0, 2]]
+  closed: false
+  rotation_deg: 90
+  scale: 2
+  centre: [1, 1]
+dynamics: {law: arc, k_normal: 10, k_tangent: 0.25, spacing: 0.5}
+)yaml");
+  const auto& s = c.command.shape;
+  CHECK(s.kind == core::ShapeKind::Polar);
+  CHECK(s.r_expr == "2 + 0.5*cos(3*phi)");
+  CHECK(s.x_expr == "cos(2*pi*s)");
+  CHECK(s.y_expr == "sin(2*pi*s)");
+  CHECK(s.f_expr == "x^2 + y^2 - 4");
+  CHECK(s.vertices ==
+        std::vector<core::Vec2>{core::Vec2(0, 0), core::Vec2(1.5, 0), core::Vec2(0, 2)});
+  CHECK_FALSE(s.closed);
+  CHECK(s.rotation == Approx(3.14159265358979323846 / 2));  // degrees in the file, radians inside
+  CHECK(s.scale == 2.0);
+  CHECK(c.command.law == core::Law::Arc);
+  CHECK(c.command.arc.k_normal == 10.0);
+  CHECK(c.command.arc.k_tangent == 0.25);
+  CHECK(c.command.arc.spacing == 0.5);
+  // Compiled and placed: r(0) = 2.5, rotated by 90 degrees, scaled by 2, about (1, 1).
+  REQUIRE(s.curve != nullptr);
+  const core::Vec2 p = core::target_point(s, core::Vec2(1.0, 30.0));
+  CHECK(p.x() == Approx(1.0).margin(1e-9));
+  CHECK(p.y() == Approx(1.0 + 2 * 2.5).epsilon(1e-6));
+
+  SECTION("defaults: no rotation, scale 1, closed, paper law") {
+    const Config d = load("");
+    CHECK(d.command.shape.rotation == 0.0);
+    CHECK(d.command.shape.scale == 1.0);
+    CHECK(d.command.shape.closed);
+    CHECK(d.command.shape.vertices.empty());
+    CHECK(d.command.shape.r_expr.empty());
+    CHECK(d.command.law == core::Law::Paper);
+    CHECK(d.command.arc.k_normal == 0.5);
+    CHECK(d.command.arc.k_tangent == 1.0);
+    CHECK(d.command.arc.spacing == 1.0);
+    REQUIRE(d.command.shape.curve != nullptr);  // the default circle is compiled too
+  }
+  SECTION("every kind compiles, expressions of other kinds are not looked at") {
+    const Config par = load("", {"shape.kind=parametric", "shape.x_expr=3*cos(2*pi*s)",
+                                 "shape.y_expr=2*sin(2*pi*s)", "shape.f_expr=junk(",
+                                 "shape.r_expr=-1"});
+    REQUIRE(par.command.shape.curve != nullptr);
+    CHECK(par.command.shape.curve->closed());
+    const Config open = load("", {"shape.kind=polygon", "shape.vertices=[[0, 0], [4, 0]]",
+                                  "shape.closed=false"});
+    REQUIRE(open.command.shape.curve != nullptr);
+    CHECK_FALSE(open.command.shape.curve->closed());
+    CHECK(open.command.shape.curve->length() == Approx(4.0));
+    const Config imp = load("", {"shape.kind=implicit", "shape.f_expr=x^2/16 + y^2/4 - 1"});
+    REQUIRE(imp.command.shape.curve != nullptr);
+    const Config circle = load("", {"shape.r_expr=4+foo", "shape.vertices=[[0, 0]]"});
+    CHECK(circle.command.shape.kind == core::ShapeKind::Circle);
+  }
+}
+
+TEST_CASE("a shape that does not compile is reported at the key that holds it") {
+  CHECK(problem_of("schema_version: 1\nshape:\n  kind: polar\n  centre: [0, 0]\n"
+                   "  r_expr: \"4+foo\"\n") ==
+        "shape.r_expr: polar: r(phi) = '4+foo': Unexpected token \"foo\" found at position 2. "
+        "(line 5)");
+  SECTION("unknown variable") {
+    const std::string p =
+        problem_of("schema_version: 1\nshape:\n  kind: polar\n  r_expr: 4 + cos(5*theta)\n");
+    CHECK(p.rfind("shape.r_expr: polar: r(phi) = '4 + cos(5*theta)': ", 0) == 0);
+    CHECK(p.find("\"theta\"") != std::string::npos);
+    CHECK(p.substr(p.size() - 9) == " (line 4)");
+  }
+  SECTION("parametric: the faulty coordinate is named") {
+    const std::string p = problem_of(
+        "schema_version: 1\nshape:\n  kind: parametric\n  x_expr: cos(2*pi*s)\n"
+        "  y_expr: sin(2*pi*t)\n");
+    CHECK(p.rfind("shape.y_expr: parametric: y(s) = 'sin(2*pi*t)': ", 0) == 0);
+    CHECK(p.substr(p.size() - 9) == " (line 5)");
+    const std::string q = problem_of(
+        "schema_version: 1\nshape:\n  kind: parametric\n  x_expr: cos(2*pi*s\n"
+        "  y_expr: sin(2*pi*s)\n");
+    CHECK(q.rfind("shape.x_expr: parametric: x(s) = 'cos(2*pi*s': ", 0) == 0);
+    CHECK(q.substr(q.size() - 9) == " (line 4)");
+  }
+  SECTION("a missing expression") {
+    CHECK(problem_of("schema_version: 1\nshape: {kind: implicit}\n") ==
+          "shape.f_expr: implicit: f(x, y): empty expression");
+    CHECK(problem_of("schema_version: 1\nshape: {kind: polar, r_expr: \"  \"}\n") ==
+          "shape.r_expr: polar: r(phi): empty expression (line 2)");
+  }
+  SECTION("implicit curve with no real points") {
+    CHECK(problem_of("schema_version: 1\nshape:\n  kind: implicit\n  f_expr: x^2+y^2+1\n") ==
+          "shape.f_expr: implicit curve: f(x, y) = 0 has no real points in the box "
+          "(f = 'x^2+y^2+1', box [-20, 20]^2 around the centre) (line 4)");
+  }
+  SECTION("polar radius not > 0 everywhere") {
+    const std::string p =
+        problem_of("schema_version: 1\nshape:\n  kind: polar\n  r_expr: 1 + 2*cos(phi)\n");
+    CHECK(p.rfind("shape.r_expr: polar: r(phi) must be finite and > 0 for every phi, got r(", 0) ==
+          0);
+    CHECK(p.substr(p.size() - 9) == " (line 4)");
+  }
+  SECTION("degenerate polygons") {
+    CHECK(problem_of("schema_version: 1\nshape:\n  kind: polygon\n  vertices: [[0, 0], [1, 0]]\n") ==
+          "shape.vertices: polygon: a closed polygon needs at least 3 vertices, got 2 (line 4)");
+    const std::string open = problem_of(
+        "schema_version: 1\nshape:\n  kind: polygon\n  closed: false\n  vertices: [[0, 0]]\n");
+    CHECK(open.rfind("shape.vertices: polygon: a", 0) == 0);
+    CHECK(open.find(" open polygon needs at least 2 vertices, got 1 (line 5)") != std::string::npos);
+    CHECK(problem_of("schema_version: 1\nshape:\n  kind: polygon\n"
+                     "  vertices: [[0, 0], [1, 0], [1, 0], [0, 1]]\n") ==
+          "shape.vertices: polygon: vertices 1 and 2 coincide (zero-length edge) (line 4)");
+    CHECK(problem_of("schema_version: 1\nshape:\n  kind: polygon\n"
+                     "  vertices: [[0, 0], [1, 1], [2, 2]]\n") ==
+          "shape.vertices: polygon: the vertices are collinear (zero area) (line 4)");
+    CHECK(problem_of("schema_version: 1\nshape: {kind: polygon}\n") ==
+          "shape.vertices: polygon: a closed polygon needs at least 3 vertices, got 0");
+  }
+  SECTION("an override is marked --set") {
+    CHECK(problem_of("schema_version: 1\nshape:\n  kind: polar\n  r_expr: \"4\"\n",
+                     {"shape.r_expr=4+foo"}) ==
+          "shape.r_expr: polar: r(phi) = '4+foo': Unexpected token \"foo\" found at position 2. "
+          "(--set)");
+  }
+  SECTION("reported together with the other sections' problems") {
+    const auto p = problems_of(
+        "schema_version: 1\nshape: {kind: polar, r_expr: \"4+foo\"}\ndynamics: {k_tangent: 2}\n");
+    REQUIRE(p.size() == 2);
+    CHECK(p[0] == "dynamics.k_tangent: must be in (0, 1], got 2 (line 3)");
+    CHECK(p[1].rfind("shape.r_expr: polar: r(phi) = '4+foo'", 0) == 0);
+  }
+  SECTION("not compiled when the shape's own keys are wrong: only those are reported") {
+    CHECK(problem_of("schema_version: 1\nshape: {kind: polar, r_expr: \"4+foo\", scale: 0}\n") ==
+          "shape.scale: must be > 0, got 0 (line 2)");
+    CHECK(problem_of("schema_version: 1\nshape: {kind: polygon, vertices: [[0, 0], [1]]}\n") ==
+          "shape.vertices[1]: expected a list of 2 numbers [x1, x2], got a list of 1 (line 2)");
+  }
+}
+
+TEST_CASE("the new keys' types and ranges are checked") {
+  const auto one = [](const std::string& section, const std::string& key, const std::string& v) {
+    return problem_of("schema_version: 1\n" + section + ":\n  " + key + ": " + v + "\n");
+  };
+  CHECK(one("shape", "scale", "0") == "shape.scale: must be > 0, got 0 (line 3)");
+  CHECK(one("shape", "scale", "-2") == "shape.scale: must be > 0, got -2 (line 3)");
+  CHECK(one("shape", "rotation_deg", ".nan") ==
+        "shape.rotation_deg: must be finite, got .nan (line 3)");
+  CHECK(one("shape", "rotation_deg", "ninety") ==
+        "shape.rotation_deg: expected a number, got \"ninety\" (line 3)");
+  CHECK(one("shape", "closed", "yes") ==
+        "shape.closed: expected true or false, got \"yes\" (line 3)");
+  CHECK(one("shape", "r_expr", "[1, 2]") == "shape.r_expr: expected a string, got a list (line 3)");
+  CHECK(one("shape", "f_expr", "{x: 1}") == "shape.f_expr: expected a string, got a map (line 3)");
+  CHECK(one("shape", "vertices", "5") ==
+        "shape.vertices: expected a list of [x, y] pairs, got 5 (line 3)");
+  CHECK(one("shape", "vertices", "[[1, 2], [3, x]]") ==
+        "shape.vertices[1][1]: expected a number, got \"x\" (line 3)");
+  CHECK(one("shape", "vertices", "[[1, 2], 3]") ==
+        "shape.vertices[1]: expected a list of 2 numbers [x1, x2], got 3 (line 3)");
+  CHECK(one("shape", "vertices", "[[1, .inf]]") ==
+        "shape.vertices[0][1]: must be finite, got .inf (line 3)");
+  CHECK(problem_of("schema_version: 1\nshape:\n  vertices:\n    - [0, 0]\n    - [1, 2, 3]\n") ==
+        "shape.vertices[1]: expected a list of 2 numbers [x1, x2], got a list of 3 (line 5)");
+  CHECK(one("dynamics", "k_normal", "0") == "dynamics.k_normal: must be in (0, 10], got 0 (line 3)");
+  CHECK(one("dynamics", "k_normal", "10.5") ==
+        "dynamics.k_normal: must be in (0, 10], got 10.5 (line 3)");
+  CHECK(one("dynamics", "k_tangent", "0") ==
+        "dynamics.k_tangent: must be in (0, 1], got 0 (line 3)");
+  CHECK(one("dynamics", "k_tangent", "1.01") ==
+        "dynamics.k_tangent: must be in (0, 1], got 1.01 (line 3)");
+  CHECK(one("dynamics", "spacing", "0") == "dynamics.spacing: must be > 0, got 0 (line 3)");
+  CHECK(one("dynamics", "spacing", "-1") == "dynamics.spacing: must be > 0, got -1 (line 3)");
+  CHECK(one("dynamics", "law", "\"\"") ==
+        "dynamics.law: must be one of paper, arc, got \"\" (line 3)");
+  CHECK(problem_of("schema_version: 1\n", {"dynamics.law=Arc"}) ==
+        "dynamics.law: must be one of paper, arc, got \"Arc\" (--set)");
+  // Boundaries included.
+  CHECK(load("", {"dynamics.k_tangent=1", "dynamics.k_normal=10"}).command.arc.k_tangent == 1.0);
+  CHECK(load("", {"shape.vertices="}).command.shape.vertices.empty());
+}
+
 // ----------------------------------------------------------------------------------------------
 // Problems, one kind at a time
 
@@ -366,7 +657,10 @@ TEST_CASE("wrong types are reported") {
 
 TEST_CASE("unknown names are reported with the allowed ones") {
   CHECK(problem_of("schema_version: 1\nshape:\n  kind: hexagon\n") ==
-        "shape.kind: must be one of line, circle, ellipse, square, got \"hexagon\" (line 3)");
+        "shape.kind: must be one of line, circle, ellipse, square, polar, parametric, implicit, "
+        "polygon, got \"hexagon\" (line 3)");
+  CHECK(problem_of("schema_version: 1\ndynamics:\n  law: boids\n") ==
+        "dynamics.law: must be one of paper, arc, got \"boids\" (line 3)");
   CHECK(problem_of("schema_version: 1\ntracking:\n  path: spiral\n") ==
         "tracking.path: must be one of fixed, line, circle, got \"spiral\" (line 3)");
   CHECK(problem_of("schema_version: 1\nintegration:\n  integrator: rk45\n") ==
@@ -502,7 +796,8 @@ transport: {domain: 300}
   const std::vector<std::string> expected = {
       "swarm.colour: unknown key (line 4)",
       "swarm.agents: expected an integer, got \"many\" (line 3)",
-      "shape.kind: must be one of line, circle, ellipse, square, got \"blob\" (line 8)",
+      "shape.kind: must be one of line, circle, ellipse, square, polar, parametric, implicit, "
+      "polygon, got \"blob\" (line 8)",
       "shape.centre: expected a list of 2 numbers [x1, x2], got a list of 1 (line 8)",
       "dynamics.sigma: must be > 0, got -1 (line 6)",
       "dynamics.beta: must be finite, got .nan (line 7)",
@@ -612,6 +907,17 @@ TEST_CASE("to_yaml round-trips every field") {
   c.command.shape.a = 7;
   c.command.shape.b = 0.7;
   c.command.shape.centre = core::Vec2(-1.5, 2.25);
+  c.command.shape.rotation = -37.5 * kRadPerDeg;  // as the loader computes it from degrees
+  c.command.shape.scale = 0.1 + 0.2;
+  // Texts YAML would misread unless quoted (the line kind compiles none of them).
+  c.command.shape.r_expr = "- 1";
+  c.command.shape.x_expr = "#not a comment";
+  c.command.shape.y_expr = "true";
+  c.command.shape.f_expr = "x: y, [z]";
+  c.command.shape.vertices = {core::Vec2(-1.5, 2.0), core::Vec2(1e-300, 1.0 / 3.0)};
+  c.command.shape.closed = false;
+  c.command.law = core::Law::Arc;
+  c.command.arc = {0.75, 0.3, 2.5};
   c.command.tracking.enabled = true;
   c.command.tracking.feedforward = true;
   c.command.tracking.path.kind = core::CentrePath::Kind::Line;
@@ -649,6 +955,37 @@ TEST_CASE("to_yaml round-trips every field") {
   CHECK(to_yaml(back) == text);
 }
 
+TEST_CASE("to_yaml round-trips the equation shapes and polygons") {
+  for (const std::string name : {"polar_star", "polygon", "implicit", "arc_line"}) {
+    INFO(name);
+    const Config c = load(scenario(name));
+    const std::string text = to_yaml(c);
+    INFO(text);
+    const Config back = load_string(text);
+    require_equal(back, c);
+    CHECK(back.command.shape.curve != nullptr);
+    CHECK(to_yaml(back) == text);
+  }
+  Config c;
+  c.command.shape.kind = core::ShapeKind::Parametric;
+  c.command.shape.x_expr = "4*cos(2*pi*s)";
+  c.command.shape.y_expr = "-2*sin(2*pi*s)";
+  c.command.shape.closed = true;
+  for (const double deg : {0.0, 30.0, 90.0, -45.0, 359.9, 1e-7, 12345.678}) {
+    INFO(deg);
+    c.command.shape.rotation = deg * kRadPerDeg;
+    const std::string text = to_yaml(c);
+    CHECK(text.find("  rotation_deg: ") != std::string::npos);
+    require_equal(load_string(text), c);  // the very same radians
+  }
+  // Degrees written as the user wrote them.
+  c.command.shape.rotation = 30.0 * kRadPerDeg;
+  CHECK(to_yaml(c).find("  rotation_deg: 30.0\n") != std::string::npos);
+  // A rotation not set from degrees comes back within rounding.
+  c.command.shape.rotation = 1.0;
+  CHECK(load_string(to_yaml(c)).command.shape.rotation == Approx(1.0).epsilon(1e-15));
+}
+
 TEST_CASE("to_yaml writes the documented schema") {
   const std::string text = to_yaml(load(scenario("track_line")));
   CHECK(text.rfind("schema_version: 1\nname: track_line\n", 0) == 0);
@@ -657,4 +994,13 @@ TEST_CASE("to_yaml writes the documented schema") {
   CHECK(text.find("  r: 0.1\n") != std::string::npos);
   CHECK(text.find("  interfaces: []\n") != std::string::npos);
   CHECK(text.find("  discovery_server: 127.0.0.1:11811\n") != std::string::npos);
+  CHECK(text.find("  rotation_deg: 0.0\n  scale: 1.0\n") != std::string::npos);
+  CHECK(text.find("  r_expr: \"\"\n") != std::string::npos);
+  CHECK(text.find("  vertices: []\n  closed: true\n") != std::string::npos);
+  CHECK(text.find("  law: paper\n  k_normal: 0.5\n  k_tangent: 1.0\n  spacing: 1.0\n") !=
+        std::string::npos);
+  const std::string poly = to_yaml(load(scenario("polygon")));
+  CHECK(poly.find("  vertices: [[-4.0, -3.0], [4.0, -3.0], [4.0, 2.0], [0.0, 5.0], [-4.0, 2.0]]\n") !=
+        std::string::npos);
+  CHECK(poly.find("  law: arc\n") != std::string::npos);
 }

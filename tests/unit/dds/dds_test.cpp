@@ -20,6 +20,8 @@
 #include "dds/node.hpp"
 #include "dds/participant.hpp"
 #include "dds/topics.hpp"
+#include "shapeform/msg/ShapeCommandPubSubTypes.h"
+#include "shapes/shapes.hpp"
 
 // Everything lives in namespace shapeform: Fast DDS's Topic.hpp declares a global ::dds namespace, so
 // `using namespace shapeform; dds::...` would be ambiguous.
@@ -73,6 +75,20 @@ core::Command sample_command() {
   c.shape.a = 6.0;
   c.shape.b = 2.5;
   c.shape.centre = core::Vec2(1.0, -2.0);
+  c.shape.rotation = 0.625;
+  c.shape.scale = 1.5;
+  // Valid for their kinds, so every kind of this command compiles.
+  c.shape.r_expr = "4 + cos(5*phi)";
+  c.shape.x_expr = "3*cos(2*pi*s)";
+  c.shape.y_expr = "2*sin(2*pi*s) + 0.5*sin(4*pi*s)";
+  c.shape.f_expr = "x^4 + y^4 - 81";
+  c.shape.vertices = {core::Vec2(-4, -3), core::Vec2(4, -3), core::Vec2(4, 2), core::Vec2(0, 5),
+                      core::Vec2(-4, 2)};
+  c.shape.closed = false;
+  c.law = core::Law::Arc;
+  c.arc.k_normal = 0.75;
+  c.arc.k_tangent = 0.5;
+  c.arc.spacing = 1.25;
   c.tracking.enabled = true;
   c.tracking.path.kind = core::CentrePath::Kind::Circle;
   c.tracking.path.point = core::Vec2(0.5, 0.25);
@@ -101,6 +117,18 @@ void require_same(const core::Command& a, const core::Command& b) {
   CHECK(a.shape.a == b.shape.a);
   CHECK(a.shape.b == b.shape.b);
   CHECK(a.shape.centre == b.shape.centre);
+  CHECK(a.shape.rotation == b.shape.rotation);
+  CHECK(a.shape.scale == b.shape.scale);
+  CHECK(a.shape.r_expr == b.shape.r_expr);
+  CHECK(a.shape.x_expr == b.shape.x_expr);
+  CHECK(a.shape.y_expr == b.shape.y_expr);
+  CHECK(a.shape.f_expr == b.shape.f_expr);
+  CHECK(a.shape.vertices == b.shape.vertices);
+  CHECK(a.shape.closed == b.shape.closed);
+  CHECK(a.law == b.law);
+  CHECK(a.arc.k_normal == b.arc.k_normal);
+  CHECK(a.arc.k_tangent == b.arc.k_tangent);
+  CHECK(a.arc.spacing == b.arc.spacing);
   CHECK(a.tracking.enabled == b.tracking.enabled);
   CHECK(a.tracking.path.kind == b.tracking.path.kind);
   CHECK(a.tracking.path.point == b.tracking.path.point);
@@ -144,6 +172,8 @@ msg::AgentState good_state() {
   s.y(-2.5);
   s.vx(0.1);
   s.vy(-0.2);
+  s.has_arc(true);
+  s.arc(7.25);
   return s;
 }
 
@@ -176,13 +206,55 @@ TEST_CASE("ShapeCommand round trip keeps every field", "[dds][convert]") {
   CHECK(m.shape_kind() == "ellipse");
   CHECK(m.path_kind() == "circle");
   CHECK(m.integrator() == "rk4");
-  CHECK(m.law() == "paper");
+  CHECK(m.law() == "arc");
+  CHECK(m.rotation() == 0.625);
+  CHECK(m.scale() == 1.5);
+  CHECK(m.r_expr() == "4 + cos(5*phi)");
+  CHECK(m.vertices() == std::vector<double>{-4, -3, 4, -3, 4, 2, 0, 5, -4, 2});  // flattened
+  CHECK_FALSE(m.closed());
+  CHECK(m.k_normal() == 0.75);
+  CHECK(m.k_tangent() == 0.5);
+  CHECK(m.spacing() == 1.25);
+  CHECK(dds::to_msg(core::Command{}, 1).law() == "paper");
 
   core::Command out;
   std::string error;
   REQUIRE(dds::from_msg(m, out, error));
   CHECK(error.empty());
   require_same(in, out);
+  CHECK(out.shape.curve != nullptr);  // compiled on receipt
+
+  SECTION("every kind and law survives, compiled to the same curve as the sender's") {
+    for (auto kind : {core::ShapeKind::Line, core::ShapeKind::Circle, core::ShapeKind::Ellipse,
+                      core::ShapeKind::Square, core::ShapeKind::Polar, core::ShapeKind::Parametric,
+                      core::ShapeKind::Implicit, core::ShapeKind::Polygon}) {
+      for (const bool closed : {true, false}) {
+        for (auto law : {core::Law::Paper, core::Law::Arc}) {
+          INFO(core::to_string(kind) << " closed " << closed << " law " << core::to_string(law));
+          core::Command c = in;
+          c.shape.kind = kind;
+          c.shape.closed = closed;
+          c.law = law;
+          const msg::ShapeCommand w = dds::to_msg(c, 3);
+          CHECK(w.shape_kind() == std::string(core::to_string(kind)));
+          CHECK(w.law() == std::string(core::to_string(law)));
+          core::Command back;
+          REQUIRE(dds::from_msg(w, back, error));
+          require_same(c, back);
+          REQUIRE(back.shape.curve != nullptr);
+          core::Command local = c;
+          shapes::compile(local);
+          CHECK(back.shape.curve->closed() == local.shape.curve->closed());
+          CHECK(back.shape.curve->length() == local.shape.curve->length());
+          for (const core::Vec2& x : {core::Vec2(9, 1), core::Vec2(-2, 7), core::Vec2(0.5, -6)}) {
+            const core::Vec2 got = core::target_point(back.shape, x);
+            const core::Vec2 want = core::target_point(local.shape, x);
+            CHECK(got == want);
+          }
+        }
+      }
+    }
+  }
 
   SECTION("every shape, path and integrator name survives") {
     for (auto kind : {core::ShapeKind::Line, core::ShapeKind::Circle, core::ShapeKind::Ellipse,
@@ -207,7 +279,53 @@ TEST_CASE("ShapeCommand round trip keeps every field", "[dds][convert]") {
     core::Command back;
     REQUIRE(dds::from_msg(dds::to_msg(core::Command{}, 1), back, error));
     require_same(core::Command{}, back);
+    CHECK(back.shape.curve != nullptr);
   }
+  SECTION("an empty vertex list and empty expressions travel as such") {
+    core::Command c = in;
+    c.shape.vertices.clear();
+    c.shape.r_expr.clear();
+    c.shape.kind = core::ShapeKind::Circle;
+    core::Command back;
+    REQUIRE(dds::from_msg(dds::to_msg(c, 1), back, error));
+    CHECK(back.shape.vertices.empty());
+    CHECK(back.shape.r_expr.empty());
+  }
+}
+
+TEST_CASE("ShapeCommand survives CDR serialization, large polygons and long expressions included",
+          "[dds][convert]") {
+  core::Command c = sample_command();
+  c.shape.kind = core::ShapeKind::Polygon;
+  c.shape.closed = true;
+  c.shape.vertices.clear();
+  constexpr int kVertices = 2000;  // 32 KB of vertices: beyond any default bound of sequences
+  for (int k = 0; k < kVertices; ++k) {
+    const double th = 2.0 * 3.14159265358979323846 * k / kVertices;
+    c.shape.vertices.emplace_back(4.0 * std::cos(th), 3.0 * std::sin(th));
+  }
+  std::string long_expr = "4";
+  while (long_expr.size() < 1000) long_expr += " + 0*cos(phi)";
+  c.shape.r_expr = long_expr;
+  const msg::ShapeCommand m = dds::to_msg(c, 9);
+
+  msg::ShapeCommandPubSubType type;
+  eprosima::fastrtps::rtps::SerializedPayload_t payload(type.getSerializedSizeProvider(
+      const_cast<msg::ShapeCommand*>(&m))());
+  REQUIRE(type.serialize(const_cast<msg::ShapeCommand*>(&m), &payload));
+  msg::ShapeCommand read;
+  REQUIRE(type.deserialize(&payload, &read));
+  CHECK(read.vertices().size() == 2u * kVertices);
+  CHECK(read.r_expr() == long_expr);
+  core::Command back;
+  std::string error;
+  REQUIRE(dds::from_msg(read, back, error));
+  require_same(c, back);
+  c.shape.kind = core::ShapeKind::Polar;
+  REQUIRE(dds::from_msg(dds::to_msg(c, 10), back, error));
+  // r(phi) = 4 (the long sum adds zeros), scaled by 1.5 about the centre (1, -2).
+  CHECK((core::target_point(back.shape, core::Vec2(30, 0)) - core::Vec2(1, -2)).norm() ==
+        Approx(6.0).epsilon(1e-9));
 }
 
 TEST_CASE("ShapeCommand rejections name the field", "[dds][convert]") {
@@ -236,7 +354,27 @@ TEST_CASE("ShapeCommand rejections name the field", "[dds][convert]") {
   CHECK(reject([](M& m) { m.shape_kind("triangle"); }).find("command.shape_kind: unknown shape \"triangle\"") == 0);
   CHECK(reject([](M& m) { m.path_kind("spiral"); }).find("command.path_kind: unknown path \"spiral\"") == 0);
   CHECK(reject([](M& m) { m.integrator("rk45"); }).find("command.integrator: unknown integrator \"rk45\"") == 0);
-  CHECK(reject([](M& m) { m.law("boids"); }).find("command.law: unknown law \"boids\"") == 0);
+  CHECK(reject([](M& m) { m.law("boids"); }) == "command.law: unknown law \"boids\" (paper|arc)");
+  CHECK(reject([](M& m) { m.law("Arc"); }) == "command.law: unknown law \"Arc\" (paper|arc)");
+  CHECK(reject([](M& m) { m.law(""); }).find("command.law:") == 0);
+  CHECK(reject([](M& m) { m.law("paper"); }).empty());
+  // The shape's placement and the arc law's parameters.
+  CHECK(reject([](M& m) { m.rotation(kNaN); }) == "command.rotation: must be finite, got nan");
+  CHECK(reject([](M& m) { m.scale(0); }) == "command.scale: must be > 0, got 0");
+  CHECK(reject([](M& m) { m.scale(-1); }) == "command.scale: must be > 0, got -1");
+  CHECK(reject([](M& m) { m.scale(kInf); }) == "command.scale: must be finite, got inf");
+  CHECK(reject([](M& m) { m.k_normal(0); }) == "command.k_normal: must be in (0, 10], got 0");
+  CHECK(reject([](M& m) { m.k_normal(10.5); }) == "command.k_normal: must be in (0, 10], got 10.5");
+  CHECK(reject([](M& m) { m.k_normal(10); }).empty());
+  CHECK(reject([](M& m) { m.k_tangent(0); }) == "command.k_tangent: must be in (0, 1], got 0");
+  CHECK(reject([](M& m) { m.k_tangent(1.5); }) == "command.k_tangent: must be in (0, 1], got 1.5");
+  CHECK(reject([](M& m) { m.k_tangent(kNaN); }) == "command.k_tangent: must be finite, got nan");
+  CHECK(reject([](M& m) { m.spacing(0); }) == "command.spacing: must be > 0, got 0");
+  CHECK(reject([](M& m) { m.vertices({1, 2, 3}); }) ==
+        "command.vertices: must hold x, y pairs (an even count), got 3 numbers");
+  CHECK(reject([](M& m) { m.vertices({1, 2, kNaN, 4}); }) ==
+        "command.vertices[2]: must be finite, got nan");
+  CHECK(reject([](M& m) { m.shape_kind("Polar"); }).find("command.shape_kind: unknown shape \"Polar\"") == 0);
   CHECK(reject([](M& m) { m.shape_kind(""); }).find("command.shape_kind:") == 0);
 
   SECTION("several problems are all reported") {
@@ -247,6 +385,63 @@ TEST_CASE("ShapeCommand rejections name the field", "[dds][convert]") {
     CHECK(e.find("command.sigma: must be > 0, got -1") != std::string::npos);
     CHECK(e.find("command.dt: must be finite, got nan") != std::string::npos);
   }
+}
+
+TEST_CASE("a shape that does not compile is rejected whole", "[dds][convert]") {
+  using M = msg::ShapeCommand;
+  CHECK(reject([](M& m) {
+          m.shape_kind("polar");
+          m.r_expr("4+foo");
+        }) == "command: polar: r(phi) = '4+foo': Unexpected token \"foo\" found at position 2.");
+  const std::string unknown = reject([](M& m) {
+    m.shape_kind("polar");
+    m.r_expr("4 + cos(5*theta)");
+  });
+  CHECK(unknown.rfind("command: polar: r(phi) = '4 + cos(5*theta)': ", 0) == 0);
+  CHECK(unknown.find("\"theta\"") != std::string::npos);
+  CHECK(reject([](M& m) {
+          m.shape_kind("polar");
+          m.r_expr("");
+        }) == "command: polar: r(phi): empty expression");
+  CHECK(reject([](M& m) {
+          m.shape_kind("polar");
+          m.r_expr("1 + 2*cos(phi)");
+        }).rfind("command: polar: r(phi) must be finite and > 0 for every phi", 0) == 0);
+  CHECK(reject([](M& m) {
+          m.shape_kind("parametric");
+          m.y_expr("sin(2*pi*t)");
+        }).rfind("command: parametric: y(s) = 'sin(2*pi*t)': ", 0) == 0);
+  CHECK(reject([](M& m) {
+          m.shape_kind("implicit");
+          m.f_expr("x^2+y^2+1");
+        }) == "command: implicit curve: f(x, y) = 0 has no real points in the box "
+              "(f = 'x^2+y^2+1', box [-20, 20]^2 around the centre)");
+  CHECK(reject([](M& m) {
+          m.shape_kind("polygon");
+          m.closed(true);
+          m.vertices({0, 0, 1, 0});
+        }) == "command: polygon: a closed polygon needs at least 3 vertices, got 2");
+  CHECK(reject([](M& m) {
+          m.shape_kind("polygon");
+          m.vertices({0, 0, 1, 0, 1, 0, 0, 1});
+        }) == "command: polygon: vertices 1 and 2 coincide (zero-length edge)");
+  CHECK(reject([](M& m) {
+          m.shape_kind("polygon");
+          m.closed(true);
+          m.vertices({0, 0, 1, 1, 2, 2});
+        }) == "command: polygon: the vertices are collinear (zero area)");
+  // An open polygon of two vertices is a segment: fine.
+  CHECK(reject([](M& m) {
+          m.shape_kind("polygon");
+          m.closed(false);
+          m.vertices({0, 0, 1, 0});
+        }).empty());
+  // Field problems come first: a malformed message is not compiled at all.
+  CHECK(reject([](M& m) {
+          m.shape_kind("polar");
+          m.r_expr("4+foo");
+          m.sigma(-1);
+        }) == "command.sigma: must be > 0, got -1");
 }
 
 TEST_CASE("valid_state rejects non-finite and absurd samples", "[dds][convert]") {
@@ -261,6 +456,20 @@ TEST_CASE("valid_state rejects non-finite and absurd samples", "[dds][convert]")
   s = good_state();
   s.vy(kInf);
   CHECK(state_problem(s) == "state.vy: must be finite, got inf");
+  s = good_state();
+  s.arc(kNaN);
+  CHECK(state_problem(s) == "state.arc: must be finite, got nan");
+  s.has_arc(false);  // arc must stay finite even when unknown
+  CHECK(state_problem(s) == "state.arc: must be finite, got nan");
+  s = good_state();
+  s.arc(-kInf);
+  CHECK(state_problem(s) == "state.arc: must be finite, got -inf");
+  s = good_state();
+  s.has_arc(false);
+  s.arc(0.0);
+  CHECK(state_problem(s).empty());
+  CHECK(std::isnan(dds::neighbour_arc(s)));
+  CHECK(dds::neighbour_arc(good_state()) == 7.25);
   s = good_state();
   s.model_time(kNaN);
   CHECK(state_problem(s) == "state.model_time: must be finite, got nan");
@@ -282,7 +491,12 @@ TEST_CASE("SwarmMetrics carries undefined values as -1", "[dds][convert]") {
   m.shape_error_mean = 0.25;
   m.gap_cv = 0.0;
   m.clusters = 1;
+  m.curve_error_mean = 0.001;
+  m.arc_gap_cv = 0.0;
   const msg::SwarmMetrics w = dds::to_msg(m, 4, 100.0, 99, true);
+  CHECK(w.curve_error_mean() == 0.001);
+  CHECK(w.curve_error_max() == -1.0);
+  CHECK(w.arc_gap_cv() == 0.0);
   CHECK(w.epoch() == 4u);
   CHECK(w.agents_alive() == 12);
   CHECK(w.shape_error_mean() == 0.25);
@@ -299,9 +513,22 @@ TEST_CASE("SwarmMetrics carries undefined values as -1", "[dds][convert]") {
   CHECK(back.gap_cv == std::optional<double>(0.0));
   CHECK_FALSE(back.centroid_error.has_value());
   CHECK(back.clusters == std::optional<int>(1));
+  CHECK(back.curve_error_mean == std::optional<double>(0.001));
+  CHECK_FALSE(back.curve_error_max.has_value());
+  CHECK(back.arc_gap_cv == std::optional<double>(0.0));
 
   core::Metrics none;
-  CHECK_FALSE(dds::from_msg(dds::to_msg(none, 1, 0.0, 0, false)).clusters.has_value());
+  const core::Metrics none_back = dds::from_msg(dds::to_msg(none, 1, 0.0, 0, false));
+  CHECK_FALSE(none_back.clusters.has_value());
+  CHECK_FALSE(none_back.curve_error_mean.has_value());
+  CHECK_FALSE(none_back.curve_error_max.has_value());
+  CHECK_FALSE(none_back.arc_gap_cv.has_value());
+  core::Metrics all;
+  all.curve_error_max = 2.5;
+  all.arc_gap_cv = 0.125;
+  const core::Metrics all_back = dds::from_msg(dds::to_msg(all, 1, 0.0, 0, false));
+  CHECK(all_back.curve_error_max == std::optional<double>(2.5));
+  CHECK(all_back.arc_gap_cv == std::optional<double>(0.125));
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -620,6 +847,59 @@ TEST_CASE("command is reliable and transient local so a late reader gets the new
   std::string error;
   REQUIRE(dds::from_msg(got.front().msg, out, error));
   require_same(cmd, out);
+}
+
+TEST_CASE("a large polygon command crosses the wire; a bad shape is refused on receipt", "[dds][node][pubsub]") {
+  const auto cfg = loopback(test_domain(3));
+  dds::Node sup(cfg, "test-supervisor");
+  dds::Node agent(cfg, "test-agent");
+  auto writer = sup.writer<msg::ShapeCommand>(dds::TopicId::Command);
+  auto reader = agent.reader<msg::ShapeCommand>(dds::TopicId::Command);
+  REQUIRE(wait_for([&] { return writer.matched() >= 1 && reader.matched() >= 1; }));
+
+  core::Command big = sample_command();
+  big.shape.kind = core::ShapeKind::Polygon;
+  big.shape.closed = true;
+  big.shape.vertices.clear();
+  constexpr int kVertices = 5000;  // 80 KB: more than one UDP datagram, so it is fragmented
+  for (int k = 0; k < kVertices; ++k) {
+    const double th = 2.0 * 3.14159265358979323846 * k / kVertices;
+    big.shape.vertices.emplace_back(5.0 * std::cos(th), 2.0 * std::sin(th));
+  }
+  msg::ShapeCommand bad = dds::to_msg(sample_command(), 2);
+  bad.shape_kind("polar");
+  bad.r_expr("4+foo");
+
+  // What an agent does: apply what from_msg accepts, count what it refuses.
+  core::Command in_force;
+  std::uint32_t epoch = 0;
+  int refused = 0;
+  std::string last_error;
+  std::vector<dds::Received<msg::ShapeCommand>> batch;
+  const auto receive = [&] {
+    reader.drain(batch);
+    for (const auto& r : batch) {
+      core::Command c;
+      std::string error;
+      if (dds::from_msg(r.msg, c, error)) {
+        in_force = c;
+        epoch = r.msg.epoch();
+      } else {
+        ++refused;
+        last_error = error;
+      }
+    }
+  };
+  // KEEP_LAST 1: the second write could replace the first before delivery, so one at a time.
+  REQUIRE(writer.write(dds::to_msg(big, 1)));
+  REQUIRE(wait_for([&] { receive(); return epoch == 1; }, 20.0));
+  REQUIRE(writer.write(bad));
+  REQUIRE(wait_for([&] { receive(); return refused == 1; }, 20.0));
+  CHECK(epoch == 1);
+  CHECK(last_error == "command: polar: r(phi) = '4+foo': Unexpected token \"foo\" found at position 2.");
+  require_same(big, in_force);  // the refused command changed nothing
+  REQUIRE(in_force.shape.curve != nullptr);
+  CHECK(in_force.shape.curve->closed());
 }
 
 TEST_CASE("node refuses a topic of another type and handles survive their node", "[dds][node]") {

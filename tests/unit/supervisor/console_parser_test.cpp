@@ -1,6 +1,9 @@
 #include "console_parser.hpp"
 
 #include <catch2/catch.hpp>
+#include <vector>
+
+#include "shapes/shapes.hpp"
 #include <sstream>
 #include <string>
 #include <variant>
@@ -132,6 +135,247 @@ TEST_CASE("shape ellipse and square", "[supervisor][parser]") {
   CHECK(s.shape.a == 4.5);
   CHECK(s.shape.centre == core::Vec2(0.0, 0.0));
   check_rest_unchanged(s);
+}
+
+TEST_CASE("shape polar", "[supervisor][parser]") {
+  const core::Command c =
+      set_command("shape polar r=\"4 + cos(5*phi)\" cx=1 cy=-1", SetCommand::What::Shape);
+  CHECK(c.shape.kind == core::ShapeKind::Polar);
+  CHECK(c.shape.r_expr == "4 + cos(5*phi)");
+  CHECK(c.shape.centre == core::Vec2(1.0, -1.0));
+  CHECK(c.shape.rotation == 0.0);
+  CHECK(c.shape.scale == 1.0);
+  CHECK_FALSE(c.tracking.enabled);
+  check_rest_unchanged(c);
+  // Compiled by the parser: r(0) = 5 from the centre.
+  REQUIRE(c.shape.curve != nullptr);
+  const core::Vec2 tip = core::target_point(c.shape, core::Vec2(21.0, -1.0));
+  CHECK(tip.x() == Approx(6.0).epsilon(1e-6));
+  CHECK(tip.y() == Approx(-1.0).epsilon(1e-9));
+  // Unquoted (no spaces) works as well.
+  CHECK(set_command("shape polar r=4+cos(5*phi)", SetCommand::What::Shape).shape.r_expr ==
+        "4+cos(5*phi)");
+}
+
+TEST_CASE("shape parametric", "[supervisor][parser]") {
+  const core::Command c = set_command(
+      "shape parametric x=\"4*cos(2*pi*s)\" y=\"2*sin(2*pi*s)\"", SetCommand::What::Shape);
+  CHECK(c.shape.kind == core::ShapeKind::Parametric);
+  CHECK(c.shape.x_expr == "4*cos(2*pi*s)");
+  CHECK(c.shape.y_expr == "2*sin(2*pi*s)");
+  CHECK(c.shape.closed);  // default on
+  CHECK(c.shape.centre == core::Vec2(0.0, 0.0));
+  REQUIRE(c.shape.curve != nullptr);
+  CHECK(c.shape.curve->closed());
+  check_rest_unchanged(c);
+
+  const core::Command open = set_command(
+      "shape parametric x=\"8*s - 4\" y=0 closed=off cx=2 cy=3", SetCommand::What::Shape);
+  CHECK_FALSE(open.shape.closed);
+  CHECK(open.shape.centre == core::Vec2(2.0, 3.0));
+  REQUIRE(open.shape.curve != nullptr);
+  CHECK_FALSE(open.shape.curve->closed());
+  CHECK(open.shape.curve->length() == Approx(8.0).epsilon(1e-9));
+}
+
+TEST_CASE("shape implicit", "[supervisor][parser]") {
+  const core::Command c =
+      set_command("shape implicit f=\"x^2/16 + y^2/4 - 1\" cy=2", SetCommand::What::Shape);
+  CHECK(c.shape.kind == core::ShapeKind::Implicit);
+  CHECK(c.shape.f_expr == "x^2/16 + y^2/4 - 1");
+  CHECK(c.shape.centre == core::Vec2(0.0, 2.0));
+  REQUIRE(c.shape.curve != nullptr);
+  const core::Vec2 p = core::target_point(c.shape, core::Vec2(9.0, 2.0));
+  CHECK(p.x() == Approx(4.0).epsilon(1e-6));
+  CHECK(p.y() == Approx(2.0).epsilon(1e-6));
+  check_rest_unchanged(c);
+}
+
+TEST_CASE("shape polygon", "[supervisor][parser]") {
+  const core::Command c = set_command("shape polygon points=\"-4,-3; 4,-3; 4,2; 0,5; -4,2\"",
+                                      SetCommand::What::Shape);
+  CHECK(c.shape.kind == core::ShapeKind::Polygon);
+  CHECK(c.shape.vertices == std::vector<core::Vec2>{core::Vec2(-4, -3), core::Vec2(4, -3),
+                                                    core::Vec2(4, 2), core::Vec2(0, 5),
+                                                    core::Vec2(-4, 2)});
+  CHECK(c.shape.closed);
+  REQUIRE(c.shape.curve != nullptr);
+  CHECK(c.shape.curve->length() == Approx(8 + 5 + 5 + 5 + 5));
+  check_rest_unchanged(c);
+
+  const core::Command open =
+      set_command("shape polygon points=0,0;4,0;4,4 closed=off cx=1", SetCommand::What::Shape);
+  CHECK_FALSE(open.shape.closed);
+  CHECK(open.shape.vertices.size() == 3u);
+  CHECK(open.shape.centre == core::Vec2(1.0, 0.0));
+  REQUIRE(open.shape.curve != nullptr);
+  CHECK(open.shape.curve->length() == Approx(8.0));
+  // Two points make an open polygon (a segment).
+  CHECK(set_command("shape polygon points=0,0;1,0 closed=off", SetCommand::What::Shape)
+            .shape.vertices.size() == 2u);
+}
+
+TEST_CASE("every shape takes rot (degrees) and scale", "[supervisor][parser]") {
+  constexpr double kPi = 3.14159265358979323846;
+  for (const std::string base : {"shape line m=1 c=0", "shape circle r=2", "shape ellipse a=3 b=1",
+                                 "shape square a=1", "shape polar r=2",
+                                 "shape parametric x=cos(2*pi*s) y=sin(2*pi*s)",
+                                 "shape implicit f=x^2+y^2-1", "shape polygon points=0,0;1,0;0,1"}) {
+    INFO(base);
+    const core::Command c = set_command(base + " rot=90 scale=2.5", SetCommand::What::Shape);
+    CHECK(c.shape.rotation == Approx(kPi / 2));
+    CHECK(c.shape.rotation == 90.0 * (kPi / 180.0));  // the config loader's conversion, bit for bit
+    CHECK(c.shape.scale == 2.5);
+    CHECK(c.shape.curve != nullptr);
+    const core::Command d = set_command(base, SetCommand::What::Shape);
+    CHECK(d.shape.rotation == 0.0);  // defaults, not the current shape's
+    CHECK(d.shape.scale == 1.0);
+  }
+  // The placement acts: an ellipse a=3 b=1 rotated by 90 degrees and doubled has its long axis on x2.
+  const core::Command e =
+      set_command("shape ellipse a=3 b=1 rot=90 scale=2 cx=1", SetCommand::What::Shape);
+  const core::Vec2 top = core::target_point(e.shape, core::Vec2(1.0, 20.0));
+  CHECK(top.x() == Approx(1.0).margin(1e-9));
+  CHECK(top.y() == Approx(6.0).epsilon(1e-9));
+  CHECK(set_command("shape circle r=1 rot=-720.5", SetCommand::What::Shape).shape.rotation ==
+        Approx(-720.5 * kPi / 180.0));
+}
+
+TEST_CASE("a new shape keeps nothing of the previous one", "[supervisor][parser]") {
+  core::Command cur = current_command();
+  cur.shape.kind = core::ShapeKind::Polar;
+  cur.shape.r_expr = "3";
+  cur.shape.rotation = 1.0;
+  cur.shape.scale = 3.0;
+  cur.shape.vertices = {core::Vec2(1, 1)};
+  const ParseResult r = parse_command("shape circle r=2", cur);
+  REQUIRE(r.ok());
+  const core::ShapeSpec& s = std::get<SetCommand>(r.action).command.shape;
+  CHECK(s.kind == core::ShapeKind::Circle);
+  CHECK(s.r_expr.empty());
+  CHECK(s.vertices.empty());
+  CHECK(s.rotation == 0.0);
+  CHECK(s.scale == 1.0);
+  REQUIRE(s.curve != nullptr);
+  CHECK(s.curve->length() == Approx(2 * 3.14159265358979323846 * 2));
+  // Tracking draws a plain circle too, freshly compiled.
+  const ParseResult t = parse_command("track point at=0,0 r=1", cur);
+  REQUIRE(t.ok());
+  const core::ShapeSpec& ts = std::get<SetCommand>(t.action).command.shape;
+  CHECK(ts.kind == core::ShapeKind::Circle);
+  CHECK(ts.scale == 1.0);
+  CHECK(ts.rotation == 0.0);
+  REQUIRE(ts.curve != nullptr);
+  CHECK(ts.curve->length() == Approx(2 * 3.14159265358979323846));
+}
+
+TEST_CASE("errors: shapes that do not compile", "[supervisor][parser]") {
+  CHECK(error_of("shape polar r=\"4+foo\"") ==
+        "shape polar: r(phi) = '4+foo': Unexpected token \"foo\" found at position 2.");
+  const std::string unknown = error_of("shape polar r=\"4 + cos(5*theta)\"");
+  CHECK(unknown.rfind("shape polar: r(phi) = '4 + cos(5*theta)': ", 0) == 0);
+  CHECK(unknown.find("\"theta\"") != std::string::npos);
+  CHECK(error_of("shape polar r=\"\"") == "shape polar: r(phi): empty expression");
+  CHECK(error_of("shape polar r=\"1 + 2*cos(phi)\"")
+            .rfind("shape polar: r(phi) must be finite and > 0 for every phi, got r(", 0) == 0);
+  CHECK(error_of("shape parametric x=\"cos(2*pi*s)\" y=\"sin(2*pi*t)\"")
+            .rfind("shape parametric: y(s) = 'sin(2*pi*t)': ", 0) == 0);
+  CHECK(error_of("shape parametric x=\"1\" y=\"2\"") ==
+        "shape parametric: curve has fewer than 2 distinct points");
+  CHECK(error_of("shape implicit f=\"x^2+y^2+1\"") ==
+        "shape implicit: implicit curve: f(x, y) = 0 has no real points in the box "
+        "(f = 'x^2+y^2+1', box [-20, 20]^2 around the centre)");
+  CHECK(error_of("shape implicit f=\"x^2+y^2-z\"")
+            .rfind("shape implicit: f(x, y) = 'x^2+y^2-z': ", 0) == 0);
+  CHECK(error_of("shape polygon points=\"0,0;1,0\"") ==
+        "shape polygon: a closed polygon needs at least 3 vertices, got 2");
+  CHECK(error_of("shape polygon points=\"0,0;1,0;1,0;0,1\"") ==
+        "shape polygon: vertices 1 and 2 coincide (zero-length edge)");
+  CHECK(error_of("shape polygon points=\"0,0;1,1;2,2\"") ==
+        "shape polygon: the vertices are collinear (zero area)");
+  CHECK(error_of("shape polygon points=\"\"") ==
+        "shape polygon: a closed polygon needs at least 3 vertices, got 0");
+}
+
+TEST_CASE("errors: polygon points, closed, rot and scale", "[supervisor][parser]") {
+  CHECK(error_of("shape polygon closed=on") == "shape polygon: missing parameter points");
+  CHECK(error_of("shape polar cx=1") == "shape polar: missing parameter r");
+  CHECK(error_of("shape parametric x=s") == "shape parametric: missing parameter y");
+  CHECK(error_of("shape parametric y=s") == "shape parametric: missing parameter x");
+  CHECK(error_of("shape implicit") == "shape implicit: missing parameter f");
+  CHECK(error_of("shape polygon points=0,0;1") ==
+        "shape polygon: points: point 2 must be x,y, got '1'");
+  CHECK(error_of("shape polygon points=0,0;1,2,3") ==
+        "shape polygon: points: point 2 must be x,y, got '1,2,3'");
+  CHECK(error_of("shape polygon points=0,0;;1,1") ==
+        "shape polygon: points: point 2 must be x,y, got ''");
+  CHECK(error_of("shape polygon points=0,0;1,1;") ==
+        "shape polygon: points: point 3 must be x,y, got ''");
+  CHECK(error_of("shape polygon points=a,0;1,1;0,1") ==
+        "shape polygon: points: point 1: not a number: 'a,0'");
+  CHECK(error_of("shape polygon points=0,0;1,inf;0,1") ==
+        "shape polygon: points: point 2 must be finite, got 1,inf");
+  CHECK(error_of("shape polygon points=0,0;1,0;0,1 closed=yes") ==
+        "shape polygon: closed must be on or off, got 'yes'");
+  CHECK(error_of("shape parametric x=s y=s closed=1") ==
+        "shape parametric: closed must be on or off, got '1'");
+  CHECK(error_of("shape circle r=1 scale=0") == "shape circle: scale must be > 0, got 0");
+  CHECK(error_of("shape circle r=1 scale=-2") == "shape circle: scale must be > 0, got -2");
+  CHECK(error_of("shape polar r=4 scale=inf") == "shape polar: scale must be finite, got inf");
+  CHECK(error_of("shape square a=1 rot=nan") == "shape square: rot must be finite, got nan");
+  CHECK(error_of("shape square a=1 rot=ninety") == "shape square: rot: not a number: 'ninety'");
+}
+
+TEST_CASE("law: paper and arc, the shape kept", "[supervisor][parser]") {
+  const core::Command a = set_command("law arc", SetCommand::What::Law);
+  CHECK(a.law == core::Law::Arc);
+  const core::ArcParams defaults;
+  CHECK(a.arc.k_normal == defaults.k_normal);  // not given: the current values
+  CHECK(a.arc.k_tangent == defaults.k_tangent);
+  CHECK(a.arc.spacing == defaults.spacing);
+  check_shape_unchanged(a);
+  check_rest_unchanged(a);
+
+  const core::Command b =
+      set_command("law arc spacing=2 k_tangent=0.5 k_normal=1", SetCommand::What::Law);
+  CHECK(b.law == core::Law::Arc);
+  CHECK(b.arc.k_normal == 1.0);
+  CHECK(b.arc.k_tangent == 0.5);
+  CHECK(b.arc.spacing == 2.0);
+  check_shape_unchanged(b);
+
+  core::Command cur = current_command();
+  cur.law = core::Law::Arc;
+  cur.arc = {0.25, 0.75, 3.0};
+  shapeform::shapes::compile(cur);
+  const ParseResult r = parse_command("law arc k_normal=2", cur);
+  REQUIRE(r.ok());
+  const core::Command c = std::get<SetCommand>(r.action).command;
+  CHECK(c.arc.k_normal == 2.0);
+  CHECK(c.arc.k_tangent == 0.75);
+  CHECK(c.arc.spacing == 3.0);
+  CHECK(c.shape.curve == cur.shape.curve);  // the very same compiled shape
+  const ParseResult p = parse_command("law paper", cur);
+  REQUIRE(p.ok());
+  const core::Command d = std::get<SetCommand>(p.action).command;
+  CHECK(d.law == core::Law::Paper);
+  CHECK(d.arc.k_normal == 0.25);  // kept for a later `law arc`
+  CHECK(d.shape.curve == cur.shape.curve);
+  CHECK(std::get<SetCommand>(p.action).what == SetCommand::What::Law);
+
+  CHECK(set_command("law arc k_normal=10 k_tangent=1", SetCommand::What::Law).arc.k_normal == 10.0);
+}
+
+TEST_CASE("errors: law", "[supervisor][parser]") {
+  CHECK(error_of("law arc k_normal=0") == "law: k_normal must be > 0, got 0");
+  CHECK(error_of("law arc k_normal=10.5") == "law: k_normal must be <= 10, got 10.5");
+  CHECK(error_of("law arc k_tangent=0") == "law: k_tangent must be > 0, got 0");
+  CHECK(error_of("law arc k_tangent=1.5") == "law: k_tangent must be <= 1, got 1.5");
+  CHECK(error_of("law arc spacing=-1") == "law: spacing must be > 0, got -1");
+  CHECK(error_of("law arc spacing=nan") == "law: spacing must be finite, got nan");
+  CHECK(error_of("law arc k_normal=fast") == "law: k_normal: not a number: 'fast'");
+  CHECK(error_of("law paper spacing=2") == "law paper: spacing is a parameter of the arc law");
+  CHECK(error_of("law paper k_normal=1") == "law paper: k_normal is a parameter of the arc law");
 }
 
 TEST_CASE("numbers: exponents, signs, hex; whitespace and quotes", "[supervisor][parser]") {
@@ -279,7 +523,7 @@ TEST_CASE("sleep, record, help", "[supervisor][parser]") {
 }
 
 TEST_CASE("quoted values keep spaces and '=' and are stripped", "[supervisor][parser]") {
-  // Later commands take expressions; today they are simply not numbers.
+  // A circle's r is a number: an expression is refused there (shape polar takes one).
   CHECK(error_of("shape circle r=\"4+cos(5*phi)\"") ==
         "shape circle: r: not a number: '4+cos(5*phi)'");
   CHECK(error_of("shape circle r=\"4 + 1\"") == "shape circle: r: not a number: '4 + 1'");
@@ -295,10 +539,16 @@ TEST_CASE("errors: unknown command words", "[supervisor][parser]") {
   CHECK(error_of("shap circle r=1") == "unknown command 'shap' (try 'help')");
   CHECK(error_of("Shape circle r=1") == "unknown command 'Shape' (try 'help')");
   CHECK(error_of("r=1") == "unknown command 'r=1' (try 'help')");
-  CHECK(error_of("shape") == "shape: expected a shape (line, circle, ellipse, square)");
-  CHECK(error_of("shape r=1") == "shape: expected a shape (line, circle, ellipse, square)");
+  CHECK(error_of("shape") == "shape: expected a shape (line, circle, ellipse, square, polar, "
+                              "parametric, implicit, polygon)");
+  CHECK(error_of("shape r=1") == "shape: expected a shape (line, circle, ellipse, square, polar, "
+                                 "parametric, implicit, polygon)");
   CHECK(error_of("shape hexagon a=1") ==
-        "shape: unknown shape 'hexagon' (expected line, circle, ellipse, square)");
+        "shape: unknown shape 'hexagon' (expected line, circle, ellipse, square, polar, "
+        "parametric, implicit, polygon)");
+  CHECK(error_of("law") == "law: missing law (paper or arc)");
+  CHECK(error_of("law boids") == "law: unknown law 'boids' (expected paper or arc)");
+  CHECK(error_of("law Arc") == "law: unknown law 'Arc' (expected paper or arc)");
   CHECK(error_of("track") == "track: expected line, circle, point or stop");
   CHECK(error_of("track spiral") ==
         "track: unknown path 'spiral' (expected line, circle, point, stop)");
@@ -342,9 +592,21 @@ TEST_CASE("errors: unknown and duplicate parameters, stray arguments", "[supervi
   CHECK(error_of("gains k3=1") ==
         "gains: unknown parameter 'k3' (expected k1, k2, sigma, beta, r)");
   CHECK(error_of("shape circle r=1 k=2") ==
-        "shape circle: unknown parameter 'k' (expected r, cx, cy)");
+        "shape circle: unknown parameter 'k' (expected r, cx, cy, rot, scale)");
   CHECK(error_of("shape line m=1 c=2 cx=0") ==
-        "shape line: unknown parameter 'cx' (expected m, c)");
+        "shape line: unknown parameter 'cx' (expected m, c, rot, scale)");
+  CHECK(error_of("shape polar r=4 a=1") ==
+        "shape polar: unknown parameter 'a' (expected r, cx, cy, rot, scale)");
+  CHECK(error_of("shape parametric x=s y=s closed=on r=1") ==
+        "shape parametric: unknown parameter 'r' (expected x, y, closed, cx, cy, rot, scale)");
+  CHECK(error_of("shape implicit f=x closed=on") ==
+        "shape implicit: unknown parameter 'closed' (expected f, cx, cy, rot, scale)");
+  CHECK(error_of("shape polygon vertices=0,0;1,0;0,1") ==
+        "shape polygon: unknown parameter 'vertices' (expected points, closed, cx, cy, rot, scale)");
+  CHECK(error_of("law arc k1=1") ==
+        "law: unknown parameter 'k1' (expected k_normal, k_tangent, spacing)");
+  CHECK(error_of("law arc paper") == "law: unexpected argument 'paper'");
+  CHECK(error_of("shape polar r=4 r=5") == "shape polar: duplicate parameter r");
   CHECK(error_of("track point at=0,0 r=1 vel=1,1") ==
         "track point: unknown parameter 'vel' (expected at, r, ff)");
   CHECK(error_of("wait converged t=1") ==
@@ -459,7 +721,9 @@ TEST_CASE("errors: out of range", "[supervisor][parser]") {
 TEST_CASE("the first problem in token order is reported", "[supervisor][parser]") {
   // Unknown parameters are found before values are read.
   CHECK(error_of("shape circle r=-1 q=1") ==
-        "shape circle: unknown parameter 'q' (expected r, cx, cy)");
+        "shape circle: unknown parameter 'q' (expected r, cx, cy, rot, scale)");
+  // Parameters are checked before the shape is compiled.
+  CHECK(error_of("shape polar r=\"4+foo\" scale=0") == "shape polar: scale must be > 0, got 0");
   CHECK(error_of("gains k1=-1 k1=2") == "gains: duplicate parameter k1");
 }
 
@@ -478,6 +742,12 @@ TEST_CASE("help text", "[supervisor][parser][help]") {
                              "shape circle r=R [cx=X cy=Y]",
                              "shape ellipse a=A b=B",
                              "shape square a=A",
+                             "shape polar r=\"EXPR\" [cx=X cy=Y]",
+                             "shape parametric x=\"EXPR\" y=\"EXPR\" [closed=on|off]",
+                             "shape implicit f=\"EXPR\"",
+                             "shape polygon points=\"x,y;x,y;...\" [closed=on|off]",
+                             "[rot=DEG] [scale=S]",
+                             "law paper | law arc [k_normal=] [k_tangent=] [spacing=]",
                              "track line from=X,Y vel=VX,VY r=R",
                              "track circle radius=RP period=T",
                              "track point at=X,Y r=R",
@@ -504,8 +774,8 @@ TEST_CASE("help text", "[supervisor][parser][help]") {
     INFO(line);
     CHECK(line.size() <= 100);
   }
-  for (const char* word : {"shape", "track", "gains", "integrator", "max_speed", "start", "status",
-                           "metrics", "wait", "sleep", "record", "help", "quit", "exit"}) {
+  for (const char* word : {"shape", "track", "gains", "integrator", "max_speed", "law", "start",
+                           "status", "metrics", "wait", "sleep", "record", "help", "quit", "exit"}) {
     INFO(word);
     CHECK(has_help(word));
     const std::string details = help_text(word);
@@ -514,6 +784,9 @@ TEST_CASE("help text", "[supervisor][parser][help]") {
     CHECK(details != overview);
   }
   CHECK(help_text("gains").find("sigma") != std::string::npos);
+  CHECK(help_text("law").find("k_tangent") != std::string::npos);
+  CHECK(help_text("shape").find("rot ") != std::string::npos);
+  CHECK(help_text("shape").find("points ") != std::string::npos);
   CHECK(help_text("exit") == help_text("quit"));
   CHECK_FALSE(has_help("shap"));
   CHECK_FALSE(has_help(""));
@@ -526,6 +799,17 @@ TEST_CASE("help examples parse", "[supervisor][parser][help]") {
                            "shape circle r=4 cx=0 cy=0",
                            "shape ellipse a=4 b=2 cx=1 cy=1",
                            "shape square a=4 cx=0 cy=0",
+                           "shape polar r=\"4+cos(5*phi)\" cx=0 cy=0",
+                           "shape polar r=\"4 + cos(5*phi)\" rot=18 scale=0.5",
+                           "shape parametric x=\"4*cos(2*pi*s)\" y=\"2*sin(2*pi*s)\" closed=on",
+                           "shape parametric x=\"8*s - 4\" y=\"(8*s - 4)^2 / 4\" closed=off cx=1",
+                           "shape implicit f=\"x^4 + y^4 - 256\" cx=0 cy=0",
+                           "shape polygon points=\"-4,-3;4,-3;4,2;0,5;-4,2\" closed=on",
+                           "shape polygon points=\"0,0;4,0;4,4\" closed=off rot=45 scale=2",
+                           "shape square a=4 rot=45",
+                           "law paper",
+                           "law arc",
+                           "law arc k_normal=0.5 k_tangent=1 spacing=1",
                            "track line from=0,0 vel=0.05,0 r=3 ff=off",
                            "track circle radius=6 period=200 r=3 cx=0 cy=0 phase=0 ff=on",
                            "track point at=1,1 r=2 ff=on",

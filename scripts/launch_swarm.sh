@@ -1,0 +1,331 @@
+#!/usr/bin/env bash
+# Launches a swarm of shapeform agent processes and a supervisor running one scenario, on loopback.
+#
+#   scripts/launch_swarm.sh -n N --scenario NAME [--domain D] [--rate HZ] [--record DIR] [--init CSV]
+#                           [--seed S] [--steps K] [--timeout S] [--set key=value]... [--json]
+#                           [--build DIR] [--runs DIR]
+#
+#   -n N            number of agent processes, ids 0..N-1 (default: the rows of --init, else the
+#                   scenario's swarm.agents)
+#   --scenario NAME config/scenarios/NAME.yaml, or a path to a YAML file
+#   --domain D      DDS domain id 0..232 (default: 10..100, derived from the PID, skipping domains
+#                   in use on this host)
+#   --rate HZ       agent loop rate (agent.rate_hz and supervisor.target_rate_hz)
+#   --record DIR    record metrics.csv and positions.csv into DIR (default: RUN/record)
+#   --init CSV      agent i starts at row i (x1,x2; optional header); N must equal the row count
+#   --seed S        seeded starts: agent i starts where shapeform_sim --seed S puts agent i
+#                   (default: the scenario's swarm.seed)
+#   --steps K       run exactly K iterations of model time (`wait time K*dt`) instead of waiting
+#                   for convergence
+#   --timeout S     seconds to wait for convergence (default 60), or for the K iterations
+#   --set key=value config override passed to every process (repeatable)
+#   --json          the supervisor's summary as one JSON line on stdout (progress stays on stderr)
+#   --build DIR     build folder holding bin/ (default: build)
+#   --runs DIR      where run folders are made (default: runs)
+#
+# One run folder per launch: RUNS/<UTC timestamp>-<scenario>-n<N>/ with agent_<i>.log,
+# supervisor.log (stderr: progress), supervisor.out (stdout: answers and summary), script.txt and
+# record/. Progress goes to stderr. On exit, error or Ctrl-C only this launcher's own children are
+# stopped (SIGTERM, then SIGKILL after 5 s). Exit status: the supervisor's (0 ok, 1 runtime failure,
+# 2 bad input, 3 a wait timed out); 2 for bad launcher arguments; 130/143 when interrupted.
+set -uo pipefail
+
+readonly prog=launch_swarm
+root=$(cd "$(dirname "$0")/.." && pwd)
+
+die() { # message -> one line on stderr, exit 2 (bad input)
+  echo "$prog: $*" >&2
+  exit 2
+}
+say() { echo "$prog: $*" >&2; }
+
+usage() { sed -n '2,/^set -uo/{/^set -uo/d;s/^# \{0,1\}//;p}' "$0"; }
+
+is_uint() { [[ $1 =~ ^[0-9]+$ ]]; }
+is_posnum() { [[ $1 =~ ^([0-9]+([.][0-9]*)?|[.][0-9]+)([eE][-+]?[0-9]+)?$ ]] && awk -v v="$1" 'BEGIN{exit !(v+0 > 0)}'; }
+
+# ------------------------------------------------------------------------------------------------
+# Arguments
+
+n="" scenario="" domain="" rate="" record="" init="" seed="" steps="" timeout="" json=0
+build="build" runs="runs"
+sets=()
+need_value() { # flag remaining-args value
+  [ "$2" -ge 2 ] || die "$1: missing value"
+  [[ $3 != --* ]] || die "$1: missing value (got the flag '$3')"
+}
+while [ $# -gt 0 ]; do
+  case "$1" in
+    -n|--agents) need_value "$1" $# "${2-}"; n=$2; shift 2 ;;
+    --scenario) need_value "$1" $# "${2-}"; scenario=$2; shift 2 ;;
+    --domain) need_value "$1" $# "${2-}"; domain=$2; shift 2 ;;
+    --rate) need_value "$1" $# "${2-}"; rate=$2; shift 2 ;;
+    --record) need_value "$1" $# "${2-}"; record=$2; shift 2 ;;
+    --init) need_value "$1" $# "${2-}"; init=$2; shift 2 ;;
+    --seed) need_value "$1" $# "${2-}"; seed=$2; shift 2 ;;
+    --steps) need_value "$1" $# "${2-}"; steps=$2; shift 2 ;;
+    --timeout) need_value "$1" $# "${2-}"; timeout=$2; shift 2 ;;
+    --set) need_value "$1" $# "${2-}"; sets+=("$2"); shift 2 ;;
+    --build) need_value "$1" $# "${2-}"; build=$2; shift 2 ;;
+    --runs) need_value "$1" $# "${2-}"; runs=$2; shift 2 ;;
+    --json) json=1; shift ;;
+    -h|--help) usage; exit 0 ;;
+    *) die "unknown argument '$1' (see --help)" ;;
+  esac
+done
+
+[ -n "$scenario" ] || die "--scenario: required (one of: $(cd "$root/config/scenarios" && ls ./*.yaml | sed 's|^\./||; s|\.yaml$||' | tr '\n' ' '))"
+if [ -n "$n" ]; then
+  { is_uint "$n" && [ "$n" -ge 1 ] && [ "$n" -le 1000 ]; } || die "-n: expected an integer 1..1000, got '$n'"
+fi
+if [ -n "$domain" ]; then
+  { is_uint "$domain" && [ "$domain" -le 232 ]; } || die "--domain: expected an integer 0..232, got '$domain'"
+fi
+if [ -n "$rate" ]; then
+  { is_posnum "$rate" && awk -v v="$rate" 'BEGIN{exit !(v <= 1000)}'; } || die "--rate: expected a number in (0, 1000], got '$rate'"
+fi
+[ -z "$seed" ] || is_uint "$seed" || die "--seed: expected an integer >= 0, got '$seed'"
+if [ -n "$steps" ]; then
+  { is_uint "$steps" && [ "$steps" -ge 1 ]; } || die "--steps: expected an integer >= 1, got '$steps'"
+fi
+[ -z "$timeout" ] || is_posnum "$timeout" || die "--timeout: expected a number of seconds > 0, got '$timeout'"
+for s in "${sets[@]+"${sets[@]}"}"; do
+  [[ $s == ?*=* ]] || die "--set: expected key=value, got '$s'"
+done
+if [ -n "$init" ]; then [ -r "$init" ] && [ -f "$init" ] || die "--init: cannot read '$init'"; fi
+
+case "$build" in /*) ;; *) build="$root/$build" ;; esac
+case "$runs" in /*) ;; *) runs="$root/$runs" ;; esac
+bin="$build/bin"
+for exe in shapeform_agent shapeform_supervisor shapeform_sim; do
+  [ -x "$bin/$exe" ] || die "--build: $bin/$exe not found (run ./scripts/build.sh first)"
+done
+
+if [ -f "$scenario" ]; then
+  config=$(cd "$(dirname "$scenario")" && pwd)/$(basename "$scenario")
+elif [ -f "$root/config/scenarios/$scenario.yaml" ]; then
+  config="$root/config/scenarios/$scenario.yaml"
+else
+  die "--scenario: no scenario '$scenario' (one of: $(cd "$root/config/scenarios" && ls ./*.yaml | sed 's|^\./||; s|\.yaml$||' | tr '\n' ' ')or a path to a .yaml file)"
+fi
+name=$(basename "$config" .yaml)
+
+# ------------------------------------------------------------------------------------------------
+# Validate the whole configuration once, with the simulator (0 steps): the same loader and checks
+# as the processes, so a bad --set or --init is one clear message and nothing starts.
+
+[ -n "$rate" ] && sets+=("agent.rate_hz=$rate" "supervisor.target_rate_hz=$rate")
+simargs=(--config "$config" --steps 0 --verbose)
+[ -n "$seed" ] && simargs+=(--seed "$seed")
+[ -n "$init" ] && simargs+=(--init "$init")
+for s in "${sets[@]+"${sets[@]}"}"; do simargs+=(--set "$s"); done
+simerr=$(mktemp)
+simout=$("$bin/shapeform_sim" "${simargs[@]}" 2>"$simerr")
+simrc=$?
+if [ $simrc -ne 0 ]; then
+  grep '^shapeform_sim: ' "$simerr" | sed "s/^shapeform_sim: /$prog: /" >&2
+  rm -f "$simerr"
+  exit 2
+fi
+effective=$(cat "$simerr")
+rm -f "$simerr"
+
+json_num() { printf '%s' "$simout" | grep -o "\"$1\":[-0-9.eE+]*" | head -1 | cut -d: -f2; }
+yaml_key() { # section key -> value from the effective configuration
+  printf '%s\n' "$effective" | awk -v sec="$1:" -v key="$2:" '
+    /^[^ #]/ { insec = ($1 == sec) } insec && $1 == key { print $2; exit }'
+}
+cfg_agents=$(json_num agents)
+cfg_seed=$(json_num seed)
+dt=$(json_num dt)
+rate_eff=$(yaml_key agent rate_hz)
+[ -n "$rate_eff" ] || rate_eff=50
+
+starts=()
+if [ -n "$init" ]; then
+  mapfile -t starts < <(printf '%s' "$simout" | grep -o '"final_positions":\[[^"]*\]\]' |
+    sed 's/^"final_positions":\[//; s/\]$//; s/\],\[/\n/g; s/[][]//g')
+  if [ -z "$n" ]; then
+    n=${#starts[@]}
+  elif [ "$n" -ne ${#starts[@]} ]; then
+    die "--init: $init has ${#starts[@]} positions but -n is $n"
+  fi
+fi
+[ -n "$n" ] || n=$cfg_agents
+[ -n "$seed" ] || seed=$cfg_seed
+# Every process sees the swarm size, so seeded starts match shapeform_sim --agents N --seed S.
+sets+=("swarm.agents=$n")
+setargs=()
+for s in "${sets[@]}"; do setargs+=(--set "$s"); done
+
+# ------------------------------------------------------------------------------------------------
+# Domain: a free one derived from the PID unless given (a domain is in use when one of the first
+# participants' ports, 7400 + 250 d + {0, 10, 12, 14}, is bound on this host).
+
+domain_busy() {
+  local d=$1 off hex
+  for off in 0 10 12 14; do
+    hex=$(printf '%04X' $((7400 + 250 * d + off)))
+    grep -qE "^ *[0-9]+: [0-9A-F]+:$hex " /proc/net/udp /proc/net/udp6 2>/dev/null && return 0
+  done
+  return 1
+}
+# Derived domains are 10..100: the integration tests use 101..130 and the DDS unit tests 150..229.
+if [ -z "$domain" ]; then
+  d0=$(($$ % 91))
+  for ((k = 0; k < 91; k++)); do
+    domain=$(((d0 + k) % 91 + 10))
+    domain_busy "$domain" || break
+  done
+  domain_note="derived from the PID; --domain D to choose"
+else
+  domain_note="given"
+  domain_busy "$domain" && say "warning: domain $domain looks in use by another DDS program on this host"
+fi
+
+# ------------------------------------------------------------------------------------------------
+# Run folder and script
+
+stamp=$(date -u +%Y%m%dT%H%M%SZ)
+mkdir -p "$runs" || die "--runs: cannot create '$runs'"
+run="$runs/$stamp-$name-n$n"
+k=1
+while ! mkdir "$run" 2>/dev/null; do
+  k=$((k + 1))
+  run="$runs/$stamp-$name-n$n-$k"
+  [ $k -lt 100 ] || die "--runs: cannot create a run folder in '$runs'"
+done
+if [ -z "$record" ]; then
+  record="$run/record"
+else
+  case "$record" in /*) ;; *) record="$PWD/$record" ;; esac
+fi
+
+agents_timeout=$((30 + n / 2))
+{
+  echo "# generated by scripts/launch_swarm.sh"
+  echo "wait agents $n timeout=$agents_timeout"
+  echo "start"
+  if [ -n "$steps" ]; then
+    model_t=$(awk -v k="$steps" -v dt="$dt" 'BEGIN{printf "%.10g", k * dt}')
+    wt=${timeout:-$(awk -v k="$steps" -v r="$rate_eff" 'BEGIN{printf "%d", 2 * k / r + 30}')}
+    echo "wait time $model_t timeout=$wt"
+  else
+    echo "wait converged timeout=${timeout:-60}"
+  fi
+  echo "status"
+  echo "quit"
+} >"$run/script.txt"
+
+# ------------------------------------------------------------------------------------------------
+# Children and cleanup
+
+sup_pid="" tail_pids=() agent_pids=()
+interrupted=""
+shm_list() { ls /dev/shm 2>/dev/null | grep -E '^(sem\.)?(fastrtps|fast_datasharing|fastdds)' | sort; }
+shm_before=$(shm_list)
+
+alive() { kill -0 "$1" 2>/dev/null; }
+# Stops the given pids (our own children): SIGTERM, up to 5 s, then SIGKILL; reaps them.
+stop_pids() {
+  local p live=() left i
+  for p in "$@"; do alive "$p" && live+=("$p"); done
+  [ ${#live[@]} -gt 0 ] || return 0
+  kill -TERM "${live[@]}" 2>/dev/null
+  for ((i = 0; i < 50; i++)); do
+    left=()
+    for p in "${live[@]}"; do alive "$p" && left+=("$p"); done
+    [ ${#left[@]} -gt 0 ] || break
+    sleep 0.1
+  done
+  left=()
+  for p in "${live[@]}"; do alive "$p" && left+=("$p"); done
+  if [ ${#left[@]} -gt 0 ]; then
+    say "warning: ${#left[@]} process(es) ignored SIGTERM for 5 s; sending SIGKILL to ${left[*]}"
+    kill -KILL "${left[@]}" 2>/dev/null
+  fi
+}
+
+cleanup() {
+  local rc=$? i p st bad=0 new_shm
+  trap - INT TERM EXIT
+  [ -n "$interrupted" ] && rc=$interrupted
+  # The supervisor first, so its recording and summary see the swarm to the end; then the agents.
+  [ -n "$sup_pid" ] && stop_pids "$sup_pid"
+  stop_pids "${agent_pids[@]+"${agent_pids[@]}"}"
+  for i in "${!agent_pids[@]}"; do
+    wait "${agent_pids[$i]}" 2>/dev/null
+    st=$?
+    if [ $st -ne 0 ]; then
+      bad=$((bad + 1))
+      [ $bad -le 5 ] && say "agent $i exited with status $st (see $run/agent_$i.log)"
+    fi
+  done
+  [ $bad -gt 5 ] && say "... $bad agents exited abnormally in all"
+  # The progress tails end by themselves once the supervisor is gone (they flush what is left).
+  for ((i = 0; i < 30; i++)); do
+    local any=0
+    for p in "${tail_pids[@]+"${tail_pids[@]}"}"; do alive "$p" && any=1; done
+    [ $any -eq 0 ] && break
+    sleep 0.1
+  done
+  stop_pids "${tail_pids[@]+"${tail_pids[@]}"}"
+  wait 2>/dev/null
+  if [ -n "$sup_pid" ]; then
+    [ $json -eq 1 ] && [ -s "$run/supervisor.out" ] && tail -n 1 "$run/supervisor.out"
+    [ -d "$record" ] && say "recording: $record (metrics.csv, positions.csv)"
+    say "logs: $run (supervisor.log, supervisor.out, agent_0..$((n - 1)).log, script.txt)"
+  fi
+  new_shm=$(comm -13 <(printf '%s\n' "$shm_before") <(shm_list) | sed '/^$/d')
+  if [ -n "$new_shm" ]; then
+    say "warning: Fast DDS shared-memory files appeared in /dev/shm during the run (not removed:" \
+      "another Fast DDS program may own them): $(echo $new_shm)"
+  fi
+  [ -n "$sup_pid" ] && say "exit status $rc"
+  exit "$rc"
+}
+on_signal() {
+  interrupted=$1
+  say "interrupted: stopping the supervisor and $n agents"
+  exit "$1"
+}
+trap cleanup EXIT
+trap 'on_signal 130' INT
+trap 'on_signal 143' TERM
+
+# ------------------------------------------------------------------------------------------------
+# Launch
+
+say "run folder $run"
+say "scenario $name ($config), $n agents, domain $domain ($domain_note), rate ${rate_eff} Hz," \
+  "$([ -n "$init" ] && echo "starts from $init" || echo "seed $seed")," \
+  "$([ -n "$steps" ] && echo "$steps iterations" || echo "until converged")"
+
+supargs=(--config "$config" --domain "$domain" --script "$run/script.txt" --record "$record" "${setargs[@]}")
+[ $json -eq 1 ] && supargs+=(--json)
+"$bin/shapeform_supervisor" "${supargs[@]}" \
+  </dev/null >"$run/supervisor.out" 2>"$run/supervisor.log" &
+sup_pid=$!
+# Progress on the terminal: the supervisor's stderr (and, in text mode, its answers and summary).
+tail -q -n +1 -s 0.2 -F --pid="$sup_pid" "$run/supervisor.log" >&2 2>/dev/null &
+tail_pids+=($!)
+if [ $json -eq 0 ]; then
+  tail -q -n +1 -s 0.2 -F --pid="$sup_pid" "$run/supervisor.out" 2>/dev/null &
+  tail_pids+=($!)
+fi
+
+for ((i = 0; i < n; i++)); do
+  if [ -n "$init" ]; then
+    startarg=(--start "${starts[$i]}")
+  else
+    startarg=(--seed "$seed")
+  fi
+  "$bin/shapeform_agent" --id "$i" --config "$config" --domain "$domain" "${startarg[@]}" "${setargs[@]}" \
+    </dev/null >"$run/agent_$i.log" 2>&1 &
+  agent_pids+=($!)
+  sleep 0.02 # a slight stagger avoids a discovery storm
+done
+say "started $n agents (pids ${agent_pids[0]}..${agent_pids[$((n - 1))]}) and the supervisor (pid $sup_pid)"
+
+wait "$sup_pid"
+exit $?

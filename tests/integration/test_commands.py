@@ -1,0 +1,145 @@
+#!/usr/bin/env python3
+"""Commands at the supervisor's console and in scripts, with a live swarm of agent processes.
+
+- A shape change mid-run (circle, then `shape square a=5`) re-converges on the new epoch.
+- Bad console lines are each rejected with one line naming the problem; the swarm is unaffected.
+- A --script with a bad line exits with status 2 and sends nothing.
+"""
+import os
+import re
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import harness  # noqa: E402
+
+AGENTS = 10
+SETS = ["--set", "swarm.agents=%d" % AGENTS]
+
+
+class CommandsTest(harness.SwarmTestCase):
+
+    def converged_swarm(self):
+        """10 agents on the circle scenario, started and converged; returns (supervisor, agents)."""
+        config = harness.scenario("circle")
+        sup = self.start_supervisor(config, extra=SETS)
+        agents = self.start_agents(AGENTS, config, seed=1, extra=SETS)
+        self.assertTrue(sup.wait_agents(AGENTS, 60), "the supervisor hears every agent")
+        self.assertEqual(sup.command("start"), 1)
+        self.assertTrue(sup.wait_converged(60), "the circle converges")
+        return sup, agents
+
+    def test_shape_change_reconverges(self):
+        sup, agents = self.converged_swarm()
+        before = sup.metrics()
+        self.assertEqual(before["epoch"], 1)
+        self.assertTrue(before["converged"])
+        self.assertEqual(sup.command("shape square a=5"), 2)
+        # The circle of radius ~4 lies 1 to 3 units off the square of half side 5: right after the
+        # command the square's error is large, and the old convergence does not count.
+        first = sup.metrics()
+        self.assertEqual(first["epoch"], 2)
+        self.assertFalse(first["converged"], "convergence restarts with the new epoch")
+        self.assertTrue(sup.wait_converged(90), "the square converges")
+        rows, metrics = sup.status()
+        self.assertEqual(sorted(rows), list(range(AGENTS)))
+        for i, r in rows.items():
+            self.assertEqual(r["alive"], "yes", "agent %d" % i)
+            self.assertEqual(r["epoch"], 2, "agent %d follows the new epoch" % i)
+            self.assertLess(r["shape_error"], 1.0, "agent %d is near the square" % i)
+        self.assertEqual(metrics["epoch"], 2)
+        self.assertTrue(metrics["converged"])
+        self.assertEqual(metrics["agents"], AGENTS)
+        self.assertLess(metrics["shape_error_mean"], 0.6, "on the square, not the old circle")
+        self.assertLessEqual(metrics["gap_cv"], 0.15)
+        self.assert_all_alive(agents)
+        sup.send("quit")
+        self.assertEqual(sup.wait(20), 0)
+
+    # Each bad line and a fragment of the one-line message that must name its problem.
+    BAD_LINES = [
+        ("frobnicate", r"unknown command 'frobnicate'"),
+        ("shape hexagon r=1", r"unknown shape 'hexagon'"),
+        ("shape circle r=4 q=1", r"unknown parameter 'q'"),
+        ("shape circle", r"missing parameter r"),
+        ("shape ellipse a=4", r"missing parameter b"),
+        ("shape circle r=abc", r"not a number: 'abc'"),
+        ("shape square a=-5", r"a must be > 0"),
+        ("shape circle r=0", r"r must be > 0"),
+        ("shape circle r=nan", r"r must be finite"),
+        ("shape square a=inf", r"a must be finite"),
+        ("gains k1=1e999", r"k1 must be finite"),
+        ("gains sigma=-inf", r"sigma must be finite"),
+        ("track line from=0,0 vel=0.1,0.1 r=2 ff=maybe", r"ff must be on or off"),
+        ("track circle radius=6 period=200", r"missing parameter r"),
+        ("track line from=0 vel=1,1 r=2", r"from must be x,y"),
+        ("integrator rk4 dt=20", r"dt must be <= 10"),
+        ("integrator leapfrog", r"unknown method 'leapfrog'"),
+        ("wait agents 2.5", r"N must be an integer"),
+        ("max_speed -1", r"must be >= 0"),
+        ("shape line m=1 c=\"2", r"unterminated double quote"),
+    ]
+
+    def test_bad_console_lines_rejected(self):
+        sup, agents = self.converged_swarm()
+        for line, message in self.BAD_LINES:
+            log_start = len(sup.log())
+            out_start = len(sup.out())
+            sup.send(line)
+            metrics = sup.metrics()  # the answer to the next line: the bad one has been handled
+            new_err = [l for l in sup.log()[log_start:].splitlines() if not l.startswith("[supervisor]")]
+            self.assertEqual(len(new_err), 1, "one line for %r, got %r" % (line, new_err))
+            self.assertRegex(new_err[0], message, "the message for %r" % line)
+            new_out = sup.out()[out_start:]
+            self.assertNotRegex(new_out, r"(?m)^epoch \d+:", "nothing published for %r" % line)
+            self.assertEqual(metrics["epoch"], 1, "epoch unchanged after %r" % line)
+        # The swarm is unaffected: same epoch everywhere, still converged, every process running.
+        self.assertTrue(sup.wait_converged(30))
+        rows, metrics = sup.status()
+        self.assertEqual(sorted(rows), list(range(AGENTS)))
+        for i, r in rows.items():
+            self.assertEqual((r["alive"], r["epoch"]), ("yes", 1), "agent %d" % i)
+        self.assertEqual(metrics["epoch"], 1)
+        self.assertTrue(metrics["converged"])
+        self.assert_all_alive(agents + [sup])
+        for a in agents:
+            self.assertEqual(len(re.findall(r"following command epoch", a.log())), 1,
+                             "%s followed exactly one command" % a.name)
+        sup.send("quit")
+        self.assertEqual(sup.wait(20), 0, "bad console lines do not change the exit status")
+
+    def test_bad_script_exits_2_and_sends_nothing(self):
+        config = harness.scenario("circle")
+        agents = self.start_agents(2, config, seed=1, extra=SETS)
+        # The two agents hear each other: the domain works, so a command sent would arrive.
+        harness.poll(lambda: all("hearing 1 neighbours" in a.log() for a in agents), 30,
+                     "the two agents to hear each other")
+        script = self.write("bad_script.txt",
+                            "wait agents 2 timeout=10\n"
+                            "shape circle r=3\n"       # fine, but must not be sent
+                            "start\n"
+                            "shape circle r=-3\n"      # line 4: out of range
+                            "gains k3=1\n"             # line 5: unknown parameter
+                            "wait converged timeout=5\n"
+                            "quit\n")
+        bad = self.start_supervisor(config, script=script, console=False, name="bad_supervisor")
+        self.assertEqual(bad.wait(30), 2, "a bad script line is exit status 2")
+        errors = bad.log().splitlines()
+        self.assertTrue(any(re.search(r"bad_script\.txt:4: .*r must be > 0", l) for l in errors), errors)
+        self.assertTrue(any(re.search(r"bad_script\.txt:5: .*unknown parameter 'k3'", l) for l in errors), errors)
+        # Nothing was sent: the agents were running and matched, so any command published would
+        # have been adopted (logged as "following command"); a probe supervisor sees both agents
+        # still at epoch 0, holding their starts.
+        probe = self.start_supervisor(config, extra=SETS, name="probe_supervisor")
+        self.assertTrue(probe.wait_agents(2, 30))
+        rows, metrics = probe.status()
+        self.assertEqual(sorted(rows), [0, 1])
+        for i, r in rows.items():
+            self.assertEqual(r["epoch"], 0, "agent %d never got a command" % i)
+        for a in agents:
+            self.assertNotIn("following command", a.log())
+        self.assert_all_alive(agents)
+
+
+if __name__ == "__main__":
+    harness.main()

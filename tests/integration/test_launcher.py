@@ -1,0 +1,169 @@
+#!/usr/bin/env python3
+"""scripts/launch_swarm.sh: every scenario runs through it, starts are reproducible, Ctrl-C and bad
+arguments are handled, and it leaves no process and no shared-memory file behind.
+
+The launcher runs in its own process group; its children (agents, supervisor, progress tails) stay
+in that group, so "nothing left" is checked as "no live process in the launcher's group and no
+shapeform process on the test's domain".
+"""
+import glob
+import json
+import os
+import re
+import signal
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import harness  # noqa: E402
+
+
+def launcher():
+    return os.path.join(harness.CONFIG["source"], "scripts", "launch_swarm.sh")
+
+
+def build_dir():
+    return os.path.dirname(harness.CONFIG["bin"])
+
+
+class LauncherTest(harness.SwarmTestCase):
+
+    def launch(self, args, name="launcher"):
+        argv = ["bash", launcher(), "--build", build_dir(), "--runs", os.path.join(self.run_dir, "runs"),
+                "--domain", str(self.domain)] + list(args)
+        return self.start(name, argv)
+
+    def run_folder(self, proc):
+        m = re.search(r"run folder (\S+)", proc.log())
+        self.assertIsNotNone(m, "the launcher names its run folder")
+        return m.group(1)
+
+    def assert_nothing_left(self, proc):
+        self.assertEqual(harness.processes_in_group(proc.pid), [], "processes left by the launcher")
+        self.assertEqual(harness.shapeform_processes_on_domain(self.domain), [], "shapeform processes left")
+        self.assertEqual(sorted(harness.shm_files() - self.shm_before), [], "new Fast DDS shm files")
+
+    def test_every_scenario_runs(self):
+        scenarios = sorted(glob.glob(os.path.join(harness.CONFIG["source"], "config", "scenarios", "*.yaml")))
+        self.assertGreaterEqual(len(scenarios), 8)
+        for path in scenarios:
+            name = os.path.basename(path)[:-5]
+            with self.subTest(scenario=name):
+                expected = self.run_sim(path, ["--steps", "0"])  # the scenario's shape and size
+                p = self.launch(["--scenario", name, "--steps", "60", "--rate", "50", "--json"], "launcher_" + name)
+                status = p.wait(120)
+                self.assertEqual(status, 0, "%s: launcher exit status" % name)
+                lines = p.out().splitlines()
+                self.assertEqual(len(lines), 1, "%s: stdout is the one JSON summary line" % name)
+                summary = json.loads(lines[0])
+                self.assertEqual(summary["name"], expected["name"])
+                self.assertEqual(summary["shape"], expected["shape"], name)
+                self.assertEqual(summary["tracking"], expected["tracking"], name)
+                self.assertEqual(summary["agents"], expected["agents"], name)
+                self.assertEqual(summary["agents_seen"], expected["agents"], name)
+                self.assertEqual(summary["epoch"], 1)
+                self.assertEqual(summary["exit_status"], 0)
+                self.assertGreaterEqual(summary["steps"], 60)
+                run = self.run_folder(p)
+                self.assertTrue(os.path.basename(run).endswith("-%s-n%d" % (name, expected["agents"])), run)
+                for i in range(expected["agents"]):
+                    self.assertIn("following command epoch 1", harness.read_text(os.path.join(run, "agent_%d.log" % i)))
+                self.assertIn("wait time 60", harness.read_text(os.path.join(run, "script.txt")))
+                rows = harness.read_csv(os.path.join(run, "record", "metrics.csv"))
+                self.assertTrue(any(r["epoch"] == "1" for r in rows), "%s: recorded metrics" % name)
+                self.assertEqual(summary["recording"], os.path.join(run, "record"))
+                self.assertIn("recording: " + os.path.join(run, "record"), p.log())
+                self.assert_nothing_left(p)
+
+    def agent_starts(self, run, n):
+        starts = []
+        for i in range(n):
+            m = re.search(r"start \(([-0-9.e+]+), ([-0-9.e+]+)\)", harness.read_text(os.path.join(run, "agent_%d.log" % i)))
+            self.assertIsNotNone(m, "agent %d logs its start" % i)
+            starts.append((float(m.group(1)), float(m.group(2))))
+        return starts
+
+    def test_seeded_and_csv_starts(self):
+        # --seed S: agent i starts where shapeform_sim --agents N --seed S puts agent i.
+        n, seed = 6, 7
+        sim = self.run_sim(harness.scenario("circle"), ["--agents", str(n), "--seed", str(seed), "--steps", "0"])
+        p = self.launch(["-n", str(n), "--scenario", "circle", "--seed", str(seed), "--steps", "5", "--json"], "launcher_seed")
+        self.assertEqual(p.wait(90), 0)
+        for i, (got, want) in enumerate(zip(self.agent_starts(self.run_folder(p), n), sim["final_positions"])):
+            self.assertAlmostEqual(got[0], want[0], delta=1e-4, msg="agent %d x1" % i)
+            self.assertAlmostEqual(got[1], want[1], delta=1e-4, msg="agent %d x2" % i)
+        self.assert_nothing_left(p)
+        # --init CSV: agent i starts at row i; -n is the row count.
+        rows = [(1.5, -2.0), (-3.25, 0.5), (0.0, 4.0), (2.75, 2.75)]
+        csv_path = self.write("init.csv", "x1,x2\n" + "".join("%g,%g\n" % r for r in rows))
+        p = self.launch(["--scenario", "square", "--init", csv_path, "--steps", "5", "--json"], "launcher_init")
+        self.assertEqual(p.wait(90), 0)
+        self.assertEqual(json.loads(p.out().splitlines()[-1])["agents"], len(rows))
+        for i, (got, want) in enumerate(zip(self.agent_starts(self.run_folder(p), len(rows)), rows)):
+            self.assertAlmostEqual(got[0], want[0], delta=1e-9, msg="agent %d x1" % i)
+            self.assertAlmostEqual(got[1], want[1], delta=1e-9, msg="agent %d x2" % i)
+        self.assert_nothing_left(p)
+
+    def interrupt(self, to_group):
+        """Starts a run to convergence (it would end by itself much later), interrupts it mid-run."""
+        p = self.launch(["-n", "10", "--scenario", "circle", "--timeout", "300", "--set", "supervisor.converge.hold=100000"],
+                        "launcher_group" if to_group else "launcher")
+        harness.poll(lambda: re.search(r"agents=10 following=10", p.log()), 60,
+                     "the launcher to show 10 agents following the command")
+        run = self.run_folder(p)
+        if to_group:
+            os.killpg(p.pid, signal.SIGINT)  # a terminal's Ctrl-C: every process of the group
+        else:
+            os.kill(p.pid, signal.SIGINT)  # the launcher alone: it must stop its children
+        status = p.wait(30)
+        self.assertEqual(status, 130, "exit status after Ctrl-C")
+        self.assert_nothing_left(p)
+        for i in range(10):
+            log = harness.read_text(os.path.join(run, "agent_%d.log" % i))
+            self.assertRegex(log, r"stopping after \d+ ticks", "agent %d stopped cleanly" % i)
+        self.assertIn("summary:", harness.read_text(os.path.join(run, "supervisor.out")),
+                      "the supervisor printed its summary")
+        self.assertIn("interrupted", p.log())
+        self.assertGreater(len(harness.read_csv(os.path.join(run, "record", "metrics.csv"))), 0)
+
+    def test_ctrl_c_stops_everything(self):
+        self.interrupt(to_group=False)
+        self.interrupt(to_group=True)
+
+    BAD_ARGS = [
+        ([], r"--scenario: required"),
+        (["--scenario", "no_such_scenario"], r"--scenario: no scenario 'no_such_scenario'"),
+        (["--scenario", "circle", "-n", "0"], r"^launch_swarm: -n: "),
+        (["--scenario", "circle", "-n", "twelve"], r"^launch_swarm: -n: "),
+        (["--scenario", "circle", "-n"], r"^launch_swarm: -n: missing value"),
+        (["--scenario", "circle", "--domain", "233"], r"^launch_swarm: --domain: "),
+        (["--scenario", "circle", "--rate", "0"], r"^launch_swarm: --rate: "),
+        (["--scenario", "circle", "--rate", "fast"], r"^launch_swarm: --rate: "),
+        (["--scenario", "circle", "--steps", "-5"], r"^launch_swarm: --steps: "),
+        (["--scenario", "circle", "--seed", "x"], r"^launch_swarm: --seed: "),
+        (["--scenario", "circle", "--timeout", "0"], r"^launch_swarm: --timeout: "),
+        (["--scenario", "circle", "--set", "dynamics.r"], r"^launch_swarm: --set: expected key=value"),
+        (["--scenario", "circle", "--set", "dynamics.r=-1"], r"^launch_swarm: dynamics\.r: must be >= 0"),
+        (["--scenario", "circle", "--set", "dynamics.speed=1"], r"^launch_swarm: .*unknown key"),
+        (["--scenario", "circle", "--init", "/nonexistent/init.csv"], r"^launch_swarm: --init: "),
+        (["--scenario", "circle", "--frobnicate"], r"^launch_swarm: unknown argument '--frobnicate'"),
+    ]
+
+    def test_bad_arguments_exit_2(self):
+        runs = os.path.join(self.run_dir, "runs")
+        csv_path = self.write("three.csv", "0,0\n1,1\n2,2\n")
+        cases = self.BAD_ARGS + [(["--scenario", "circle", "-n", "4", "--init", csv_path],
+                                  r"^launch_swarm: --init: .* has 3 positions but -n is 4")]
+        for k, (args, message) in enumerate(cases):
+            with self.subTest(args=args):
+                # Own process group and the test's domain: were a bad argument let through, the
+                # swarm it started would still be found and stopped.
+                p = self.start("bad_args_%d" % k, ["bash", launcher(), "--build", build_dir(), "--runs", runs,
+                                                   "--domain", str(self.domain)] + args)
+                self.assertEqual(p.wait(60), 2, "%s: exit status (stderr %r)" % (args, p.log()))
+                self.assertEqual(len(p.log().splitlines()), 1, "%s: one line, got %r" % (args, p.log()))
+                self.assertRegex(p.log(), message)
+                self.assertEqual(p.out(), "")
+        self.assertFalse(os.path.exists(runs) and os.listdir(runs), "no run folder for bad arguments")
+
+if __name__ == "__main__":
+    harness.main()

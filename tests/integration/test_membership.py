@@ -1,0 +1,137 @@
+#!/usr/bin/env python3
+"""Agents and supervisors coming and going while the swarm runs.
+
+- A late agent, started after convergence, adopts the current command (transient-local) and the
+  formation re-spaces to N+1.
+- An agent killed with SIGKILL is dropped by every other agent (their status' neighbours heard
+  falls to N-2) well before the participant lease could tell them, the supervisor shows it DEAD,
+  and the survivors re-space.
+- The supervisor killed with SIGKILL and restarted: the agents keep the last command and stay on
+  the shape; the new supervisor sees every agent with its epoch and continues after that epoch.
+
+Re-spacing is checked through the gap CV: one agent more or less without re-spacing leaves one
+gap of about half or twice the others, a gap CV of about 0.3 for 10 agents, twice the supervisor's
+convergence threshold (supervisor.converge.gap_cv_max = 0.15).
+"""
+import math
+import os
+import signal
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import harness  # noqa: E402
+
+AGENTS = 10
+GAP_CV_MAX = 0.15
+
+
+class MembershipTest(harness.SwarmTestCase):
+
+    def converged_swarm(self, extra=()):
+        config = harness.scenario("circle")
+        sets = ["--set", "swarm.agents=%d" % AGENTS] + list(extra)
+        sup = self.start_supervisor(config, extra=sets)
+        agents = self.start_agents(AGENTS, config, seed=1, extra=sets)
+        self.assertTrue(sup.wait_agents(AGENTS, 60), "the supervisor hears every agent")
+        self.assertEqual(sup.command("start"), 1)
+        self.assertTrue(sup.wait_converged(60), "the circle converges")
+        return config, sets, sup, agents
+
+    def test_late_agent_adopts_shape_and_swarm_respaces(self):
+        config, sets, sup, agents = self.converged_swarm()
+        out_before = sup.out()
+        late = self.start_agent(AGENTS, config, seed=1, extra=sets)
+        self.assertTrue(sup.wait_agents(AGENTS + 1, 30), "the supervisor hears the late agent")
+        harness.poll(lambda: "following command epoch 1" in late.log(), 30,
+                     "the late agent to follow epoch 1 (the command in force, transient-local)")
+
+        def respaced():
+            rows, m = sup.status()
+            ok = (m["agents"] == AGENTS + 1 and m["converged"] and m["gap_cv"] is not None
+                  and m["gap_cv"] <= GAP_CV_MAX and AGENTS in rows
+                  and rows[AGENTS]["shape_error"] is not None and rows[AGENTS]["shape_error"] < 0.3)
+            return (rows, m) if ok else None
+
+        rows, metrics = harness.poll(respaced, 60, "the %d agents to converge, re-spaced" % (AGENTS + 1), 0.5)
+        self.assertEqual(sorted(rows), list(range(AGENTS + 1)))
+        for i, r in rows.items():
+            self.assertEqual((r["alive"], r["epoch"]), ("yes", 1), "agent %d" % i)
+            self.assertEqual(r["heard"], AGENTS, "agent %d hears the %d others" % (i, AGENTS))
+        self.assertEqual(metrics["epoch"], 1)
+        self.assertEqual(metrics["clusters"], AGENTS + 1)
+        # No new command was needed: the late agent got the one in force.
+        self.assertEqual(sup.out().count("epoch 1:"), out_before.count("epoch 1:"))
+        self.assertNotRegex(sup.out(), r"(?m)^epoch 2:")
+        self.assert_all_alive(agents + [late, sup])
+
+    def test_killed_agent_dropped_and_survivors_respace(self):
+        # A long participant lease (20 s): only the agents' own neighbour timeout can drop the
+        # killed agent in time. Status at 5 Hz so the supervisor sees the counts soon.
+        config, sets, sup, agents = self.converged_swarm(
+            ["--set", "transport.lease_s=20", "--set", "agent.status_rate_hz=5"])
+        harness.poll(lambda: all(r["heard"] == AGENTS - 1 for r in sup.status()[0].values()), 20,
+                     "every agent to hear the %d others" % (AGENTS - 1), 0.5)
+        victim = agents[4]
+        victim.kill_group()  # SIGKILL: no dispose, no goodbye
+        self.assertEqual(victim.returncode, -signal.SIGKILL)
+        survivors = [a for a in agents if a is not victim]
+
+        def dropped():
+            rows, m = sup.status()
+            live = {i: r for i, r in rows.items() if i != 4}
+            ok = (rows.get(4, {}).get("alive") == "DEAD" and len(live) == AGENTS - 1
+                  and all(r["alive"] == "yes" and r["heard"] == AGENTS - 2 for r in live.values()))
+            return rows if ok else None
+
+        # Far below the 20 s lease: the application's neighbour timeout (3 periods) did it.
+        harness.poll(dropped, 8, "every survivor to drop agent 4 (heard = %d) and agent 4 DEAD" % (AGENTS - 2), 0.2)
+
+        def respaced():
+            m = sup.metrics()
+            ok = m["agents"] == AGENTS - 1 and m["converged"] and m["gap_cv"] is not None and m["gap_cv"] <= GAP_CV_MAX
+            return m if ok else None
+
+        metrics = harness.poll(respaced, 60, "the %d survivors to converge, re-spaced" % (AGENTS - 1), 0.5)
+        self.assertEqual(metrics["epoch"], 1)
+        self.assertEqual(metrics["clusters"], AGENTS - 1)
+        self.assert_all_alive(survivors + [sup])
+
+    def test_supervisor_restart_keeps_command(self):
+        config, sets, sup, agents = self.converged_swarm()
+        rows_before, metrics_before = sup.status()
+        self.assertEqual(metrics_before["epoch"], 1)
+        sup.kill_group()  # SIGKILL
+        self.assertEqual(sup.returncode, -signal.SIGKILL)
+        r0 = 4.0  # circle.yaml: shape.r0
+
+        sup2 = self.start_supervisor(config, extra=sets, name="supervisor_restarted")
+        self.assertTrue(sup2.wait_agents(AGENTS, 30), "the new supervisor hears every agent")
+
+        def all_rows():
+            rows, _ = sup2.status()
+            ok = sorted(rows) == list(range(AGENTS)) and all(r["alive"] == "yes" for r in rows.values())
+            return rows if ok else None
+
+        rows = harness.poll(all_rows, 30, "the new supervisor's status to list every agent alive", 0.5)
+        for i, r in rows.items():
+            self.assertEqual(r["epoch"], 1, "agent %d still follows epoch 1" % i)
+            radius = math.hypot(r["x1"], r["x2"])
+            self.assertLess(abs(radius - r0), 0.4, "agent %d still on the circle (radius %.3f)" % (i, radius))
+        # The formation is the one before the restart, only chattering (amplitude r*dt = 0.1).
+        for i, r in rows.items():
+            b = rows_before[i]
+            self.assertLess(abs(math.hypot(r["x1"], r["x2"]) - math.hypot(b["x1"], b["x2"])), 0.3, "agent %d" % i)
+        self.assert_all_alive(agents)
+        # The new supervisor continues after the epoch the agents follow, so its command is taken.
+        self.assertEqual(sup2.command("shape circle r=3"), 2)
+        self.assertTrue(sup2.wait_converged(60), "the new command converges")
+        rows, metrics = sup2.status()
+        for i, r in rows.items():
+            self.assertEqual(r["epoch"], 2, "agent %d follows the new supervisor's epoch" % i)
+        self.assertLess(metrics["shape_error_mean"], 0.3)
+        sup2.send("quit")
+        self.assertEqual(sup2.wait(20), 0)
+
+
+if __name__ == "__main__":
+    harness.main()
