@@ -12,6 +12,7 @@ AgentLogic::AgentLogic(std::int32_t id, core::Vec2 start, std::int64_t timeout_n
 bool AgentLogic::on_command(const core::Command& cmd, std::uint32_t epoch) {
   if (epoch <= epoch_) return false;
   cmd_ = cmd;
+  core::ensure_curve(cmd_.shape);  // analytic shapes; expression shapes arrive compiled
   epoch_ = epoch;
   t_ = 0.0;
   if (target_ && target_->epoch != epoch) target_.reset();
@@ -25,15 +26,16 @@ void AgentLogic::on_target(const TargetSample& t) {
   target_age_ = 0.0;
 }
 
-void AgentLogic::on_state(std::int32_t id, const core::Vec2& x, std::uint64_t seq, std::int64_t now_ns) {
+void AgentLogic::on_state(std::int32_t id, const core::Vec2& x, std::uint64_t seq, std::int64_t now_ns,
+                          std::uint32_t epoch, std::optional<double> arc) {
   if (id == id_) return;
   auto it = table_.find(id);
   if (it == table_.end()) {
-    table_.emplace(id, Entry{x, now_ns, seq});
+    table_.emplace(id, Entry{x, now_ns, seq, epoch, arc});
   } else {
     if (seq <= it->second.seq) return;  // duplicate or reordered: keep the newest
     counters_.samples_lost += seq - it->second.seq - 1;
-    it->second = Entry{x, now_ns, seq};
+    it->second = Entry{x, now_ns, seq, epoch, arc};
   }
   ++counters_.samples_received;
 }
@@ -59,28 +61,44 @@ std::optional<core::Vec2> AgentLogic::tracked_centre() const {
   return core::centre_at(cmd_.tracking.path, t_);
 }
 
+core::Command AgentLogic::effective_command() const {
+  core::Command local = cmd_;
+  if (cmd_.tracking.enabled && target_) {
+    // Follow the supervisor's target: the centre moves on from where it was last heard, linearly,
+    // with its published velocity (which feed-forward then uses). Time runs from 0 at "now".
+    local.tracking.path.kind = core::CentrePath::Kind::Line;
+    local.tracking.path.point = target_->centre + target_age_ * target_->velocity;
+    local.tracking.path.velocity = target_->velocity;
+  }
+  return local;
+}
+
+std::optional<double> AgentLogic::arc() const {
+  if (!has_command()) return std::nullopt;
+  const core::Command local = effective_command();
+  const double t = cmd_.tracking.enabled && target_ ? 0.0 : t_;
+  const core::ShapeSpec s = core::shape_at(local, t);
+  return core::closest_point(s, *core::curve_of(s), x_).s;
+}
+
 void AgentLogic::step() {
   if (!has_command()) {
     v_ = core::Vec2::Zero();
     return;
   }
+  const bool arc_law = cmd_.law == core::Law::Arc;
   nbrs_.clear();
-  for (const auto& [id, e] : table_) nbrs_.push_back({id, e.x});
+  for (const auto& [id, e] : table_) {
+    core::Neighbour n{id, e.x};
+    if (arc_law && e.epoch == epoch_ && e.arc) n.s = *e.arc;
+    nbrs_.push_back(n);
+  }
   // Deterministic neighbour order (ids ascending) so results never depend on hash order.
   std::sort(nbrs_.begin(), nbrs_.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
 
-  core::StepResult r;
-  if (cmd_.tracking.enabled && target_) {
-    // Follow the supervisor's target: the centre moves on from where it was last heard, linearly over
-    // the step, with its velocity (so feed-forward uses the published velocity).
-    core::Command local = cmd_;
-    local.tracking.path.kind = core::CentrePath::Kind::Line;
-    local.tracking.path.point = target_->centre + target_age_ * target_->velocity;
-    local.tracking.path.velocity = target_->velocity;
-    r = core::agent_step(local, id_, x_, nbrs_, 0.0);
-  } else {
-    r = core::agent_step(cmd_, id_, x_, nbrs_, t_);
-  }
+  const bool follow_target = cmd_.tracking.enabled && target_;
+  const core::StepResult r =
+      core::agent_step(follow_target ? effective_command() : cmd_, id_, x_, nbrs_, follow_target ? 0.0 : t_);
   x_ = r.x;
   v_ = r.v;
   t_ += cmd_.dt;

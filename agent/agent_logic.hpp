@@ -35,8 +35,11 @@ class AgentLogic {
   bool on_command(const core::Command& cmd, std::uint32_t epoch);
   /// Keeps the newest target of the followed epoch.
   void on_target(const TargetSample& t);
-  /// A valid neighbour state received at now_ns. Own samples are ignored.
-  void on_state(std::int32_t id, const core::Vec2& x, std::uint64_t seq, std::int64_t now_ns);
+  /// A valid neighbour state received at now_ns. Own samples are ignored. epoch and arc: the command
+  /// the neighbour follows and its arc length along that command's shape (used by the arc law only
+  /// when the epoch is the one this agent follows).
+  void on_state(std::int32_t id, const core::Vec2& x, std::uint64_t seq, std::int64_t now_ns,
+                std::uint32_t epoch = 0, std::optional<double> arc = std::nullopt);
   /// The neighbour left (its instance was disposed or lost its writer): drop it now.
   void on_gone(std::int32_t id);
   void count_rejected() { ++counters_.samples_rejected; }
@@ -58,13 +61,20 @@ class AgentLogic {
   const AgentCounters& counters() const { return counters_; }
   /// The tracked centre this agent uses now (extrapolated from the last target), if tracking.
   std::optional<core::Vec2> tracked_centre() const;
+  /// This agent's arc length along the shape in force (published so the others need not project it);
+  /// nullopt before the first command.
+  std::optional<double> arc() const;
 
  private:
   struct Entry {
     core::Vec2 x;
     std::int64_t last_seen_ns;
     std::uint64_t seq;
+    std::uint32_t epoch;
+    std::optional<double> arc;
   };
+  /// The command actually integrated now: tracking follows the latest target from its last position.
+  core::Command effective_command() const;
   std::int32_t id_;
   core::Vec2 x_;
   core::Vec2 v_ = core::Vec2::Zero();

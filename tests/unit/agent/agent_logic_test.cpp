@@ -110,3 +110,33 @@ TEST_CASE("seeded starts match the simulator's uniform start", "[agent]") {
   // An agent beyond the configured size still gets a deterministic start.
   CHECK(agent::seeded_start(15, 12, 7, 5.0) == core::uniform_start(16, 7, 5.0)[15]);
 }
+
+TEST_CASE("arc law: agents exchanging their arc lengths reproduce the simulator", "[agent][arc]") {
+  core::Command cmd;
+  cmd.law = core::Law::Arc;
+  cmd.shape.kind = core::ShapeKind::Ellipse;
+  const auto start = core::uniform_start(5, 4);
+  core::Swarm swarm(cmd, start);
+  std::vector<AgentLogic> agents;
+  for (int i = 0; i < 5; ++i) agents.emplace_back(i, start[i], 60 * kMs);
+  for (auto& a : agents) a.on_command(cmd, 1);
+  std::uint64_t seq = 0;
+  for (int k = 0; k < 40; ++k) {
+    ++seq;
+    for (auto& a : agents)
+      for (const auto& b : agents) a.on_state(b.id(), b.position(), seq, 0, b.epoch(), b.arc());
+    for (auto& a : agents) a.step();
+    swarm.step();
+  }
+  for (int i = 0; i < 5; ++i) CHECK((agents[i].position() - swarm.positions()[i]).norm() < 1e-12);
+  // A neighbour's arc length from another epoch is not used (it would belong to another shape).
+  AgentLogic a(0, Vec2(4, 0), 60 * kMs);
+  a.on_command(cmd, 2);
+  a.on_state(1, Vec2(-4, 0), 1, 0, 1, 123.0);  // epoch 1: arc ignored, position projected instead
+  AgentLogic b(0, Vec2(4, 0), 60 * kMs);
+  b.on_command(cmd, 2);
+  b.on_state(1, Vec2(-4, 0), 1, 0);
+  a.step();
+  b.step();
+  CHECK(a.position() == b.position());
+}
