@@ -1,7 +1,10 @@
 // DDS wiring of the agent: drain inputs into AgentLogic, step, publish. No maths here.
+// One process hosts one agent (shapeform_agent) or several (shapeform_agent_group); the loop is the same.
 #include "agent_node.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <memory>
 #include <sstream>
 
 #include "agent_logic.hpp"
@@ -26,24 +29,45 @@ bool finite_target(const msg::TrackingTarget& t) {
     if (!std::isfinite(v) || std::abs(v) > dds::kStateLimit) return false;
   return true;
 }
+
+/// Data ages kept per status period (the rest of a period's samples are not booked).
+constexpr std::size_t kAgeCapacity = 4096;
 }  // namespace
 
 int run_agent(std::int32_t id, const core::Vec2& start, const config::Config& cfg) {
-  util::log_init("agent", id);
+  return run_agents({id}, {start}, cfg);
+}
+
+int run_agents(const std::vector<std::int32_t>& ids, const std::vector<core::Vec2>& starts,
+               const config::Config& cfg) {
+  const bool group = ids.size() > 1;
+  if (group) {
+    util::log_init("agent-group " + std::to_string(ids.front()) + ".." + std::to_string(ids.back()));
+  } else {
+    util::log_init("agent", ids.front());
+  }
   util::install_stop_signals();
   const double period_s = 1.0 / cfg.agent.rate_hz;
   const auto timeout_ns = static_cast<std::int64_t>(cfg.agent.neighbour_timeout_periods * period_s * 1e9);
-  AgentLogic logic(id, start, timeout_ns);
+  std::vector<std::unique_ptr<AgentLogic>> logics;
+  logics.reserve(ids.size());
+  for (std::size_t k = 0; k < ids.size(); ++k) logics.push_back(std::make_unique<AgentLogic>(ids[k], starts[k], timeout_ns));
   {
     std::ostringstream s;
-    s << "start (" << start.x() << ", " << start.y() << "), " << cfg.agent.rate_hz << " Hz, "
-      << dds::describe(cfg.transport) << ", neighbour timeout " << cfg.agent.neighbour_timeout_periods
-      << " periods";
+    if (group) {
+      s << ids.size() << " agents in one process, ";
+    } else {
+      s << "start (" << starts.front().x() << ", " << starts.front().y() << "), ";
+    }
+    s << cfg.agent.rate_hz << " Hz, " << dds::describe(cfg.transport) << ", neighbour timeout "
+      << cfg.agent.neighbour_timeout_periods << " periods";
     util::log_info(s.str());
   }
 
   try {
-    dds::Node node(cfg.transport, "shapeform_agent_" + std::to_string(id));
+    const std::string node_name = group ? "shapeform_agent_group_" + std::to_string(ids.front())
+                                        : "shapeform_agent_" + std::to_string(ids.front());
+    dds::Node node(cfg.transport, node_name);
     auto state_writer = node.writer<msg::AgentState>(dds::TopicId::State);
     auto status_writer = node.writer<msg::AgentStatus>(dds::TopicId::Status);
     auto state_reader = node.reader<msg::AgentState>(dds::TopicId::State);
@@ -54,13 +78,14 @@ int run_agent(std::int32_t id, const core::Vec2& start, const config::Config& cf
     std::vector<dds::Received<msg::ShapeCommand>> commands;
     std::vector<dds::Received<msg::TrackingTarget>> targets;
     std::vector<double> ages_us;
-    ages_us.reserve(4096);
+    ages_us.reserve(kAgeCapacity);
     util::ThrottledLog throttled(5.0);
     util::CpuMeter cpu;
     util::RateLoop loop(cfg.agent.rate_hz);
     const auto status_every = std::max<std::uint64_t>(1, static_cast<std::uint64_t>(std::llround(cfg.agent.rate_hz / cfg.agent.status_rate_hz)));
-    msg::AgentState out;
-    out.id(id);
+    const double share = 1.0 / static_cast<double>(ids.size());  // of the process figures, per agent
+    std::vector<msg::AgentState> outs(ids.size());
+    for (std::size_t k = 0; k < ids.size(); ++k) outs[k].id(ids[k]);
     std::uint64_t seq = 0, ticks = 0;
     int heard_logged = -1;
 
@@ -72,11 +97,13 @@ int run_agent(std::int32_t id, const core::Vec2& start, const config::Config& cf
         core::Command cmd;
         std::string error;
         if (!dds::from_msg(c.msg, cmd, error)) {
-          logic.count_rejected();
+          for (auto& l : logics) l->count_rejected();
           util::log_warn("command epoch " + std::to_string(c.msg.epoch()) + " rejected: " + error);
           continue;
         }
-        if (logic.on_command(cmd, c.msg.epoch()))
+        bool adopted = false;
+        for (auto& l : logics) adopted = l->on_command(cmd, c.msg.epoch()) || adopted;
+        if (adopted)
           util::log_info("following command epoch " + std::to_string(c.msg.epoch()) + ": " + c.msg.shape_kind() +
                          (cmd.tracking.enabled ? " (tracking)" : ""));
       }
@@ -84,72 +111,97 @@ int run_agent(std::int32_t id, const core::Vec2& start, const config::Config& cf
       for (const auto& t : targets) {
         if (!t.valid_data) continue;
         if (!finite_target(t.msg)) {
-          logic.count_rejected();
+          for (auto& l : logics) l->count_rejected();
           throttled.warn("target", "tracking target rejected: non-finite or absurd value");
           continue;
         }
-        logic.on_target({t.msg.epoch(), t.msg.model_time(), core::Vec2(t.msg.cx(), t.msg.cy()),
-                         core::Vec2(t.msg.vx(), t.msg.vy())});
+        const TargetSample ts{t.msg.epoch(), t.msg.model_time(), core::Vec2(t.msg.cx(), t.msg.cy()),
+                              core::Vec2(t.msg.vx(), t.msg.vy())};
+        for (auto& l : logics) l->on_target(ts);
       }
       state_reader.drain(states);
       for (const auto& s : states) {
         if (!s.valid_data) {
-          if (s.instance != dds::InstanceState::Alive && s.key_id >= 0) logic.on_gone(s.key_id);
+          if (s.instance != dds::InstanceState::Alive && s.key_id >= 0)
+            for (auto& l : logics) l->on_gone(s.key_id);
           continue;
         }
         std::string why;
         if (!dds::valid_state(s.msg, why)) {
-          logic.count_rejected();
+          for (auto& l : logics) l->count_rejected();
           throttled.warn("state", "state sample rejected: " + why);
           continue;
         }
-        if (s.msg.id() == id) continue;
-        logic.on_state(s.msg.id(), core::Vec2(s.msg.x(), s.msg.y()), s.msg.seq(), s.receive_stamp_ns);
-        if (ages_us.size() < ages_us.capacity()) ages_us.push_back(static_cast<double>(s.receive_stamp_ns - s.msg.stamp_ns()) * 1e-3);
+        const core::Vec2 x(s.msg.x(), s.msg.y());
+        const std::optional<double> arc = s.msg.has_arc() ? std::optional<double>(s.msg.arc()) : std::nullopt;
+        for (auto& l : logics)  // own id ignored
+          l->on_state(s.msg.id(), x, s.msg.seq(), s.receive_stamp_ns, s.msg.epoch(), arc);
+        // Data age of samples from agents hosted elsewhere (a process's own samples are not a delivery).
+        const bool hosted = std::find(ids.begin(), ids.end(), s.msg.id()) != ids.end();
+        if (!hosted && ages_us.size() < ages_us.capacity())
+          ages_us.push_back(static_cast<double>(s.receive_stamp_ns - s.msg.stamp_ns()) * 1e-3);
       }
-      logic.drop_stale(now);
-      logic.step();
+      ++seq;
+      const std::int64_t stamp = util::steady_ns();
+      for (std::size_t k = 0; k < logics.size(); ++k) {
+        AgentLogic& l = *logics[k];
+        l.drop_stale(now);
+        l.step();
+        msg::AgentState& out = outs[k];
+        out.seq(seq);
+        out.stamp_ns(stamp);
+        out.epoch(l.epoch());
+        out.model_time(l.model_time());
+        out.x(l.position().x());
+        out.y(l.position().y());
+        out.vx(l.velocity().x());
+        out.vy(l.velocity().y());
+        // The arc law's agents share their arc lengths so that nobody projects everyone else.
+        const std::optional<double> arc = l.command().law == core::Law::Arc ? l.arc() : std::nullopt;
+        out.has_arc(arc.has_value());
+        out.arc(arc.value_or(0.0));
+        state_writer.write(out);
+      }
 
-      out.seq(++seq);
-      out.stamp_ns(util::steady_ns());
-      out.epoch(logic.epoch());
-      out.model_time(logic.model_time());
-      out.x(logic.position().x());
-      out.y(logic.position().y());
-      out.vx(logic.velocity().x());
-      out.vy(logic.velocity().y());
-      state_writer.write(out);
-
-      if (logic.neighbours() != heard_logged && ticks % static_cast<std::uint64_t>(cfg.agent.rate_hz) == 0) {
-        heard_logged = logic.neighbours();
-        util::log_info("hearing " + std::to_string(heard_logged) + " neighbours");
+      int heard = logics.front()->neighbours();
+      for (const auto& l : logics) heard = std::min(heard, l->neighbours());
+      if (heard != heard_logged && ticks % static_cast<std::uint64_t>(cfg.agent.rate_hz) == 0) {
+        heard_logged = heard;
+        util::log_info(std::string(group ? "every hosted agent hears at least " : "hearing ") + std::to_string(heard) +
+                       " neighbours");
       }
       if (++ticks % status_every == 0) {
         const util::LoopStats ls = loop.stats();
-        const AgentCounters& k = logic.counters();
+        const double age_p50 = util::percentile(ages_us, 50).value_or(-1);
+        const double age_p99 = util::percentile(ages_us, 99).value_or(-1);
+        const double cpu_percent = cpu.percent() * share;
+        const double rss = util::rss_mb() * share;
         msg::AgentStatus st;
-        st.id(id);
         st.stamp_ns(util::steady_ns());
         st.ticks(ls.ticks);
         st.overruns(ls.overruns);
         st.lateness_max_us(ls.lateness_max_us);
         st.lateness_p99_us(ls.lateness_p99_us);
-        st.neighbours_heard(logic.neighbours());
-        st.stale_dropped(k.stale_dropped);
-        st.samples_rejected(k.samples_rejected);
-        st.samples_received(k.samples_received);
-        st.samples_lost(k.samples_lost);
-        st.age_p50_us(util::percentile(ages_us, 50).value_or(-1));
-        st.age_p99_us(util::percentile(ages_us, 99).value_or(-1));
-        st.cpu_percent(cpu.percent());
-        st.rss_mb(util::rss_mb());
-        st.epoch(logic.epoch());
-        status_writer.write(st);
+        st.age_p50_us(age_p50);
+        st.age_p99_us(age_p99);
+        st.cpu_percent(cpu_percent);
+        st.rss_mb(rss);
+        for (const auto& l : logics) {
+          const AgentCounters& k = l->counters();
+          st.id(l->id());
+          st.neighbours_heard(l->neighbours());
+          st.stale_dropped(k.stale_dropped);
+          st.samples_rejected(k.samples_rejected);
+          st.samples_received(k.samples_received);
+          st.samples_lost(k.samples_lost);
+          st.epoch(l->epoch());
+          status_writer.write(st);
+        }
         ages_us.clear();
       }
     }
-    // Leave cleanly: dispose our instance so the others drop us at once, then delete the entities.
-    state_writer.dispose(out);
+    // Leave cleanly: dispose our instances so the others drop us at once, then delete the entities.
+    for (const auto& out : outs) state_writer.dispose(out);
     util::log_info("stopping after " + std::to_string(ticks) + " ticks (signal " +
                    std::to_string(util::stop_signal()) + ")");
   } catch (const std::exception& e) {

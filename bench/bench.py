@@ -151,6 +151,7 @@ class Sampler(threading.Thread):
     def __init__(self):
         super().__init__(daemon=True)
         self.pids: dict[str, int] = {}
+        self.ours: list[int] = []
         self.samples: list[dict] = []
         self._halt = threading.Event()
 
@@ -162,6 +163,8 @@ class Sampler(threading.Thread):
             for name, pid in list(self.pids.items()):
                 s[name] = read_proc_cpu_ticks(pid)
                 s[name + "_rss"] = read_proc_rss_mb(pid)
+            # CPU of every process this run started (to tell our load from other jobs on the host).
+            s["ours"] = {pid: read_proc_cpu_ticks(pid) for pid in list(self.ours)}
             self.samples.append(s)
             self._halt.wait(0.5)
 
@@ -208,7 +211,8 @@ class Ctx:
     domain_base: int
     domain_count: int = 30
     next_domain: int = 0
-    verbose: bool = True
+    quiet_busy: float = 0.15
+    quiet_wait_s: float = 600.0
 
     def domain(self) -> int:
         d = self.domain_base + self.next_domain % self.domain_count
@@ -285,7 +289,30 @@ def stop_processes(procs: list[subprocess.Popen], spacing_s: float, grace_s: flo
     return codes
 
 
+def host_busy_over(seconds: float) -> float:
+    """Host CPU busy fraction (0..1) over the next `seconds`."""
+    t1, i1 = read_host_cpu()
+    time.sleep(seconds)
+    t2, i2 = read_host_cpu()
+    return 1 - (i2 - i1) / max(1, t2 - t1)
+
+
+def wait_quiet(ctx: Ctx) -> float:
+    """Waits (up to ctx.quiet_wait_s) until the host is nearly idle, so other jobs do not skew a run.
+    Returns the busy fraction seen last."""
+    end = time.monotonic() + ctx.quiet_wait_s
+    busy = host_busy_over(2.0)
+    warned = False
+    while busy > ctx.quiet_busy and time.monotonic() < end:
+        if not warned:
+            log(f"host {100 * busy:.0f} % busy with other work; waiting up to {ctx.quiet_wait_s:.0f} s for it to calm down")
+            warned = True
+        busy = host_busy_over(5.0)
+    return busy
+
+
 def run_once(ctx: Ctx, row: Row, run_idx: int) -> dict:
+    busy_before = wait_quiet(ctx)
     domain = ctx.domain()
     rdir = ctx.runs_dir / row.id / f"run{run_idx}"
     rdir.mkdir(parents=True, exist_ok=True)
@@ -306,12 +333,13 @@ def run_once(ctx: Ctx, row: Row, run_idx: int) -> dict:
         out = open(rdir / f"{name}.out", "w")
         err = open(rdir / f"{name}.err", "w")
         files.extend([out, err])
-        return subprocess.Popen(argv, stdout=kw.get("stdout", out), stderr=err, stdin=subprocess.DEVNULL,
-                                cwd=rdir)
+        p = subprocess.Popen(argv, stdout=kw.get("stdout", out), stderr=err, stdin=subprocess.DEVNULL, cwd=rdir)
+        sampler.ours.append(p.pid)
+        return p
 
     result: dict = {"row": row.id, "run": run_idx, "domain": domain, "dir": str(rdir)}
-    load_before = os.getloadavg()[0]
-    result["load_before"] = load_before
+    result["load_before"] = os.getloadavg()[0]
+    result["busy_before_pct"] = 100 * busy_before
     try:
         if preset["ds"]:
             xml = rdir / "ds.xml"
@@ -507,6 +535,14 @@ def analyse(ctx: Ctx, row: Row, rdir: Path, res: dict, sampler: Sampler) -> None
             if a.get(name) is not None and b.get(name) is not None:
                 res[f"{name}_cpu_pct"] = 100 * (b[name] - a[name]) / CLK_TCK / span_s
                 res[f"{name}_rss_mb"] = b.get(name + "_rss")
+        ours = 0.0
+        for pid, tb in b["ours"].items():
+            ta = a["ours"].get(pid)
+            if ta is not None and tb is not None:
+                ours += tb - ta
+        res["ours_cpu_pct"] = 100 * ours / CLK_TCK / span_s  # % of one core
+        if res.get("host_busy_pct") is not None:
+            res["other_cpu_pct"] = max(0.0, res["host_busy_pct"] * (os.cpu_count() or 1) - res["ours_cpu_pct"])
         ua, ub = a["udp"], b["udp"]
         res["udp_in_per_s"] = (ub["InDatagrams"] - ua["InDatagrams"]) / span_s
         res["udp_rcvbuf_errors_per_s"] = (ub["RcvbufErrors"] - ua["RcvbufErrors"]) / span_s
@@ -625,7 +661,7 @@ def run_rows(ctx: Ctx, rows: list[Row], runs: int, store: dict) -> None:
                 f"age p50 {fmt(r.get('age_p50_ms'), 'ms')} p99 {fmt(r.get('age_p99_ms'), 'ms')} "
                 f"cpu {fmt(r.get('cpu_pct'), '%')} host {fmt(r.get('host_busy_pct'), '%')} "
                 f"rcvbuf err/s {fmt(r.get('udp_rcvbuf_errors_per_s'), 'n')} conv {fmt(r.get('converge_s'), 's')} "
-                f"aborts {r.get('aborts')}")
+                f"aborts {r.get('aborts')} other load {fmt(r.get('other_cpu_pct'), '%')}")
         entry = {"row": row.__dict__ | {"id": row.id}, "agg": aggregate(per), "runs": per,
                  "when": dt.datetime.now().isoformat(timespec="seconds")}
         store[row.id] = entry
@@ -665,6 +701,9 @@ def main(argv=None) -> int:
     ap.add_argument("--results", default=str(ROOT / "docs" / "figures" / "bench_results.json"))
     ap.add_argument("--report", default=str(ROOT / "docs" / "BENCHMARKS.md"))
     ap.add_argument("--domain-base", type=int, default=200, help="first DDS domain id (30 are used in turn)")
+    ap.add_argument("--quiet-busy", type=float, default=15.0,
+                    help="before each run wait until the host is at most this %% busy (default 15)")
+    ap.add_argument("--quiet-wait", type=float, default=600.0, help="longest wait for a quiet host, s")
     ap.add_argument("--render-only", action="store_true", help="only re-render the report from the results file")
     ap.add_argument("--list", action="store_true", help="list the row ids and exit")
     args = ap.parse_args(argv)
@@ -696,7 +735,8 @@ def main(argv=None) -> int:
     runs = args.runs or (1 if args.quick else 3)
     ctx = Ctx(bin=bindir, runs_dir=Path(args.runs_dir), window_s=0, disc_timeout_s=60 if not args.quick else 40,
               conv_timeout_s=120 if not args.quick else 60, scenario=ROOT / "config" / "scenarios" / "circle.yaml",
-              scenario_sets=SCENARIO_SETS, status_rate_hz=2.0, domain_base=args.domain_base)
+              scenario_sets=SCENARIO_SETS, status_rate_hz=2.0, domain_base=args.domain_base,
+              quiet_busy=args.quiet_busy / 100, quiet_wait_s=args.quiet_wait)
 
     selected: list[Row] = []
     if not args.no_main:

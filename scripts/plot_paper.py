@@ -168,16 +168,21 @@ def fig3(data, out, Kr):
             ax.plot([p[0] for p in sp.values()], [p[1] for p in sp.values()], "o", ms=10, mfc="none", mec=SIM_C,
                     mew=1.4, label="simulator")
             md, ms_ = P.at_step(r["dist_series"], k), P.at_step(r["sim_series"], k)
-            ax.set_title(f"{s}, r={'0' if rr == 'r0' else '0.1'}, step {k}\ngap CV {P.fmt(md['gap_cv'])} / "
-                         f"{P.fmt(ms_['gap_cv'])}, clusters {P.fmt(md['clusters'])} / {P.fmt(ms_['clusters'])}",
+
+            def g(v):
+                return "undefined" if v is None else P.fmt(v)
+
+            ax.set_title(f"{s}, r={'0' if rr == 'r0' else '0.1'}, step {k}\ngap CV {g(md['gap_cv'])} / "
+                         f"{g(ms_['gap_cv'])}, clusters {P.fmt(md['clusters'])} / {P.fmt(ms_['clusters'])}",
                          fontsize=9)
             ax.set_aspect("equal", adjustable="datalim")
             ax.grid(alpha=0.3)
             ax.tick_params(labelsize=7)
             if i == 0 and j == 0:
                 ax.legend(fontsize=7, loc="lower left")
-    fig.suptitle("Fig. 3 analogue: without (r=0) and with (r=0.1) nearest-neighbour repulsion, 12 agents "
-                 "(values: processes / simulator; without repulsion the agents pile up in clumps)", fontsize=11)
+    fig.suptitle("Fig. 3 analogue: without (r=0) and with (r=0.1) nearest-neighbour repulsion, 12 agents\n"
+                 "(values: processes / simulator; clusters at link 0.05; without repulsion the agents pile up "
+                 "in clumps, and by step 1000 all 12 sit on one point: gap CV undefined)", fontsize=11)
     fig.tight_layout()
     save(fig, out, "paper_fig3_repulsion.png")
 
@@ -337,25 +342,30 @@ def fig_limits(data, out):
     ax = axs[1, 1]
     if r:
         K = max(r["sim_pos"])
-        for kind, ls, lab in (("sim", "--o", "simulator"), ("dist", "-o", "agent processes")):
-            tr = trajectories({k: v for k, v in r[f"{kind}_pos"].items() if K - 30 <= k <= K}).get(0)
-            if tr:
-                ax.plot(tr[0], [math.hypot(x, y) for x, y in zip(tr[1], tr[2])], ls, ms=3, label=lab)
-        ax.axhline(4.0, color="k", ls=":", lw=0.8)
-        ax.set_title("circle: agent 0's radius over the last 30 iterations\n(r0 = 4 dotted; Euler chatter, "
-                     "amplitude ~ r*dt)", fontsize=10)
+        for i, c in ((0, "tab:blue"), (1, "tab:red")):
+            tr = trajectories({k: v for k, v in r["sim_pos"].items() if K - 30 <= k <= K}).get(i)
+            if not tr:
+                continue
+            th = np.unwrap([math.atan2(y, x) for x, y in zip(tr[1], tr[2])])
+            s_arc = 4.0 * (th - th.mean())  # position along the ring, about its mean
+            ax.plot(tr[0], s_arc, "-o", ms=3, color=c, label=f"agent {i}")
+        ax.set_title("circle, 12 agents: position along the ring over the last 30 iterations\n"
+                     "Euler dt=1 chatter: every agent hops back and forth by ~r*dt = 0.1", fontsize=10)
+        ax.set_ylabel("arc position about its mean")
         ax.set_xlabel("iteration")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
     ax = axs[1, 2]
     tr = trajectories(P.load_positions_csv(ld / "track_line_ff_long_positions.csv"))
+    far = 0
     for i, (ks, xs, ys) in sorted(tr.items()):
         d = [math.hypot(x - (-10 + 0.1 * k), y - (-10 + 0.1 * k)) for k, x, y in zip(ks, xs, ys)]
+        far += d[-1] > 5
         ax.plot(ks, d, lw=0.9)
     ax.axhline(2.0, color="k", ls=":", lw=0.8)
     ax.set_yscale("log")
-    ax.set_title("line path with feed-forward (paper start), simulator:\neach agent's distance from C(t)",
-                 fontsize=10)
+    ax.set_title(f"line path, feed-forward, paper start: distance from C(t)\n{far} of {len(tr)} agents "
+                 f"escape for ever (as around a fixed centre)", fontsize=10)
     ax.set_xlabel("iteration")
     ax.grid(alpha=0.3, which="both")
     fig.suptitle("Limits of the published law (simulator; Euler dt=1 unless said)", fontsize=11)
@@ -380,11 +390,11 @@ def main():
     fig_track(data, out, "line", [("track_line_paper", "paper law"), ("track_line_ff", "feed-forward"),
                                   ("track_line_ff_near", "feed-forward, start around C(0)")],
               "paper_fig4_track_line.png",
-              "Fig. 4 analogue: centre on y=x from (-10,-10) at (0.1,0.1)/iteration; snapshots at t=40..200 "
+              "Fig. 4 analogue: centre on y=x from (-10,-10) at (0.1,0.1)/iteration; snapshots at t=40..200\n"
               "(centre: open circle, target ring dashed), one agent's trajectory (grey)")
     fig_track(data, out, "circle", [("track_circle_paper", "paper law"), ("track_circle_ff", "feed-forward")],
               "paper_fig5_track_circle.png",
-              "Fig. 5 analogue: centre on the circle of radius 6, period 200; snapshots at t=40..200 "
+              "Fig. 5 analogue: centre on the circle of radius 6, period 200; snapshots at t=40..200\n"
               "(centre: open circle, target ring dashed), one agent's trajectory (grey)")
     fig_convergence(data, out, K)
     fig_tracking_errors(data, out)

@@ -191,6 +191,8 @@ void Supervisor::print_metrics_line(const SwarmMonitor::Sample& s) {
     << " gap_cv=" << fmt_opt(m.gap_cv) << " min_sep=" << fmt_opt(m.min_separation)
     << " clusters=" << (m.clusters ? std::to_string(*m.clusters) : "-");
   if (m.centroid_error) o << " centroid_error=" << fmt_opt(m.centroid_error) << " ring_error=" << fmt_opt(m.ring_error);
+  if (current_.law == core::Law::Arc || !m.shape_error_mean || m.curve_error_mean != m.shape_error_mean)
+    o << " curve_error=" << fmt_opt(m.curve_error_mean, "%.2e") << " arc_gap_cv=" << fmt_opt(m.arc_gap_cv, "%.2e");
   o << (s.converged ? " converged" : "");
   util::log_info(o.str());
 }
@@ -342,6 +344,7 @@ void Supervisor::print_summary(std::int64_t now) {
   nlohmann::json j = sim::metrics_json(s.metrics);
   j["name"] = cfg_.name;
   j["shape"] = std::string(core::to_string(current_.shape.kind));
+  j["law"] = std::string(core::to_string(current_.law));
   j["tracking"] = current_.tracking.enabled;
   j["epoch"] = epoch_;
   j["model_time"] = t;
@@ -375,6 +378,8 @@ void Supervisor::print_summary(std::int64_t now) {
             << " gap_cv=" << fmt_opt(s.metrics.gap_cv) << " min_separation=" << fmt_opt(s.metrics.min_separation)
             << " clusters=" << (s.metrics.clusters ? std::to_string(*s.metrics.clusters) : "-")
             << " settle_step=" << (settle ? std::to_string(std::llround(*settle / current_.dt)) : "-");
+  std::cout << " curve_error_mean=" << fmt_opt(s.metrics.curve_error_mean, "%.3g")
+            << " arc_gap_cv=" << fmt_opt(s.metrics.arc_gap_cv, "%.3g");
   if (s.metrics.centroid_error)
     std::cout << " centroid_error=" << fmt_opt(s.metrics.centroid_error) << " ring_error=" << fmt_opt(s.metrics.ring_error);
   std::cout << std::endl;

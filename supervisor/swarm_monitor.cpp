@@ -76,10 +76,11 @@ SwarmMonitor::Sample SwarmMonitor::update(double model_time, std::int64_t now_ns
     for (const auto& [id, p] : alive_positions(now_ns)) x.push_back(p);
     s.metrics = core::compute_metrics(*command_, x, model_time);
     if (s.alive > 0 && s.following == s.alive) {
-      detector_.add(model_time, s.metrics.shape_error_mean, s.metrics.gap_cv);
+      const auto uniform = core::uniformity(*command_, s.metrics);
+      detector_.add(model_time, s.metrics.shape_error_mean, uniform);
       hist_t_.push_back(model_time);
       hist_err_.push_back(s.metrics.shape_error_mean.value_or(0.0));
-      hist_gap_.push_back(s.metrics.gap_cv);
+      hist_gap_.push_back(uniform);
     } else {
       detector_.reset();  // agents still switching to the new command
     }

@@ -808,7 +808,10 @@ Config convert(const YAML::Node& root, bool version_required, Reader& rd) {
     }
     assign(rd.integer(get(m, s, "socket_buffer_bytes"), 0, std::numeric_limits<int>::max()),
            tr.socket_buffer_bytes);
-    assign(rd.boolean(get(m, s, "multicast_data")), tr.multicast_data);
+    const Entry multicast = get(m, s, "multicast_data");
+    assign(rd.boolean(multicast), tr.multicast_data);
+    if (tr.multicast_data && tr.profile != "loopback")
+      rd.bad(multicast, "needs transport.profile loopback (profile is " + tr.profile + ")");
   }
   if (shape_ok) compile_shape(c.command, shape_keys, rd);
   return c;

@@ -403,7 +403,7 @@ std::shared_ptr<const Curve> make_square(double a) {
 std::shared_ptr<const Curve> make_polygon(std::vector<Vec2> vertices, bool closed) {
   const std::size_t need = closed ? 3 : 2;
   if (vertices.size() < need)
-    throw ShapeError(std::string("polygon: a ") + (closed ? "closed" : "open") + " polygon needs at least " +
+    throw ShapeError(std::string("polygon: ") + (closed ? "a closed" : "an open") + " polygon needs at least " +
                      std::to_string(need) + " vertices, got " + std::to_string(vertices.size()));
   for (std::size_t k = 0; k + 1 < vertices.size() + (closed ? 1 : 0); ++k)
     if ((vertices[(k + 1) % vertices.size()] - vertices[k]).norm() == 0.0)

@@ -47,6 +47,12 @@ int count_clusters(const std::vector<Vec2>& x, double link = kClusterLink);
 /// O(N log N) ones (shape error, gap CV, tracking errors) are computed; the O(N^2) ones stay null.
 Metrics compute_metrics(const Command& cmd, const std::vector<Vec2>& x, double t, bool pairwise = true);
 
+/// The uniformity measure convergence is judged by: the Euclidean gap CV for the paper's law (as the
+/// paper measures it), the arc-length gap CV for the arc law (whose spacing is by arc length).
+inline std::optional<double> uniformity(const Command& cmd, const Metrics& m) {
+  return cmd.law == Law::Arc ? m.arc_gap_cv : m.gap_cv;
+}
+
 /// Settling: the first index k such that for every sample j >= k the shape error is within
 /// max(band_abs, band_rel * plateau) of the plateau (the last sample) and gap CV <= gap_cv_max.
 struct SettleParams {

@@ -91,6 +91,9 @@ void validate_common(const config::TransportConfig& cfg) {
   if (cfg.socket_buffer_bytes < 0) {
     fail("transport.socket_buffer_bytes: must be >= 0, got " + str(cfg.socket_buffer_bytes));
   }
+  if (cfg.multicast_data && cfg.profile != "loopback") {
+    fail("transport.multicast_data: only the loopback profile supports it, got profile " + quoted(cfg.profile));
+  }
 }
 
 }  // namespace
@@ -187,6 +190,9 @@ fdds::DomainParticipantQos participant_qos(const config::TransportConfig& cfg, c
     builtin.initialPeersList.clear();  // announcements: one datagram to the group, not one per peer id
     builtin.initialPeersList.push_back(group);
     builtin.metatrafficMulticastLocatorList.push_back(group);
+    // User endpoints advertise the group only. With a unicast locator as well, a writer would switch
+    // to unicast when a single reader is left, to a locator 2.9 never registered (the same assert).
+    pq.wire_protocol().default_unicast_locator_list.clear();
     pq.wire_protocol().default_multicast_locator_list.push_back(group);
   }
 

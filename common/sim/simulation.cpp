@@ -79,7 +79,7 @@ SimResult run_simulation(const core::Command& cmd, std::vector<core::Vec2> start
     // The O(N^2) metrics are only needed per step when a metrics CSV is written.
     const core::Metrics m = core::compute_metrics(cmd, x, swarm.time(), opt.metrics_csv != nullptr);
     err.push_back(m.shape_error_mean.value_or(0.0));
-    gap.push_back(m.gap_cv);
+    gap.push_back(core::uniformity(cmd, m));
     if (opt.metrics_csv) *opt.metrics_csv << k << ',' << fmt(swarm.time()) << ',' << metric_csv_values(m) << '\n';
     if (opt.positions_csv)
       for (std::size_t i = 0; i < x.size(); ++i)

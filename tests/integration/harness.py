@@ -29,9 +29,6 @@ CONFIG = {"bin": None, "source": None, "domain": None, "work": None}
 SHM_DIR = "/dev/shm"
 SHM_PATTERN = re.compile(r"^(sem\.)?(fastrtps|fast_datasharing|fastdds)")
 LOG_TAIL_LINES = 30
-# For checking that the tests can fail: extra arguments for every agent the harness starts, e.g.
-# SHAPEFORM_IT_AGENT_ARGS="--set dynamics.r=0" makes the agents (alone) run a wrong law.
-AGENT_MUTATION = os.environ.get("SHAPEFORM_IT_AGENT_ARGS", "").split()
 
 
 def bin_path(name):
@@ -393,7 +390,7 @@ class SwarmTestCase(unittest.TestCase):
                 "--domain", str(self.domain if domain is None else domain)]
         if seed is not None:
             argv += ["--seed", str(seed)]
-        argv += list(extra) + AGENT_MUTATION
+        argv += list(extra)
         return self.start(name or "agent_%d" % i, argv)
 
     def start_agents(self, n, config, domain=None, extra=(), seed=None, first=0, prefix="agent_"):

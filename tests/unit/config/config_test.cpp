@@ -130,6 +130,7 @@ void require_equal(const Config& a, const Config& b) {
   CHECK(a.transport.lease_s == b.transport.lease_s);
   CHECK(a.transport.announce_s == b.transport.announce_s);
   CHECK(a.transport.socket_buffer_bytes == b.transport.socket_buffer_bytes);
+  CHECK(a.transport.multicast_data == b.transport.multicast_data);
 }
 
 /// The paper's dynamics and step, shared by every scenario.
@@ -718,6 +719,19 @@ TEST_CASE("out-of-range values are reported with the range") {
         "supervisor.converge.gap_cv_max: must be > 0, got 0 (line 4)");
   CHECK(problem_of("schema_version: 1\nsupervisor:\n  converge:\n    hold: -1\n") ==
         "supervisor.converge.hold: must be >= 0, got -1 (line 4)");
+}
+
+TEST_CASE("multicast_data is off by default, read as a bool, and needs the loopback profile") {
+  CHECK_FALSE(load_string("schema_version: 1\n").transport.multicast_data);
+  const Config c = load_string("schema_version: 1\ntransport:\n  multicast_data: true\n");
+  CHECK(c.transport.multicast_data);
+  CHECK(c.transport.profile == "loopback");
+  CHECK(load("", {"transport.multicast_data=true"}).transport.multicast_data);
+  CHECK(to_yaml(c).find("multicast_data: true") != std::string::npos);
+  CHECK(load_string(to_yaml(c)).transport.multicast_data);
+  CHECK(problem_of("schema_version: 1\ntransport:\n  multicast_data: 3\n").find("transport.multicast_data:") == 0);
+  CHECK(problem_of("schema_version: 1\ntransport:\n  profile: lan\n  multicast_data: true\n") ==
+        "transport.multicast_data: needs transport.profile loopback (profile is lan), got true (line 4)");
 }
 
 TEST_CASE("announce_s must be below lease_s") {

@@ -35,8 +35,8 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 /// A domain of its own for each pub/sub test case and each test process (ctest may run the cases as
-/// parallel processes): 150 + 4 * (pid % 20) + offset, offset 0..3, always within 150..229.
-int test_domain(int offset) { return 150 + 4 * static_cast<int>(::getpid() % 20) + offset; }
+/// parallel processes): 150 + 5 * (pid % 16) + offset, offset 0..4, always within 150..229.
+int test_domain(int offset) { return 150 + 5 * static_cast<int>(::getpid() % 16) + offset; }
 
 /// Fast DDS short-cuts endpoints of one process (intraprocess delivery). Switch that off so the
 /// pub/sub tests really go through the loopback UDP transport the profile builds.
@@ -573,6 +573,49 @@ TEST_CASE("loopback profile has no builtin transports and only unicast UDPv4 on 
   }
 }
 
+TEST_CASE("loopback multicast_data: discovery and user data on one multicast group, on lo only", "[dds][qos]") {
+  config::TransportConfig cfg;
+  cfg.domain = 7;
+  cfg.multicast_data = true;
+  const fdds::DomainParticipantQos q = dds::participant_qos(cfg, "agent-1");
+  CHECK_FALSE(q.transport().use_builtin_transports);
+  CHECK(only_udp(q)->interfaceWhiteList == std::vector<std::string>{"127.0.0.1"});
+
+  const std::uint32_t port = 7400 + 250 * 7;  // the domain's discovery multicast port
+  auto is_group = [&](const frtps::Locator_t& l) {
+    return l.kind == LOCATOR_KIND_UDPv4 && frtps::IPLocator::toIPv4string(l) == "239.255.0.1" && l.port == port;
+  };
+  const auto& b = q.wire_protocol().builtin;
+  // Announcements go to the group once, not to every participant id.
+  REQUIRE(b.initialPeersList.size() == 1);
+  CHECK(is_group(*b.initialPeersList.begin()));
+  REQUIRE(b.metatrafficMulticastLocatorList.size() == 1);
+  CHECK(is_group(*b.metatrafficMulticastLocatorList.begin()));
+  REQUIRE(b.metatrafficUnicastLocatorList.size() == 1);
+  CHECK(is_loopback_locator(*b.metatrafficUnicastLocatorList.begin()));
+  // User endpoints advertise the group only (no unicast locator a writer could fall back to).
+  CHECK(q.wire_protocol().default_unicast_locator_list.empty());
+  REQUIRE(q.wire_protocol().default_multicast_locator_list.size() == 1);
+  CHECK(is_group(*q.wire_protocol().default_multicast_locator_list.begin()));
+  CHECK(dds::describe(cfg).find("multicast 239.255.0.1") != std::string::npos);
+
+  SECTION("off by default: no multicast locator at all") {
+    CHECK_FALSE(config::TransportConfig{}.multicast_data);
+  }
+  SECTION("other profiles refuse it") {
+    for (const char* profile : {"lan", "discovery-server"}) {
+      cfg.profile = profile;
+      INFO(profile);
+      try {
+        dds::participant_qos(cfg, "x");
+        FAIL("accepted multicast_data with profile " << profile);
+      } catch (const std::runtime_error& e) {
+        CHECK(std::string(e.what()).find("transport.multicast_data:") == 0);
+      }
+    }
+  }
+}
+
 TEST_CASE("lan profile: interfaces and peers", "[dds][qos]") {
   config::TransportConfig cfg;
   cfg.profile = "lan";
@@ -819,6 +862,63 @@ TEST_CASE("loopback pub-sub delivers 12 keyed instances and a dispose", "[dds][n
       }
     }
     return disposed;
+  }));
+}
+
+TEST_CASE("multicast_data pub-sub: keyed state and a reliable topic between three nodes", "[dds][node][pubsub]") {
+  auto cfg = loopback(test_domain(4));
+  cfg.multicast_data = true;
+  dds::Node a(cfg, "test-mc-a");
+  dds::Node b(cfg, "test-mc-b");
+  dds::Node c(cfg, "test-mc-c");
+  auto writer = a.writer<msg::AgentState>(dds::TopicId::State);
+  auto reader_b = b.reader<msg::AgentState>(dds::TopicId::State);
+  auto reader_c = c.reader<msg::AgentState>(dds::TopicId::State);
+  auto status_writer = b.writer<msg::AgentStatus>(dds::TopicId::Status);
+  auto status_reader = c.reader<msg::AgentStatus>(dds::TopicId::Status);
+  REQUIRE(wait_for([&] {
+    return writer.matched() >= 2 && reader_b.matched() >= 1 && reader_c.matched() >= 1 && status_reader.matched() >= 1;
+  }));
+
+  std::set<std::int32_t> seen_b, seen_c;
+  bool status_seen = false;
+  std::vector<dds::Received<msg::AgentState>> batch;
+  std::vector<dds::Received<msg::AgentStatus>> statuses;
+  std::uint64_t seq = 0;
+  REQUIRE(wait_for([&] {
+    ++seq;
+    for (int id = 0; id < 3; ++id) {
+      msg::AgentState s = good_state();
+      s.id(id);
+      s.seq(seq);
+      s.stamp_ns(dds::steady_now_ns());
+      writer.write(s);
+    }
+    msg::AgentStatus st;
+    st.id(9);
+    status_writer.write(st);
+    reader_b.drain(batch);
+    for (const auto& r : batch) seen_b.insert(r.msg.id());
+    reader_c.drain(batch);
+    for (const auto& r : batch) seen_c.insert(r.msg.id());
+    status_reader.drain(statuses);
+    for (const auto& r : statuses) status_seen = status_seen || (r.valid_data && r.msg.id() == 9);
+    return seen_b.size() == 3 && seen_c.size() == 3 && status_seen;
+  }));
+
+  // Readers leave one by one: the writer keeps sending to the group (it has no unicast locator to fall
+  // back to, which in 2.9 would abort on an unregistered output locator), and the last reader still hears it.
+  reader_b = dds::Reader<msg::AgentState>();
+  REQUIRE(wait_for([&] { return writer.matched() == 1; }));
+  seen_c.clear();
+  REQUIRE(wait_for([&] {
+    msg::AgentState s = good_state();
+    s.id(4);
+    s.seq(++seq);
+    writer.write(s);
+    reader_c.drain(batch);
+    for (const auto& r : batch) seen_c.insert(r.msg.id());
+    return seen_c.count(4) == 1;
   }));
 }
 
