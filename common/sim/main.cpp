@@ -1,5 +1,6 @@
 // shapeform_sim: the headless simulator. Prints ONE JSON object on stdout.
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -24,6 +25,7 @@ int main(int argc, char** argv) {
   double dt = 0.0;
   bool verbose = false;
   std::string kernel = "auto";
+  int outline = 0;
   app.add_option("--config", config_path, "scenario YAML file (default: built-in defaults)");
   app.add_option("--agents", agents, "number of agents (overrides swarm.agents)");
   app.add_option("--seed", seed, "seed of the uniform start (overrides swarm.seed)");
@@ -39,6 +41,8 @@ int main(int argc, char** argv) {
                  "auto | agent (each agent through agent_step, as agent processes) | batch (paper law + Euler: "
                  "each pair once, vectorised); auto = batch from 64 agents")
       ->check(CLI::IsMember({"auto", "agent", "batch"}));
+  app.add_option("--outline", outline, "add `outline`: this many points along the shape at the final time")
+      ->check(CLI::Range(0, 100000));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -124,6 +128,24 @@ int main(int argc, char** argv) {
   if (!cmd.tracking.enabled) {
     j.erase("centroid_error");
     j.erase("ring_error");
+  }
+  if (outline > 0) {
+    const core::ShapeSpec s = core::shape_at(cmd, r.model_time);
+    const auto curve = core::curve_of(s);
+    // The line is infinite: draw the stretch the agents span, with a margin.
+    double lo = 0, hi = curve->length();
+    if (!std::isfinite(hi)) {
+      lo = 1e300, hi = -1e300;
+      for (const auto& p : r.final_positions) {
+        const double a = core::closest_point(s, *curve, p).s;
+        lo = std::min(lo, a - 2.0), hi = std::max(hi, a + 2.0);
+      }
+    }
+    auto& ol = j["outline"] = nlohmann::json::array();
+    for (int k = 0; k <= outline; ++k) {
+      const core::Vec2 p = core::to_world(s, curve->at((lo + (hi - lo) * k / outline) / s.scale));
+      ol.push_back({p.x(), p.y()});
+    }
   }
   auto& fp = j["final_positions"] = nlohmann::json::array();
   for (const auto& p : r.final_positions) fp.push_back({p.x(), p.y()});
