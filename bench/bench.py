@@ -44,12 +44,18 @@ def add_preset(name: str, sets: list[str], about: str, ds: bool = False) -> None
 
 
 BUF = "transport.socket_buffer_bytes=4194304"
+ANN = ["transport.lease_s=10", "transport.announce_s=3"]
 MC = "transport.multicast_data=true"
 add_preset("buf", [BUF], "4 MiB UDP socket send/receive buffers (transport.socket_buffer_bytes)")
 add_preset("mc", [MC], "user data on multicast 239.255.0.1 on lo (transport.multicast_data)")
 add_preset("mcbuf", [MC, BUF], "multicast user data on lo + 4 MiB socket buffers")
+add_preset("ann", ANN, "participant lease 10 s, announcements every 3 s (instead of 2 s / 0.5 s)")
+add_preset("bufann", [BUF] + ANN, "4 MiB socket buffers + lease 10 s / announce 3 s")
+add_preset("mcbufann", [MC, BUF] + ANN, "multicast user data on lo + 4 MiB socket buffers + lease 10 s / announce 3 s")
 add_preset("ds", [], "discovery server on 127.0.0.1 (transport.profile=discovery-server)", ds=True)
 add_preset("dsmcbuf", [MC, BUF], "discovery server + multicast user data on lo + 4 MiB socket buffers", ds=True)
+add_preset("dsmcbufann", [MC, BUF] + ANN, "discovery server + multicast user data on lo + 4 MiB socket buffers + "
+           "lease 10 s / announce 3 s", ds=True)
 
 
 @dataclass

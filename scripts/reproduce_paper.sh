@@ -8,7 +8,7 @@
 #   --quick       shortened runs (200 iterations everywhere; a few minutes less)
 #   --build DIR   build folder holding bin/ (default: build; built with scripts/build.sh if missing)
 #   --data DIR    where the recorded CSV files go (default: BUILD/paper)
-#   --domain D    first DDS domain id; experiment i uses D+i (default 160)
+#   --domain D    first of 9 DDS domain ids the experiments cycle through (default 131: 131..139)
 #   --direct      start the processes here instead of through scripts/launch_swarm.sh
 #
 # Experiments run one after another (one line of progress each): the four shapes, the repulsion study,
@@ -18,7 +18,7 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 py=/usr/bin/python3 # Debian's python3 with python3-matplotlib (scripts/install_deps.sh)
 
-quick=() build="$root/build" data="" domain=160 backend=auto
+quick=() build="$root/build" data="" domain=131 backend=auto
 while [ $# -gt 0 ]; do
   case "$1" in
     --quick) quick=(--quick); shift ;;
@@ -30,7 +30,7 @@ while [ $# -gt 0 ]; do
     *) echo "reproduce_paper: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
-[[ $domain =~ ^[0-9]+$ ]] && [ "$domain" -le 215 ] || { echo "reproduce_paper: --domain: expected 0..215, got '$domain'" >&2; exit 2; }
+[[ $domain =~ ^[0-9]+$ ]] && [ "$domain" -le 224 ] || { echo "reproduce_paper: --domain: expected 0..224, got '$domain'" >&2; exit 2; }
 case "$build" in /*) ;; *) build="$PWD/$build" ;; esac
 [ -n "$data" ] || data="$build/paper"
 "$py" -c 'import matplotlib, numpy' 2>/dev/null || {

@@ -302,7 +302,7 @@ class Supervisor(Proc):
 
         return poll(done, timeout + 30, "the answer to 'wait agents'", 0.1) == "yes"
 
-    def command(self, line, expect=r"^epoch \d+:", timeout=10.0):
+    def command(self, line, timeout=10.0):
         """Sends a command that publishes an epoch; returns the epoch number announced."""
         start = len(self.out())
         self.send(line)
@@ -313,8 +313,6 @@ class Supervisor(Proc):
 
 class SwarmTestCase(unittest.TestCase):
     """Base class: a run folder, a domain, process bookkeeping and the after-test checks."""
-
-    domain = None  # set from the command line
 
     def setUp(self):
         self.domain = CONFIG["domain"]

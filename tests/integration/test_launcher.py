@@ -86,11 +86,23 @@ class LauncherTest(harness.SwarmTestCase):
         # --seed S: agent i starts where shapeform_sim --agents N --seed S puts agent i.
         n, seed = 6, 7
         sim = self.run_sim(harness.scenario("circle"), ["--agents", str(n), "--seed", str(seed), "--steps", "0"])
-        p = self.launch(["-n", str(n), "--scenario", "circle", "--seed", str(seed), "--steps", "5", "--json"], "launcher_seed")
+        # Also: --rate, --set and --record reach the processes.
+        record = os.path.join(self.run_dir, "my_record")
+        p = self.launch(["-n", str(n), "--scenario", "circle", "--seed", str(seed), "--steps", "5", "--json",
+                         "--rate", "40", "--set", "transport.lease_s=3", "--record", record], "launcher_seed")
         self.assertEqual(p.wait(90), 0)
-        for i, (got, want) in enumerate(zip(self.agent_starts(self.run_folder(p), n), sim["final_positions"])):
+        run = self.run_folder(p)
+        for i, (got, want) in enumerate(zip(self.agent_starts(run, n), sim["final_positions"])):
             self.assertAlmostEqual(got[0], want[0], delta=1e-4, msg="agent %d x1" % i)
             self.assertAlmostEqual(got[1], want[1], delta=1e-4, msg="agent %d x2" % i)
+        for i in range(n):
+            log = harness.read_text(os.path.join(run, "agent_%d.log" % i))
+            self.assertRegex(log, r"\b40 Hz\b", "agent %d runs at --rate" % i)
+            self.assertIn("lease 3 s", log, "agent %d got --set" % i)
+        self.assertIn("lease 3 s", harness.read_text(os.path.join(run, "supervisor.log")), "the supervisor got --set")
+        self.assertEqual(json.loads(p.out())["recording"], record)
+        self.assertTrue(harness.read_csv(os.path.join(record, "metrics.csv")), "recorded into --record")
+        self.assertFalse(os.path.exists(os.path.join(run, "record")))
         self.assert_nothing_left(p)
         # --init CSV: agent i starts at row i; -n is the row count.
         rows = [(1.5, -2.0), (-3.25, 0.5), (0.0, 4.0), (2.75, 2.75)]
@@ -101,6 +113,19 @@ class LauncherTest(harness.SwarmTestCase):
         for i, (got, want) in enumerate(zip(self.agent_starts(self.run_folder(p), len(rows)), rows)):
             self.assertAlmostEqual(got[0], want[0], delta=1e-9, msg="agent %d x1" % i)
             self.assertAlmostEqual(got[1], want[1], delta=1e-9, msg="agent %d x2" % i)
+        self.assert_nothing_left(p)
+
+    def test_not_converged_exit_3(self):
+        # A scenario given as a path; convergence made impossible (hold longer than the run):
+        # the launcher's exit status is the supervisor's 3, the summary says not converged.
+        p = self.launch(["-n", "4", "--scenario", harness.scenario("square"), "--timeout", "3", "--json",
+                         "--set", "supervisor.converge.hold=1000000"], "launcher_timeout")
+        self.assertEqual(p.wait(90), 3)
+        summary = json.loads(p.out())
+        self.assertEqual((summary["converged"], summary["exit_status"], summary["agents"]), (False, 3, 4))
+        self.assertEqual(summary["shape"], "square")
+        self.assertIn("wait converged timeout=3", harness.read_text(os.path.join(self.run_folder(p), "script.txt")))
+        self.assertIn("exit status 3", p.log())
         self.assert_nothing_left(p)
 
     def interrupt(self, to_group):
@@ -122,6 +147,7 @@ class LauncherTest(harness.SwarmTestCase):
             self.assertRegex(log, r"stopping after \d+ ticks", "agent %d stopped cleanly" % i)
         self.assertIn("summary:", harness.read_text(os.path.join(run, "supervisor.out")),
                       "the supervisor printed its summary")
+        self.assertIn("summary:", p.out(), "the launcher shows the summary")
         self.assertIn("interrupted", p.log())
         self.assertGreater(len(harness.read_csv(os.path.join(run, "record", "metrics.csv"))), 0)
 
