@@ -1,11 +1,354 @@
-"""Renders docs/BENCHMARKS.md from docs/figures/bench_results.json (see bench.py)."""
+"""Simulator rows and the Markdown report of the benchmark (see bench.py).
+
+render() turns docs/figures/bench_results.json into docs/BENCHMARKS.md; every number in the report
+comes from that file, which bench.py fills from the processes' own reports.
+"""
+from __future__ import annotations
+
 import json
+import math
+import statistics
+import subprocess
 from pathlib import Path
 
+# --------------------------------------------------------------------------------------------
+# Simulator throughput (shapeform_bench_sim, one JSON object per call).
 
-def sim_rows(bindir, quick):
-    return {}
+SIM_SIZES = (100, 1000, 10000)
+# Steps per call, chosen so one call takes roughly a second or more on this kind of machine.
+SIM_STEPS = {("fast", 100): 5000, ("fast", 1000): 500, ("fast", 10000): 20,
+             ("reference", 100): 1000, ("reference", 1000): 20, ("reference", 10000): 1}
+SIM_TARGETS = {1000: 200.0, 10000: 2.0}  # Euler steps/s, fast implementation, one core
 
 
-def render(store, path: Path):
-    path.write_text("# Benchmarks\n\n```\n" + json.dumps({k: v["agg"] for k, v in store["rows"].items()}, indent=1) + "\n```\n")
+def sim_rows(bindir: Path, quick: bool) -> dict:
+    exe = bindir / "shapeform_bench_sim"
+    out: dict = {"available": exe.exists(), "rows": []}
+    if not exe.exists():
+        return out
+    runs = 1 if quick else 3
+    for n in SIM_SIZES:
+        for impl in ("fast", "reference"):
+            steps = SIM_STEPS[(impl, n)]
+            if quick:
+                steps = max(1, steps // 4)
+            cmd = [str(exe), "--agents", str(n), "--steps", str(steps), "--impl", impl]
+            results = []
+            error = None
+            for _ in range(runs):
+                try:
+                    p = subprocess.run(["taskset", "-c", "0"] + cmd, capture_output=True, text=True, timeout=600)
+                    if p.returncode != 0:
+                        error = (p.stderr.strip().splitlines() or ["exit %d" % p.returncode])[-1]
+                        break
+                    results.append(json.loads(p.stdout.strip().splitlines()[-1]))
+                except (subprocess.TimeoutExpired, json.JSONDecodeError, IndexError, OSError) as e:
+                    error = str(e)
+                    break
+            row = {"agents": n, "impl": impl, "steps": steps, "runs": len(results),
+                   "command": "taskset -c 0 build/bin/shapeform_bench_sim --agents %d --steps %d --impl %s" % (n, steps, impl)}
+            if results:
+                row["steps_per_s"] = statistics.median(r["steps_per_s"] for r in results)
+                row["rss_mb"] = statistics.median(r["rss_mb"] for r in results)
+                row["seconds"] = statistics.median(r["seconds"] for r in results)
+            if error:
+                row["error"] = error
+            out["rows"].append(row)
+    return out
+
+
+# --------------------------------------------------------------------------------------------
+# Formatting.
+
+
+def f_s(v):
+    if v is None:
+        return "-"
+    if isinstance(v, float) and math.isinf(v):
+        return "never"
+    return f"{v:.1f} s"
+
+
+def f_pct(v, digits=2):
+    return "-" if v is None else f"{100 * v:.{digits}f} %"
+
+
+def f_ms(v):
+    if v is None:
+        return "-"
+    if v < 1:
+        return f"{v:.2f} ms"
+    if v < 10:
+        return f"{v:.1f} ms"
+    return f"{v:.0f} ms"
+
+
+def f_num(v, fmt="{:.1f}"):
+    return "-" if v is None else fmt.format(v)
+
+
+def ratio(a, b):
+    if a is None or b is None:
+        return "-"
+    if isinstance(a, float) and math.isinf(a):
+        return "never"
+    if isinstance(b, float) and math.isinf(b):
+        return "-"
+    if b == 0:
+        return "-"
+    return f"x{a / b:.2f}"
+
+
+def agg_val(entry, key):
+    return entry["agg"].get(key) if entry else None
+
+
+def processes(row: dict) -> str:
+    if row["kind"] == "group":
+        k = row["group"]
+        return f"{math.ceil(row['n'] / k)} x {k} agents"
+    return f"{row['n']}"
+
+
+def row_label(row: dict) -> str:
+    kind = {"baseline": "baseline", "agents": "agents", "group": "agents (grouped)"}[row["kind"]]
+    return kind
+
+
+TABLE_HEAD = ("| row | kind | N | rate | processes | config | all hear all | delivery | age p50 | age p99 | age p99 worst window "
+              "| lateness p99 | overruns | CPU %/agent | RSS MB/agent | supervisor CPU % | launch to converged "
+              "| aborts | host busy | other load |\n"
+              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n")
+
+
+def table_line(rid: str, e: dict) -> str:
+    r, a = e["row"], e["agg"]
+    conv = a.get("converge_s")
+    conv_txt = f_s(conv) if r["kind"] != "baseline" else "n/a"
+    st = f" +{r['stagger_s'] * 1000:.0f} ms stagger" if r.get("stagger_s") else ""
+    aborts = a.get("aborts_total", 0)
+    runs = a.get("runs", 1)
+    return (f"| `{rid}` | {row_label(r)} | {r['n']} | {r['rate']:g} Hz | {processes(r)} | {r['preset']}{st} "
+            f"| {f_s(a.get('all_heard_s'))} | {f_pct(a.get('delivery'))} | {f_ms(a.get('age_p50_ms'))} "
+            f"| {f_ms(a.get('age_p99_ms'))} | {f_ms(a.get('age_p99_worst_ms'))} | {f_ms(a.get('lateness_p99_ms'))} "
+            f"| {f_num(a.get('overrun_pct'), '{:.2f} %')} | {f_num(a.get('cpu_pct'), '{:.2f}')} "
+            f"| {f_num(a.get('rss_mb'))} | {f_num(a.get('sup_cpu_pct')) if r['kind'] != 'baseline' else 'n/a'} "
+            f"| {conv_txt} | {aborts} in {runs} run{'s' if runs != 1 else ''} | {f_num(a.get('host_busy_pct'), '{:.0f} %')} "
+            f"| {f_num(a.get('other_cpu_pct'), '{:.0f} %')} |\n")
+
+
+def ratio_line(rid: str, e: dict, base: dict | None) -> str:
+    a = e["agg"]
+    b = base["agg"] if base else {}
+    return (f"| `{rid}` | `{base['row']['id'] if base else '-'}` | {ratio(a.get('all_heard_s'), b.get('all_heard_s'))} "
+            f"| {ratio(a.get('delivery'), b.get('delivery'))} | {ratio(a.get('age_p50_ms'), b.get('age_p50_ms'))} "
+            f"| {ratio(a.get('age_p99_ms'), b.get('age_p99_ms'))} | {ratio(a.get('lateness_p99_ms'), b.get('lateness_p99_ms'))} "
+            f"| {ratio(a.get('cpu_pct'), b.get('cpu_pct'))} | {ratio(a.get('rss_mb'), b.get('rss_mb'))} |\n")
+
+
+RATIO_HEAD = ("| agent row | baseline row | all hear all | delivery | age p50 | age p99 | lateness p99 | CPU/agent | RSS/agent |\n"
+              "|---|---|---|---|---|---|---|---|---|\n")
+
+
+def baseline_for(rows: dict, e: dict) -> dict | None:
+    r = e["row"]
+    bid = f"baseline-n{r['n']}-r{r['rate']:g}" + (f"-{r['preset']}" if r["preset"] != "default" else "")
+    if r.get("stagger_s"):
+        bid += f"-st{int(round(r['stagger_s'] * 1000))}"
+    if bid in rows:
+        return rows[bid]
+    # Same N, rate and transport without the stagger.
+    bid2 = f"baseline-n{r['n']}-r{r['rate']:g}" + (f"-{r['preset']}" if r["preset"] != "default" else "")
+    return rows.get(bid2)
+
+
+# --------------------------------------------------------------------------------------------
+# Targets.
+
+
+def verdict_max(v, limit, unit_fmt):
+    if v is None:
+        return "not measured", "-"
+    if isinstance(v, float) and math.isinf(v):
+        return "never", "**missed**"
+    if v <= limit:
+        return unit_fmt(v), "met"
+    return unit_fmt(v), f"**missed** by {unit_fmt(v - limit)} (x{v / limit:.2f})"
+
+
+def verdict_min(v, limit, unit_fmt):
+    if v is None:
+        return "not measured", "-"
+    if v >= limit:
+        return unit_fmt(v), "met"
+    return unit_fmt(v), f"**missed** by {unit_fmt(limit - v)}"
+
+
+def target_rows(rows: dict, rid: str, targets: list) -> str:
+    e = rows.get(rid)
+    out = ""
+    for label, key, kind, limit, fmt in targets:
+        if e is None:
+            out += f"| {label} | `{rid}` | not run | - |\n"
+            continue
+        a = e["agg"]
+        if key == "aborts_total":
+            v = a.get("aborts_total", 0)
+            runs = a.get("runs", 1)
+            out += f"| {label} | `{rid}` | {v} in {runs} run{'s' if runs != 1 else ''} | {'met' if v == 0 else '**missed**'} |\n"
+            continue
+        if key == "converged":
+            c = a.get("converge_s")
+            ok = c is not None and not math.isinf(c)
+            out += f"| {label} | `{rid}` | {f_s(c)} (supervisor: converged in {a.get('sup_converged_runs', 0)} of {a.get('runs', 1)} runs) | {'met' if ok else '**missed**'} |\n"
+            continue
+        if key == "ratio_p50" or key == "ratio_p99":
+            base = baseline_for(rows, e)
+            k = "age_p50_ms" if key == "ratio_p50" else "age_p99_ms"
+            if base is None or a.get(k) is None or not base["agg"].get(k):
+                out += f"| {label} | `{rid}` | no baseline | - |\n"
+                continue
+            v = a[k] / base["agg"][k]
+            txt, verdict = verdict_max(v, limit, lambda x: f"{x:.2f}")
+            out += f"| {label} | `{rid}` vs `{base['row']['id']}` | x{txt} | {verdict} |\n"
+            continue
+        v = a.get(key)
+        txt, verdict = (verdict_min if kind == "min" else verdict_max)(v, limit, fmt)
+        out += f"| {label} | `{rid}` | {txt} | {verdict} |\n"
+    return out
+
+
+# --------------------------------------------------------------------------------------------
+
+
+def render(store: dict, path: Path, plan: dict) -> None:
+    """plan: {"main": [row ids], "levers": [{"name", "question", "rows": [ids], "note"}], "targets": {...},
+    "presets": {name: about}, "notes": [str], "limits": str}"""
+    rows = store.get("rows", {})
+    m = store.get("machine", {})
+    o = []
+    o.append("# Benchmarks\n\n")
+    o.append("Generated by `scripts/bench.sh` (do not edit by hand: rerun it). Every figure below comes from the "
+             "processes themselves: agents and baseline processes publish `AgentStatus` (loop ticks, overruns, "
+             "lateness, neighbours heard, samples received, data age percentiles, CPU, RSS), recorded by "
+             "`shapeform_bench_probe`; convergence from the supervisor's `SwarmMetrics`; supervisor and host CPU and "
+             "the kernel's UDP counters from `/proc`.\n\n")
+    o.append(f"- **Date**: {store.get('date', '-')}; **commit**: `{store.get('commit', '-')}`"
+             f"{'; **quick mode** (1 run per row, short windows)' if store.get('quick') else ''}\n")
+    o.append(f"- **Machine**: {m.get('cpu', '?')}, {m.get('host_cpus', '?')} CPUs, {m.get('mem_gb', '?')} GB RAM, "
+             f"{m.get('os', '?')}, kernel {m.get('kernel', '?')}, Fast DDS {m.get('fastdds', '?')}\n")
+    o.append(f"- **Kernel socket limits**: net.core.rmem_max = {m.get('rmem_max', '?')}, wmem_max = {m.get('wmem_max', '?')}, "
+             f"rmem_default = {m.get('rmem_default', '?')} (bench.sh does not change them)\n")
+    o.append("- **Runs**: each row is the median of its runs (the per-run values are in "
+             "`docs/figures/bench_results.json`); rerun one row with the command in the last table.\n\n")
+
+    for note in plan.get("headline", []):
+        o.append(note + "\n")
+    o.append("\n")
+
+    # Targets
+    o.append("## Targets\n\n| target | row | measured | verdict |\n|---|---|---|---|\n")
+    for rid, targets in plan.get("targets", []):
+        o.append(target_rows(rows, rid, targets))
+    o.append("\n")
+    if plan.get("limits"):
+        o.append(plan["limits"] + "\n\n")
+
+    # Main table
+    o.append("## Agents and baseline\n\n")
+    o.append(plan.get("main_intro", "") + "\n\n")
+    o.append(TABLE_HEAD)
+    for rid in plan.get("main", []):
+        if rid in rows:
+            o.append(table_line(rid, rows[rid]))
+    o.append("\n")
+    o.append("### Agent figures as a ratio to the baseline (same N, rate and transport)\n\n")
+    o.append(RATIO_HEAD)
+    for rid in plan.get("main", []):
+        e = rows.get(rid)
+        if e and e["row"]["kind"] != "baseline":
+            o.append(ratio_line(rid, e, baseline_for(rows, e)))
+    o.append("\n![delivery and p99 data age against N](figures/bench_scaling.png)\n\n")
+
+    # Levers
+    o.append("## Levers, measured one at a time\n\n")
+    o.append(plan.get("levers_intro", "") + "\n\n")
+    for lv in plan.get("levers", []):
+        o.append(f"### {lv['name']}\n\n{lv['question']}\n\n")
+        present = [rid for rid in lv["rows"] if rid in rows]
+        if not present:
+            o.append("_not run yet: `scripts/bench.sh --levers`_\n\n")
+            continue
+        o.append(TABLE_HEAD)
+        for rid in present:
+            o.append(table_line(rid, rows[rid]))
+        o.append("\n")
+        extra = lv.get("extra")
+        if extra:
+            o.append("| row | UDP datagrams in/s | UDP out/s | receive-buffer drops/s | our CPU (% of one core) |\n|---|---|---|---|---|\n")
+            for rid in present:
+                a = rows[rid]["agg"]
+                o.append(f"| `{rid}` | {f_num(a.get('udp_in_per_s'), '{:.0f}')} | {f_num(a.get('udp_out_per_s'), '{:.0f}')} "
+                         f"| {f_num(a.get('udp_rcvbuf_errors_per_s'), '{:.0f}')} | {f_num(a.get('ours_cpu_pct'), '{:.0f}')} |\n")
+            o.append("\n")
+        if lv.get("note"):
+            o.append(lv["note"] + "\n\n")
+
+    # Experiments
+    exp = [rid for rid, e in rows.items() if e["row"].get("section") == "experiment"]
+    if exp:
+        o.append("### Other measured rows\n\n" + TABLE_HEAD)
+        for rid in sorted(exp):
+            o.append(table_line(rid, rows[rid]))
+        o.append("\n")
+
+    # Simulator
+    o.append("## Simulator\n\n")
+    sim = store.get("sim") or {}
+    if not sim.get("available"):
+        o.append("| N | impl | Euler steps/s | RSS MB | target |\n|---|---|---|---|---|\n")
+        for n in SIM_SIZES:
+            for impl in ("fast", "reference"):
+                o.append(f"| {n} | {impl} | not available | - | - |\n")
+        o.append("\n`build/bin/shapeform_bench_sim` was not built when this report was generated.\n\n")
+    else:
+        o.append("One core (`taskset -c 0`), paper law, Euler dt = 1. `fast`: the batched, vectorised implementation the "
+                 "simulator uses; `reference`: the plain scalar O(N^2) implementation kept for comparison.\n\n")
+        o.append("| N | impl | Euler steps/s | RSS MB | speed-up vs reference | target | verdict |\n|---|---|---|---|---|---|---|\n")
+        by = {(r["agents"], r["impl"]): r for r in sim["rows"]}
+        for n in SIM_SIZES:
+            for impl in ("fast", "reference"):
+                r = by.get((n, impl))
+                if r is None:
+                    continue
+                sps = r.get("steps_per_s")
+                ref = by.get((n, "reference"), {}).get("steps_per_s")
+                speed = f"x{sps / ref:.1f}" if impl == "fast" and sps and ref else ""
+                target = SIM_TARGETS.get(n) if impl == "fast" else None
+                if target is None:
+                    tgt, verdict = "", ""
+                else:
+                    tgt = f">= {target:g}/s"
+                    verdict = "met" if sps is not None and sps >= target else (
+                        f"**missed** by {target - sps:.1f}/s" if sps is not None else "not measured")
+                val = f"{sps:,.1f}" if sps is not None else f"failed: {r.get('error', '?')}"
+                o.append(f"| {n} | {impl} | {val} | {f_num(r.get('rss_mb'))} | {speed} | {tgt} | {verdict} |\n")
+        o.append("\n")
+
+    # Rerun commands
+    o.append("## Rerun a row\n\n| row | command |\n|---|---|\n")
+    for rid in sorted(rows):
+        o.append(f"| `{rid}` | `{rows[rid].get('command', '-')}` |\n")
+    if sim.get("available"):
+        for r in sim["rows"]:
+            o.append(f"| sim {r['agents']} {r['impl']} | `{r['command']}` |\n")
+    o.append("\n")
+
+    # Method
+    o.append("## Method\n\n" + plan.get("method", "") + "\n")
+    o.append("\n### Transport configurations\n\n| config | what it sets |\n|---|---|\n")
+    for name, about in plan.get("presets", {}).items():
+        o.append(f"| `{name}` | {about} |\n")
+    o.append("\n")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text("".join(o))

@@ -144,10 +144,14 @@ def centre_at(track, t):
     return o + R * np.array([math.cos(a), math.sin(a)]), R * w * np.array([-math.sin(a), math.cos(a)])
 
 
-def run(start, shape, steps, schedule="sync", phases=None, g=GAINS, dt=1.0, track=None, ff=False):
+def run(start, shape, steps, schedule="sync", phases=None, g=GAINS, dt=1.0, track=None, ff=False,
+        compensate=False):
     """Positions over steps 0..steps (list of arrays) and per-step metrics (list of dicts).
     track: None (static shape) or a centre path dict (path fixed|line|circle, ...) for a circle
-    shape around C(t); ff adds dC/dt to every agent's velocity (tracking.feedforward)."""
+    shape around C(t); ff adds dC/dt to every agent's velocity (tracking.feedforward).
+    compensate (async, ff): an agent moves the neighbours that already stepped in this period back by
+    dC/dt*dt, i.e. it sees every neighbour in the centre's frame of its own step (x_j + v_C (t_i - t_j)
+    with the neighbours' model times): a proposed fix for the agent, not what it does now."""
     x = np.array(start, dtype=float)
     n = len(x)
     cen = (lambda t: centre_at(track, t)) if track else (lambda t: (None, np.zeros(2)))
@@ -160,10 +164,16 @@ def run(start, shape, steps, schedule="sync", phases=None, g=GAINS, dt=1.0, trac
         if schedule == "sync":
             x = x + dt * (velocities(x, shape, g, c) + add)
         else:
+            stepped = np.zeros(n, bool)
             for i in order:  # each agent in its phase order sees the others' newest positions
                 others = idx != i
+                ox = x[others]
+                if compensate and ff:
+                    ox = ox.copy()
+                    ox[stepped[others]] -= dt * vc
                 xt = target(shape, x[i:i + 1], c)[0]
-                x[i] = x[i] + dt * (velocity_one(i, x[i].copy(), idx[others], x[others], xt, g) + add)
+                x[i] = x[i] + dt * (velocity_one(i, x[i].copy(), idx[others], ox, xt, g) + add)
+                stepped[i] = True
         out_x.append(x.copy())
         out_m.append(metrics(x, shape, cen((k + 1) * dt)[0]))
     return out_x, out_m

@@ -16,6 +16,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+sys.dont_write_bytecode = True  # no __pycache__ in scripts/
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import paper_experiments as P  # noqa: E402
 
@@ -132,19 +133,21 @@ def fig2(data, out, K, agent=0):
         if not r:
             continue
         ax = axs[j]
-        for kind, ls, lab in (("dist", "-", "processes"), ("sim", "--", "simulator")):
+        for kind, c1, c2, lw, lab in (("sim", "lightsalmon", "lightskyblue", 2.2, "simulator"),
+                                      ("dist", "tab:red", "tab:blue", 1.0, "processes")):
             tr = trajectories(r[f"{kind}_pos"]).get(agent)
             if not tr:
                 continue
-            ax.plot(tr[0], tr[1], ls, color="tab:red", lw=1.2, label=f"x1 ({lab})")
-            ax.plot(tr[0], tr[2], ls, color="tab:blue", lw=1.2, label=f"x2 ({lab})")
+            ax.plot(tr[0], tr[1], "-", color=c1, lw=lw, label=f"x1 ({lab})")
+            ax.plot(tr[0], tr[2], "-", color=c2, lw=lw, label=f"x2 ({lab})")
         ax.set_xlim(0, K)
         ax.set_title(f"{s}: agent {agent}", fontsize=10)
         ax.set_xlabel("iteration")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
-    fig.suptitle("Fig. 2 analogue: one agent's position components against time (solid: agent processes, "
-                 "dashed: simulator, same start)", fontsize=11)
+    fig.suptitle("Fig. 2 analogue: one agent's position components against time, agent processes (dark) and "
+                 "simulator (light) from the same start\n(the wiggle is Euler dt=1 chatter; in the processes the "
+                 "resting ring slowly turns, an effect of the agents' unsynchronised ticks)", fontsize=11)
     fig.tight_layout()
     save(fig, out, "paper_fig2_agent_states.png")
 

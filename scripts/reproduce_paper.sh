@@ -5,8 +5,8 @@
 #
 #   scripts/reproduce_paper.sh [--quick] [--build DIR] [--data DIR] [--domain D] [--direct]
 #
-#   --quick       shortened runs (200 iterations everywhere; a few minutes less)
-#   --build DIR   build folder holding bin/ (default: build; built with scripts/build.sh if missing)
+#   --quick       shortened runs: 200 iterations everywhere (about half the time)
+#   --build DIR   build folder holding bin/ (default: build; configured and built, Release, if missing)
 #   --data DIR    where the recorded CSV files go (default: BUILD/paper)
 #   --domain D    first of 9 DDS domain ids the experiments cycle through (default 131: 131..139)
 #   --direct      start the processes here instead of through scripts/launch_swarm.sh
@@ -17,6 +17,7 @@
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 py=/usr/bin/python3 # Debian's python3 with python3-matplotlib (scripts/install_deps.sh)
+export PYTHONDONTWRITEBYTECODE=1 # no __pycache__ in scripts/
 
 quick=() build="$root/build" data="" domain=131 backend=auto
 while [ $# -gt 0 ]; do

@@ -810,8 +810,8 @@ Config convert(const YAML::Node& root, bool version_required, Reader& rd) {
            tr.socket_buffer_bytes);
     const Entry multicast = get(m, s, "multicast_data");
     assign(rd.boolean(multicast), tr.multicast_data);
-    if (tr.multicast_data && tr.profile == "lan")
-      rd.bad(multicast, "needs transport.profile loopback or discovery-server (profile is lan)");
+    if (tr.multicast_data && tr.profile != "loopback")
+      rd.bad(multicast, "needs transport.profile loopback (profile is " + tr.profile + ")");
   }
   if (shape_ok) compile_shape(c.command, shape_keys, rd);
   return c;

@@ -91,9 +91,8 @@ void validate_common(const config::TransportConfig& cfg) {
   if (cfg.socket_buffer_bytes < 0) {
     fail("transport.socket_buffer_bytes: must be >= 0, got " + str(cfg.socket_buffer_bytes));
   }
-  if (cfg.multicast_data && cfg.profile == "lan") {
-    fail("transport.multicast_data: only the loopback and discovery-server profiles support it, got profile " +
-         quoted(cfg.profile));
+  if (cfg.multicast_data && cfg.profile != "loopback") {
+    fail("transport.multicast_data: only the loopback profile supports it, got profile " + quoted(cfg.profile));
   }
 }
 

@@ -26,7 +26,6 @@ and a supervisor on loopback; fixed seeds; each test's runs one after another on
 Run directly: test_paper_claims.py --bin build/bin --source . --domain 140 [unittest args]
 """
 import csv
-import json
 import os
 import statistics
 import sys

@@ -12,7 +12,8 @@ averaged over the last part of the run (the metrics of both come from the same c
     from step to step (ellipse: 0.35..0.52), so the processes' mean must lie in the simulator's
     band over seeds 1..12 at the same K, widened by 10 % (a wrong shape or law lands far outside);
   - all: the gap CV as uniform as the simulator's, every agent apart (clusters = 12);
-  - line: the swarm lies on the line (shape error ~0 by step 600) and keeps growing along it.
+  - line: the swarm comes to lie on the line (shape error ~0, from step ~600 at worst) and keeps
+    growing along it.
 """
 import os
 import sys
@@ -109,23 +110,31 @@ class ShapesTest(harness.SwarmTestCase):
         self.check_closed_shape("ellipse", steps=300, window=150, widen=0.05)
 
     def test_line(self):
-        steps, rate = 600, 100.0
+        # The line of 12 first hovers ~0.5 off the line (step 300: 0.48 for seed 1), then spreads
+        # along it and lies on it: by step 800 for all of seeds 1..20 in the simulator, by ~600 at
+        # worst in the processes' runs. K = 1000 at 100 Hz leaves that margin.
+        steps, rate = 1000, 100.0
         summary, rows = self.run_swarm("line", steps, rate)
         sim_err, sim = self.sim_window("line", steps, "shape_error_mean", steps, SEED)
         extents = [self.sim_window("line", steps, "extent", steps, seed)[0] for seed in range(1, SEEDS + 1)]
-        sys.stderr.write("line: processes shape_error %.6f extent %.2f; simulator seed %d %.6f extent %.2f, "
-                         "seeds 1..%d extents %.1f..%.1f\n" % (summary["shape_error_mean"], summary["extent"], SEED,
-                                                               sim["shape_error_mean"], sim["extent"], SEEDS,
-                                                               min(extents), max(extents)))
+        off = [float(r["model_time"]) for r in rows if (fnum(r["shape_error_mean"]) or 0.0) > 0.02]
+        sys.stderr.write("line: processes shape_error %.6f extent %.2f, last sample off the line at t=%s; "
+                         "simulator seed %d %.6f extent %.2f, seeds 1..%d extents %.1f..%.1f\n"
+                         % (summary["shape_error_mean"], summary["extent"], max(off) if off else None, SEED,
+                            sim["shape_error_mean"], sim["extent"], SEEDS, min(extents), max(extents)))
         self.assertLess(sim["shape_error_mean"], 0.01)  # the simulator's fact this test relies on
         self.assertLess(summary["shape_error_mean"], 0.02, "the agents lie on the line")
         self.assertLess(summary["shape_error_max"], 0.05, "every agent lies on the line")
+        late = [r for r in rows if float(r["model_time"]) >= 0.8 * steps]
+        self.assertTrue(late, "no metrics recorded after t=%d" % (0.8 * steps))
+        self.assertLessEqual(max(fnum(r["shape_error_mean"]) for r in late), 0.02, "the swarm stays on the line")
         # Growing: the extent keeps increasing along the run, as in the simulator.
         half = [fnum(r["extent"]) for r in rows if abs(float(r["model_time"]) - steps / 2) < 10]
         self.assertTrue(half, "no metrics near t=%d" % (steps / 2))
         self.assertGreater(summary["extent"], mean(half) * 1.5, "the line keeps growing")
         self.assertTrue(0.9 * min(extents) <= summary["extent"] <= 1.1 * max(extents),
                         "extent %.2f outside the simulator's %.1f..%.1f" % (summary["extent"], min(extents), max(extents)))
+        self.assertEqual(summary["clusters"], AGENTS, "every agent apart from the others")
 
 
 if __name__ == "__main__":

@@ -1,0 +1,89 @@
+#!/usr/bin/python3
+"""Plots delivery ratio and p99 data age against N from docs/figures/bench_results.json.
+
+Usage: scripts/plot_bench.py [RESULTS_JSON] [OUT_PNG]
+Defaults: docs/figures/bench_results.json -> docs/figures/bench_scaling.png. Called by scripts/bench.sh.
+Needs Debian's python3-matplotlib (/usr/bin/python3).
+"""
+import json
+import math
+import sys
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def series(rows, kind, rate, preset, group=None):
+    pts = []
+    for e in rows.values():
+        r, a = e["row"], e["agg"]
+        if r["kind"] != kind or r["rate"] != rate or r["preset"] != preset or r.get("stagger_s", 0):
+            continue
+        if group is not None and r.get("group") != group:
+            continue
+        if r.get("section") not in ("main", None):
+            continue
+        pts.append((r["n"], a.get("delivery"), a.get("age_p99_ms"), a.get("age_p99_worst_ms")))
+    return sorted(pts)
+
+
+def main() -> int:
+    src = Path(sys.argv[1]) if len(sys.argv) > 1 else ROOT / "docs" / "figures" / "bench_results.json"
+    out = Path(sys.argv[2]) if len(sys.argv) > 2 else ROOT / "docs" / "figures" / "bench_scaling.png"
+    store = json.loads(src.read_text())
+    rows = store.get("rows", {})
+    main_presets = sorted({e["row"]["preset"] for e in rows.values() if e["row"].get("section") == "main"})
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
+    styles = {"baseline": ("o", "--"), "agents": ("s", "-"), "group": ("^", "-.")}
+    plotted = False
+    for preset in main_presets:
+        for kind in ("baseline", "agents", "group"):
+            for rate in (20.0, 50.0):
+                pts = series(rows, kind, rate, preset)
+                if not pts:
+                    continue
+                plotted = True
+                n = [p[0] for p in pts]
+                marker, ls = styles[kind]
+                label = f"{'agents, grouped' if kind == 'group' else kind} {rate:g} Hz" + (
+                    f" ({preset})" if len(main_presets) > 1 else "")
+                ax1.plot(n, [100 * p[1] if p[1] is not None else math.nan for p in pts], marker=marker, ls=ls,
+                         label=label)
+                ax2.plot(n, [p[2] if p[2] is not None else math.nan for p in pts], marker=marker, ls=ls, label=label)
+    if not plotted:
+        print("plot_bench: no main rows to plot", file=sys.stderr)
+        return 1
+    ax1.set_xlabel("agents N (processes unless grouped)")
+    ax1.set_ylabel("delivery ratio, %")
+    ax1.axhline(99, color="grey", lw=0.8, ls=":")
+    ax1.text(10, 99.05, "target 99 %", color="grey", fontsize=8)
+    ax1.set_title("State samples delivered (all-to-all)")
+    ax2.set_xlabel("agents N (processes unless grouped)")
+    ax2.set_ylabel("data age p99, ms (log)")
+    ax2.set_yscale("log")
+    ax2.axhline(100, color="grey", lw=0.8, ls=":")
+    ax2.axhline(5, color="grey", lw=0.8, ls=":")
+    ax2.set_title("Receive time minus sender stamp, p99")
+    for ax in (ax1, ax2):
+        ax.set_xscale("log")
+        ax.set_xticks([10, 25, 50, 100])
+        ax.get_xaxis().set_major_formatter(matplotlib.ticker.ScalarFormatter())
+        ax.grid(True, which="both", alpha=0.3)
+    ax2.legend(fontsize=7, loc="upper left")
+    m = store.get("machine", {})
+    fig.suptitle(f"shapeform on {m.get('host_cpus', '?')} CPUs ({m.get('cpu', '?')}), commit {store.get('commit', '?')}",
+                 fontsize=9)
+    fig.tight_layout()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=110)
+    print(f"plot_bench: wrote {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
