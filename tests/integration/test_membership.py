@@ -122,13 +122,19 @@ class MembershipTest(harness.SwarmTestCase):
             b = rows_before[i]
             self.assertLess(abs(math.hypot(r["x1"], r["x2"]) - math.hypot(b["x1"], b["x2"])), 0.3, "agent %d" % i)
         self.assert_all_alive(agents)
-        # The new supervisor continues after the epoch the agents follow, so its command is taken.
+        # The new supervisor continues after the epoch the agents follow, so its command is taken:
+        # every agent follows epoch 2 and moves onto the new circle (the old ring of radius ~4 is
+        # ~1 off it; the law's ring for r=3 and 10 agents is ~0.1 inside). Convergence itself is
+        # not asked for: the restart is a shape change like any other (tested elsewhere).
         self.assertEqual(sup2.command("shape circle r=3"), 2)
-        self.assertTrue(sup2.wait_converged(60), "the new command converges")
-        rows, metrics = sup2.status()
-        for i, r in rows.items():
-            self.assertEqual(r["epoch"], 2, "agent %d follows the new supervisor's epoch" % i)
-        self.assertLess(metrics["shape_error_mean"], 0.3)
+
+        def on_new_circle():
+            rows, m = sup2.status()
+            ok = (sorted(rows) == list(range(AGENTS)) and all(r["epoch"] == 2 for r in rows.values())
+                  and m["epoch"] == 2 and m["shape_error_mean"] is not None and m["shape_error_mean"] < 0.3)
+            return (rows, m) if ok else None
+
+        harness.poll(on_new_circle, 60, "every agent on epoch 2 and on the circle of radius 3", 0.5)
         sup2.send("quit")
         self.assertEqual(sup2.wait(20), 0)
 
