@@ -6,8 +6,9 @@
 
 namespace shapeform::agent {
 
-AgentLogic::AgentLogic(std::int32_t id, core::Vec2 start, std::int64_t timeout_ns)
-    : id_(id), x_(start), timeout_ns_(timeout_ns) {}
+AgentLogic::AgentLogic(std::int32_t id, core::Vec2 start, std::int64_t timeout_ns, bool lockstep,
+                       int max_wait_ticks)
+    : id_(id), x_(start), x_prev_(start), timeout_ns_(timeout_ns), lockstep_(lockstep), max_wait_ticks_(max_wait_ticks) {}
 
 bool AgentLogic::on_command(const core::Command& cmd, std::uint32_t epoch) {
   if (epoch <= epoch_) return false;
@@ -15,6 +16,16 @@ bool AgentLogic::on_command(const core::Command& cmd, std::uint32_t epoch) {
   core::ensure_curve(cmd_.shape);  // analytic shapes; expression shapes arrive compiled
   epoch_ = epoch;
   t_ = 0.0;
+  waited_ = 0;
+  x_prev_ = x_;
+  arc_prev_.reset();
+  if (lockstep_) {
+    // A late joiner starts at the step the swarm is at, so nobody waits for its past.
+    long k0 = 0;
+    for (const auto& [id, e] : table_)
+      if (e.cur.epoch == epoch) k0 = std::max(k0, step_of(e.cur.model_time));
+    t_ = static_cast<double>(k0) * cmd_.dt;
+  }
   if (target_ && target_->epoch != epoch) target_.reset();
   return true;
 }
@@ -27,15 +38,25 @@ void AgentLogic::on_target(const TargetSample& t) {
 }
 
 void AgentLogic::on_state(std::int32_t id, const core::Vec2& x, std::uint64_t seq, std::int64_t now_ns,
-                          std::uint32_t epoch, std::optional<double> arc) {
+                          std::uint32_t epoch, std::optional<double> arc, double model_time,
+                          std::optional<core::Vec2> prev_x, std::optional<double> prev_arc) {
   if (id == id_) return;
+  const Snapshot snap{x, epoch, model_time, arc};
+  // The sender's previous step comes with the sample: a lost sample never leaves a hole in lockstep.
+  const std::optional<Snapshot> before =
+      prev_x ? std::optional<Snapshot>(Snapshot{*prev_x, epoch, model_time - cmd_.dt, prev_arc}) : std::nullopt;
   auto it = table_.find(id);
   if (it == table_.end()) {
-    table_.emplace(id, Entry{x, now_ns, seq, epoch, arc});
+    table_.emplace(id, Entry{now_ns, seq, snap, before.value_or(snap)});
   } else {
-    if (seq <= it->second.seq) return;  // duplicate or reordered: keep the newest
-    counters_.samples_lost += seq - it->second.seq - 1;
-    it->second = Entry{x, now_ns, seq, epoch, arc};
+    Entry& e = it->second;
+    if (seq <= e.seq) return;  // duplicate or reordered: keep the newest
+    counters_.samples_lost += seq - e.seq - 1;
+    if (before) e.prev = *before;
+    else if (snap.epoch != e.cur.epoch || snap.model_time != e.cur.model_time) e.prev = e.cur;
+    e.cur = snap;
+    e.seq = seq;
+    e.last_seen_ns = now_ns;
   }
   ++counters_.samples_received;
 }
@@ -57,7 +78,7 @@ void AgentLogic::drop_stale(std::int64_t now_ns) {
 
 std::optional<core::Vec2> AgentLogic::tracked_centre() const {
   if (!cmd_.tracking.enabled) return std::nullopt;
-  if (target_) return target_->centre + target_age_ * target_->velocity;
+  if (target_ && !lockstep_) return target_->centre + target_age_ * target_->velocity;
   return core::centre_at(cmd_.tracking.path, t_);
 }
 
@@ -75,34 +96,58 @@ core::Command AgentLogic::effective_command() const {
 
 std::optional<double> AgentLogic::arc() const {
   if (!has_command()) return std::nullopt;
-  const core::Command local = effective_command();
-  const double t = cmd_.tracking.enabled && target_ ? 0.0 : t_;
+  const bool follow_target = cmd_.tracking.enabled && target_ && !lockstep_;
+  const core::Command local = follow_target ? effective_command() : cmd_;
+  const double t = follow_target ? 0.0 : t_;
   const core::ShapeSpec s = core::shape_at(local, t);
   return core::closest_point(s, *core::curve_of(s), x_).s;
 }
 
-void AgentLogic::step() {
+bool AgentLogic::step() {
   if (!has_command()) {
     v_ = core::Vec2::Zero();
-    return;
+    return false;
   }
   const bool arc_law = cmd_.law == core::Law::Arc;
+  const long k = step_of(t_);
   nbrs_.clear();
+  bool ready = true;
   for (const auto& [id, e] : table_) {
-    core::Neighbour n{id, e.x};
-    if (arc_law && e.epoch == epoch_ && e.arc) n.s = *e.arc;
+    // Lockstep: the neighbour's state of step k (the newest, or the one before if it is already
+    // ahead); free running: the newest.
+    const Snapshot* use = &e.cur;
+    if (lockstep_) {
+      const long cur = step_of(e.cur.model_time);
+      if (e.cur.epoch != epoch_ || cur < k) ready = false;
+      else if (cur > k && e.prev.epoch == epoch_ && step_of(e.prev.model_time) == k) use = &e.prev;
+    }
+    core::Neighbour n{id, use->x};
+    if (arc_law && use->epoch == epoch_ && use->arc) n.s = *use->arc;
     nbrs_.push_back(n);
+  }
+  if (lockstep_ && !ready) {
+    // Hold until every neighbour has published step k; past the bound, go on without the laggard
+    // (free running) until it catches up.
+    if (++waited_ <= max_wait_ticks_) {
+      v_ = core::Vec2::Zero();
+      return false;
+    }
+  } else {
+    waited_ = 0;
   }
   // Deterministic neighbour order (ids ascending) so results never depend on hash order.
   std::sort(nbrs_.begin(), nbrs_.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
 
-  const bool follow_target = cmd_.tracking.enabled && target_;
+  const bool follow_target = cmd_.tracking.enabled && target_ && !lockstep_;
   const core::StepResult r =
       core::agent_step(follow_target ? effective_command() : cmd_, id_, x_, nbrs_, follow_target ? 0.0 : t_);
+  arc_prev_ = arc_law ? arc() : std::nullopt;
+  x_prev_ = x_;
   x_ = r.x;
   v_ = r.v;
   t_ += cmd_.dt;
   target_age_ += cmd_.dt;
+  return true;
 }
 
 core::Vec2 seeded_start(std::int32_t id, int n, std::uint64_t seed, double half_width) {

@@ -29,7 +29,10 @@ struct AgentCounters {
 class AgentLogic {
  public:
   /// timeout_ns: a neighbour unheard for longer is dropped (neighbour_timeout periods).
-  AgentLogic(std::int32_t id, core::Vec2 start, std::int64_t timeout_ns);
+  /// lockstep: see step(); max_wait_ticks bounds how long a lockstep agent waits for a neighbour that
+  /// is alive but does not advance (e.g. it refused the command), after which it steps without it.
+  AgentLogic(std::int32_t id, core::Vec2 start, std::int64_t timeout_ns, bool lockstep = false,
+             int max_wait_ticks = 50);
 
   /// Adopts cmd if epoch is newer than the one followed; returns whether it did. Model time restarts.
   bool on_command(const core::Command& cmd, std::uint32_t epoch);
@@ -38,8 +41,12 @@ class AgentLogic {
   /// A valid neighbour state received at now_ns. Own samples are ignored. epoch and arc: the command
   /// the neighbour follows and its arc length along that command's shape (used by the arc law only
   /// when the epoch is the one this agent follows).
+  /// model_time: the neighbour's model time after its last step (its step tag, for lockstep).
+  /// prev_x / prev_arc: the sender's state one step earlier (carried in every sample so that a lost
+  /// sample does not break lockstep).
   void on_state(std::int32_t id, const core::Vec2& x, std::uint64_t seq, std::int64_t now_ns,
-                std::uint32_t epoch = 0, std::optional<double> arc = std::nullopt);
+                std::uint32_t epoch = 0, std::optional<double> arc = std::nullopt, double model_time = 0.0,
+                std::optional<core::Vec2> prev_x = std::nullopt, std::optional<double> prev_arc = std::nullopt);
   /// The neighbour left (its instance was disposed or lost its writer): drop it now.
   void on_gone(std::int32_t id);
   void count_rejected() { ++counters_.samples_rejected; }
@@ -48,7 +55,11 @@ class AgentLogic {
   void drop_stale(std::int64_t now_ns);
   /// One control step: the law for the command and target in force, integrated over cmd.dt.
   /// Before the first command the agent holds its position.
-  void step();
+  /// Lockstep (agent.sync: lockstep): step k -> k+1 is taken only once every neighbour has published
+  /// its state of step k for the same command, and uses exactly those states; the tracked centre is
+  /// then the command's path at the agent's own model time. This is the simulator's synchronous
+  /// update, so processes and simulator compute the same numbers. Returns whether it stepped.
+  bool step();
 
   std::int32_t id() const { return id_; }
   const core::Vec2& position() const { return x_; }
@@ -64,21 +75,34 @@ class AgentLogic {
   /// This agent's arc length along the shape in force (published so the others need not project it);
   /// nullopt before the first command.
   std::optional<double> arc() const;
+  /// Position and arc length before the last step (equal to the current ones before any step).
+  const core::Vec2& previous_position() const { return x_prev_; }
+  const std::optional<double>& previous_arc() const { return arc_prev_; }
 
  private:
-  struct Entry {
+  struct Snapshot {
     core::Vec2 x;
-    std::int64_t last_seen_ns;
-    std::uint64_t seq;
     std::uint32_t epoch;
+    double model_time;  ///< the sender's model time after its step (step tag = model_time / dt)
     std::optional<double> arc;
   };
+  struct Entry {
+    std::int64_t last_seen_ns;
+    std::uint64_t seq;
+    Snapshot cur, prev;  ///< the newest state and the one before (lockstep needs step k after k+1)
+  };
+  long step_of(double model_time) const { return std::lround(model_time / cmd_.dt); }
   /// The command actually integrated now: tracking follows the latest target from its last position.
   core::Command effective_command() const;
   std::int32_t id_;
   core::Vec2 x_;
   core::Vec2 v_ = core::Vec2::Zero();
+  core::Vec2 x_prev_;
+  std::optional<double> arc_prev_;
   std::int64_t timeout_ns_;
+  bool lockstep_;
+  int max_wait_ticks_;
+  int waited_ = 0;
   core::Command cmd_;
   std::uint32_t epoch_ = 0;
   double t_ = 0.0;  ///< model time since the command was adopted

@@ -51,7 +51,8 @@ int run_agents(const std::vector<std::int32_t>& ids, const std::vector<core::Vec
   const auto timeout_ns = static_cast<std::int64_t>(cfg.agent.neighbour_timeout_periods * period_s * 1e9);
   std::vector<std::unique_ptr<AgentLogic>> logics;
   logics.reserve(ids.size());
-  for (std::size_t k = 0; k < ids.size(); ++k) logics.push_back(std::make_unique<AgentLogic>(ids[k], starts[k], timeout_ns));
+  for (std::size_t k = 0; k < ids.size(); ++k) logics.push_back(std::make_unique<AgentLogic>(ids[k], starts[k], timeout_ns, cfg.agent.lockstep,
+                                                 static_cast<int>(std::lround(5.0 * cfg.agent.rate_hz))));
   {
     std::ostringstream s;
     if (group) {
@@ -135,7 +136,9 @@ int run_agents(const std::vector<std::int32_t>& ids, const std::vector<core::Vec
         const core::Vec2 x(s.msg.x(), s.msg.y());
         const std::optional<double> arc = s.msg.has_arc() ? std::optional<double>(s.msg.arc()) : std::nullopt;
         for (auto& l : logics)  // own id ignored
-          l->on_state(s.msg.id(), x, s.msg.seq(), s.receive_stamp_ns, s.msg.epoch(), arc);
+          l->on_state(s.msg.id(), x, s.msg.seq(), s.receive_stamp_ns, s.msg.epoch(), arc, s.msg.model_time(),
+                      core::Vec2(s.msg.prev_x(), s.msg.prev_y()),
+                      s.msg.has_arc() ? std::optional<double>(s.msg.prev_arc()) : std::nullopt);
         // Data age of samples from agents hosted elsewhere (a process's own samples are not a delivery).
         const bool hosted = std::find(ids.begin(), ids.end(), s.msg.id()) != ids.end();
         if (!hosted && ages_us.size() < ages_us.capacity())
@@ -160,6 +163,9 @@ int run_agents(const std::vector<std::int32_t>& ids, const std::vector<core::Vec
         const std::optional<double> arc = l.command().law == core::Law::Arc ? l.arc() : std::nullopt;
         out.has_arc(arc.has_value());
         out.arc(arc.value_or(0.0));
+        out.prev_x(l.previous_position().x());
+        out.prev_y(l.previous_position().y());
+        out.prev_arc(l.previous_arc().value_or(arc.value_or(0.0)));
         state_writer.write(out);
       }
 

@@ -142,7 +142,7 @@ int run(std::int32_t id, const config::Config& cfg) {
     auto* state_writer = publisher->create_datawriter(state_topic, sdds::writer_qos(sdds::TopicId::State));
     auto* status_writer = publisher->create_datawriter(status_topic, sdds::writer_qos(sdds::TopicId::Status));
     StateListener listener(id);
-    auto* state_reader = subscriber->create_datareader(state_topic, sdds::reader_qos(sdds::TopicId::State), &listener,
+    auto* state_reader = subscriber->create_datareader(state_topic, sdds::reader_qos(sdds::TopicId::State, cfg.transport), &listener,
                                                        fdds::StatusMask::data_available());
     if (!state_writer || !status_writer || !state_reader) throw std::runtime_error("create endpoint failed");
 

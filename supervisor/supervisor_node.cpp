@@ -361,9 +361,11 @@ void Supervisor::print_summary(std::int64_t now) {
   }
   auto& ids = j["final_ids"] = nlohmann::json::array();
   auto& fp = j["final_positions"] = nlohmann::json::array();
+  auto& ft = j["final_model_times"] = nlohmann::json::array();  // each agent's own model time
   for (const auto& [id, x] : monitor_.alive_positions(now)) {
     ids.push_back(id);
     fp.push_back({x.x(), x.y()});
+    ft.push_back(monitor_.agents().at(id).model_time);
   }
   j["samples_rejected"] = rejected_;
   j["recording"] = recorder_.is_open() ? nlohmann::json(recorder_.dir().string()) : nlohmann::json(nullptr);

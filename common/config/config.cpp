@@ -46,6 +46,7 @@ constexpr Name<core::ShapeKind> kShapeNames[] = {{core::ShapeKind::Line, "line"}
                                                  {core::ShapeKind::Implicit, "implicit"},
                                                  {core::ShapeKind::Polygon, "polygon"}};
 constexpr Name<core::Law> kLawNames[] = {{core::Law::Paper, "paper"}, {core::Law::Arc, "arc"}};
+constexpr Name<bool> kSyncNames[] = {{false, "free"}, {true, "lockstep"}};
 constexpr Name<core::CentrePath::Kind> kPathNames[] = {{core::CentrePath::Kind::Fixed, "fixed"},
                                                        {core::CentrePath::Kind::Line, "line"},
                                                        {core::CentrePath::Kind::Circle, "circle"}};
@@ -95,7 +96,7 @@ const std::map<std::string, std::vector<std::string>>& schema_sections() {
        {"k1", "k2", "sigma", "beta", "r", "max_speed", "law", "k_normal", "k_tangent", "spacing"}},
       {"integration", {"integrator", "dt"}},
       {"sim", {"steps"}},
-      {"agent", {"rate_hz", "neighbour_timeout_periods", "status_rate_hz"}},
+      {"agent", {"rate_hz", "neighbour_timeout_periods", "status_rate_hz", "sync"}},
       {"supervisor",
        {"metrics_rate_hz", "target_rate_hz", "agent_timeout_s", "flush_s", "converge"}},
       {"supervisor.converge", {"band_abs", "band_rel", "gap_cv_max", "hold"}},
@@ -759,6 +760,7 @@ Config convert(const YAML::Node& root, bool version_required, Reader& rd) {
     assign(rd.real(get(m, s, "neighbour_timeout_periods"), at_least(1)),
            c.agent.neighbour_timeout_periods);
     assign(rd.real(get(m, s, "status_rate_hz"), above(0)), c.agent.status_rate_hz);
+    assign(rd.choice(get(m, s, "sync"), kSyncNames), c.agent.lockstep);
   }
   {
     const std::string s = "supervisor";
@@ -979,6 +981,7 @@ std::string to_yaml(const Config& c) {
   put_real(e, "rate_hz", c.agent.rate_hz);
   put_real(e, "neighbour_timeout_periods", c.agent.neighbour_timeout_periods);
   put_real(e, "status_rate_hz", c.agent.status_rate_hz);
+  e << YAML::Key << "sync" << YAML::Value << name_of(kSyncNames, c.agent.lockstep);
   e << YAML::EndMap;
 
   const auto& sup = c.supervisor;

@@ -47,6 +47,9 @@ struct AgentConfig {
   double rate_hz = 50.0;                  ///< control loop rate
   double neighbour_timeout_periods = 3.0; ///< drop a neighbour unheard for this many periods
   double status_rate_hz = 1.0;            ///< agent status publication rate
+  /// How agents step: false = free running (each on its own clock, using the newest neighbour states);
+  /// true = lockstep (step k+1 waits for every neighbour's step k: the simulator's synchronous update).
+  bool lockstep = false;
 };
 
 /// Supervisor settings.

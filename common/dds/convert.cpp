@@ -232,6 +232,11 @@ bool valid_state(const msg::AgentState& s, std::string& why) {
   const bool fvx = p.finite("vx", s.vx());
   const bool fvy = p.finite("vy", s.vy());
   p.finite("arc", s.arc());
+  const bool fpx = p.finite("prev_x", s.prev_x());
+  const bool fpy = p.finite("prev_y", s.prev_y());
+  p.finite("prev_arc", s.prev_arc());
+  if (fpx && std::abs(s.prev_x()) > kStateLimit) p.add("prev_x", "|prev_x| must be <= 1e6, got " + num(s.prev_x()));
+  if (fpy && std::abs(s.prev_y()) > kStateLimit) p.add("prev_y", "|prev_y| must be <= 1e6, got " + num(s.prev_y()));
   if (fx && std::abs(s.x()) > kStateLimit) p.add("x", "|x| must be <= 1e6, got " + num(s.x()));
   if (fy && std::abs(s.y()) > kStateLimit) p.add("y", "|y| must be <= 1e6, got " + num(s.y()));
   if (fvx && fvy) {

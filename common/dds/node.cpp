@@ -65,6 +65,7 @@ Node::Node(const config::TransportConfig& cfg, const std::string& name)
     : entities_(std::make_shared<detail::Entities>()) {
   // Any throw below destroys entities_, which deletes whatever was created so far.
   entities_->name = name;
+  entities_->transport = cfg;
   entities_->participant = create_participant(cfg, name);
 
   register_type<msg::AgentState>(entities_->participant, name);
@@ -113,7 +114,7 @@ fdds::DataWriter* Node::create_writer(TopicId id) {
 }
 
 fdds::DataReader* Node::create_reader(TopicId id, fdds::DataReaderListener* listener) {
-  fdds::DataReader* r = entities_->subscriber->create_datareader(topic(id), reader_qos(id), listener,
+  fdds::DataReader* r = entities_->subscriber->create_datareader(topic(id), reader_qos(id, entities_->transport), listener,
                                                                  fdds::StatusMask::data_available());
   if (r == nullptr) {
     throw std::runtime_error(std::string("create_datareader failed for topic ") + topic_name(id) +

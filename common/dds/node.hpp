@@ -69,6 +69,7 @@ struct Entities {
   eprosima::fastdds::dds::Subscriber* subscriber = nullptr;
   std::array<eprosima::fastdds::dds::Topic*, kAllTopics.size()> topics{};
   std::string name;
+  config::TransportConfig transport;  ///< the profile the participant was built from (reader locators)
 
   Entities() = default;
   Entities(const Entities&) = delete;
@@ -289,7 +290,7 @@ class Node {
     return Writer<Msg>(entities_, create_writer(id));
   }
 
-  /// A reader on topic id with reader_qos(id), its listener filling a mailbox of at most
+  /// A reader on topic id with reader_qos(id, transport), its listener filling a mailbox of at most
   /// mailbox_capacity samples. Msg must be the topic's type (else std::logic_error).
   template <class Msg>
   Reader<Msg> reader(TopicId id, std::size_t mailbox_capacity = kDefaultMailboxCapacity) {

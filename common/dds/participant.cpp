@@ -70,8 +70,8 @@ frtps::Locator_t udp_locator(const std::array<std::uint8_t, 4>& ip, std::uint32_
 
 frtps::Locator_t loopback_locator(std::uint32_t port) { return udp_locator({127, 0, 0, 1}, port); }
 
-/// RTPS well-known discovery multicast port of a domain: PB + DG * domain + d0 = 7400 + 250 d.
-std::uint32_t discovery_multicast_port(int domain) { return 7400u + 250u * static_cast<std::uint32_t>(domain); }
+/// RTPS well-known user-data multicast port of a domain: PB + DG * domain + d2 = 7400 + 250 d + 1.
+std::uint32_t user_multicast_port(int domain) { return 7400u + 250u * static_cast<std::uint32_t>(domain) + 1u; }
 
 void validate_common(const config::TransportConfig& cfg) {
   if (cfg.domain < 0 || cfg.domain > kMaxDomainId) {
@@ -179,25 +179,13 @@ fdds::DomainParticipantQos participant_qos(const config::TransportConfig& cfg, c
     fail("transport.profile: must be loopback, lan or discovery-server, got " + quoted(cfg.profile));
   }
 
-  if (cfg.multicast_data) {
-    // One multicast locator shared by every participant of the domain, for discovery announcements and
-    // user data: a writer whose matched readers share it sends each sample once
-    // (UDPTransportInterface::select_locators) and the kernel fans it out. Joined and sent on the
-    // whitelisted interfaces only (loopback profile: lo). It is the discovery multicast locator on
-    // purpose: Fast DDS 2.9 registers an output locator with its statistics module only when it is an
-    // initial peer, and sending to an unregistered one trips an assert (OutputTrafficManager.hpp:87).
-    const frtps::Locator_t group = udp_locator(kDataMulticastGroup, discovery_multicast_port(cfg.domain));
-    builtin.initialPeersList.clear();  // announcements: one datagram to the group, not one per peer id
-    builtin.initialPeersList.push_back(group);
-    builtin.metatrafficMulticastLocatorList.push_back(group);
-    // User endpoints advertise the group only. With a unicast locator as well, a writer would switch
-    // to unicast when a single reader is left, to a locator 2.9 never registered (the same assert).
-    pq.wire_protocol().default_unicast_locator_list.clear();
-    pq.wire_protocol().default_multicast_locator_list.push_back(group);
-  }
-
   pq.transport().user_transports.push_back(udp);
   return pq;
+}
+
+frtps::Locator_t data_multicast_locator(const config::TransportConfig& cfg) {
+  validate_common(cfg);
+  return udp_locator(kDataMulticastGroup, user_multicast_port(cfg.domain));
 }
 
 fdds::DomainParticipant* create_participant(const config::TransportConfig& cfg, const std::string& name) {
@@ -252,7 +240,7 @@ std::string describe(const config::TransportConfig& cfg) {
   os << ", domain " << cfg.domain << ", lease " << cfg.lease_s << " s, announce " << cfg.announce_s
      << " s";
   if (cfg.socket_buffer_bytes > 0) os << ", socket buffers " << cfg.socket_buffer_bytes << " B";
-  if (cfg.multicast_data) os << ", user data multicast 239.255.0.1";
+  if (cfg.multicast_data) os << ", state on multicast 239.255.0.1:" << (7400 + 250 * cfg.domain + 1);
   return os.str();
 }
 

@@ -17,8 +17,8 @@ namespace shapeform::dds {
 inline constexpr const char* kDiscoveryServerPrefix = "44.53.00.5f.45.50.52.4f.53.49.4d.41";
 /// Discovery-server client sync period, seconds (Fast DDS default 0.45 s; 0.1 s discovers faster).
 inline constexpr double kDiscoveryServerSyncPeriod_s = 0.1;
-/// Multicast group of user data when transport.multicast_data is on (administratively scoped,
-/// Fast DDS's default group; on the loopback profile it is joined and sent on lo only).
+/// Multicast group of State samples when transport.multicast_data is on (administratively scoped,
+/// Fast DDS's default group; with the loopback profile it is joined and sent on lo only).
 inline constexpr std::array<std::uint8_t, 4> kDataMulticastGroup = {239, 255, 0, 1};
 /// Largest valid DDS domain id (ports 7400 + 250 d must stay below 65536).
 inline constexpr int kMaxDomainId = 232;
@@ -34,11 +34,21 @@ inline constexpr int kMaxDomainId = 232;
 ///  - "discovery-server": CLIENT of server id 0 at `discovery_server` "host:port" (host an IPv4
 ///    address or "localhost"); UDPv4 whitelisted to 127.0.0.1 when the host is a loopback address.
 /// Lease and announcement period come from lease_s / announce_s; socket_buffer_bytes > 0 sets the
-/// UDP send and receive buffer sizes; multicast_data adds the user-data multicast locator
-/// 239.255.0.1:(7400 + 250 domain + 1) (any profile; on loopback it stays on lo). Pure: creates nothing.
+/// UDP send and receive buffer sizes (the kernel caps them at net.core.rmem_max / wmem_max).
+/// multicast_data (loopback only) changes no participant setting: see data_multicast_locator().
+/// Pure: creates nothing.
 /// Throws std::runtime_error naming the offending field ("transport.domain: must be in 0..232, got 300").
 eprosima::fastdds::dds::DomainParticipantQos participant_qos(const config::TransportConfig& cfg,
                                                              const std::string& name);
+
+/// The multicast locator readers of the State topic listen on when cfg.multicast_data is set:
+/// 239.255.0.1:(7400 + 250 domain + 1), the domain's user multicast port. A writer whose matched readers
+/// share it sends each sample once (UDPTransportInterface::select_locators) and the kernel fans it out;
+/// with the loopback profile's 127.0.0.1 whitelist it is joined and sent on lo only. Such readers
+/// advertise no unicast locator: a writer switching from the group to the unicast locator of its last
+/// reader would send to a locator Fast DDS 2.9 never registered and abort on an assert
+/// (statistics/rtps/messages/OutputTrafficManager.hpp:87). Throws like participant_qos().
+eprosima::fastrtps::rtps::Locator_t data_multicast_locator(const config::TransportConfig& cfg);
 
 /// Creates a participant on cfg.domain from participant_qos(cfg, name). Never returns null:
 /// throws std::runtime_error naming the problem. Free it with delete_participant().

@@ -2,6 +2,8 @@
 
 #include <stdexcept>
 
+#include "dds/participant.hpp"
+
 namespace shapeform::dds {
 namespace {
 
@@ -76,6 +78,16 @@ fdds::DataReaderQos reader_qos(TopicId id) {
   q.durability().kind = r.durability;
   set_history(r, q.history(), q.resource_limits());
   q.data_sharing().off();
+  return q;
+}
+
+fdds::DataReaderQos reader_qos(TopicId id, const config::TransportConfig& transport) {
+  fdds::DataReaderQos q = reader_qos(id);
+  if (transport.multicast_data && id == TopicId::State) {
+    // Only the high-rate all-to-all topic: low-rate reliable topics stay unicast, so their heartbeats
+    // and acknowledgements do not reach every process.
+    q.endpoint().multicast_locator_list.push_back(data_multicast_locator(transport));
+  }
   return q;
 }
 

@@ -6,6 +6,8 @@
 #include <fastdds/dds/publisher/qos/DataWriterQos.hpp>
 #include <fastdds/dds/subscriber/qos/DataReaderQos.hpp>
 
+#include "config/config.hpp"
+
 namespace shapeform::dds {
 
 enum class TopicId { State, Command, Target, Metrics, Status };
@@ -36,6 +38,10 @@ eprosima::fastdds::dds::DataWriterQos writer_qos(TopicId id);
 /// Reader QoS of a topic: the same reliability, durability and history as the writer. Keyed readers
 /// lift max_instances (Fast DDS default 10 would silently hide agents 11 and up).
 eprosima::fastdds::dds::DataReaderQos reader_qos(TopicId id);
+
+/// reader_qos(id), plus, when transport.multicast_data is set and id is State, the State multicast
+/// locator (data_multicast_locator) as the reader's only locator.
+eprosima::fastdds::dds::DataReaderQos reader_qos(TopicId id, const config::TransportConfig& transport);
 
 /// Heartbeat period of reliable writers, seconds (Fast DDS default 3 s).
 inline constexpr double kHeartbeatPeriod_s = 0.5;

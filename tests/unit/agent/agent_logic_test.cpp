@@ -3,6 +3,9 @@
 #include "agent_logic.hpp"
 #include "core/swarm.hpp"
 
+#include <numeric>
+#include <random>
+
 using namespace shapeform;
 using agent::AgentLogic;
 using core::Vec2;
@@ -139,4 +142,92 @@ TEST_CASE("arc law: agents exchanging their arc lengths reproduce the simulator"
   a.step();
   b.step();
   CHECK(a.position() == b.position());
+}
+
+namespace {
+/// Agents ticking once per period in a random order, each publishing after every tick (stepped or
+/// held), so that an agent sees some neighbours already at step k+1 and others still at k, as
+/// processes do; a fraction `loss` of deliveries is lost. Agents stop stepping at `steps`.
+std::vector<Vec2> run_shuffled(const core::Command& cmd, const std::vector<Vec2>& start, bool lockstep, long steps,
+                               double loss = 0.0) {
+  std::vector<AgentLogic> agents;
+  for (int i = 0; i < static_cast<int>(start.size()); ++i) agents.emplace_back(i, start[i], 60 * kMs, lockstep);
+  std::mt19937 rng(11);
+  std::bernoulli_distribution lost(loss);
+  std::vector<std::uint64_t> seq(start.size(), 0);
+  const auto publish = [&](int i) {
+    ++seq[i];
+    for (auto& b : agents)
+      if (!lost(rng))  // a best-effort sample may not arrive
+        b.on_state(i, agents[i].position(), seq[i], 0, agents[i].epoch(), agents[i].arc(), agents[i].model_time(),
+                   agents[i].previous_position(), agents[i].previous_arc());
+  };
+  // As processes do: agents publish while they hold, before the first command, so they know each other
+  // (the supervisor's `wait agents N` precedes `start`); a lockstep barrier waits only for known agents.
+  for (int round = 0; round < 20; ++round)
+    for (int i = 0; i < static_cast<int>(agents.size()); ++i) publish(i);
+  for (auto& a : agents) a.on_command(cmd, 1);
+  for (int i = 0; i < static_cast<int>(agents.size()); ++i) publish(i);
+  std::vector<int> order(agents.size());
+  std::iota(order.begin(), order.end(), 0);
+  for (int period = 0; period < 100 * steps; ++period) {
+    bool done = true;
+    for (const auto& a : agents) done = done && a.model_time() >= static_cast<double>(steps);
+    if (done) break;
+    std::shuffle(order.begin(), order.end(), rng);
+    for (int i : order) {
+      if (agents[i].model_time() < static_cast<double>(steps)) agents[i].step();
+      publish(i);
+    }
+  }
+  std::vector<Vec2> out;
+  for (const auto& a : agents) out.push_back(a.position());
+  return out;
+}
+}  // namespace
+
+TEST_CASE("lockstep agents in any tick order reproduce the simulator exactly", "[agent][lockstep]") {
+  for (auto law : {core::Law::Paper, core::Law::Arc}) {
+    core::Command cmd;
+    cmd.law = law;
+    cmd.shape.kind = core::ShapeKind::Square;
+    cmd.shape.a = 5;
+    const auto start = core::uniform_start(8, 3);
+    core::Swarm swarm(cmd, start);
+    for (int k = 0; k < 60; ++k) swarm.step();
+    const auto lock = run_shuffled(cmd, start, true, 60);
+    for (int i = 0; i < 8; ++i) CHECK((lock[i] - swarm.positions()[i]).norm() < 1e-12);
+    // Lost samples only delay a lockstep swarm: each sample also carries the sender's previous step.
+    const auto lossy = run_shuffled(cmd, start, true, 60, 0.3);
+    for (int i = 0; i < 8; ++i) CHECK((lossy[i] - swarm.positions()[i]).norm() < 1e-12);
+    // Free running under the same schedule is a different (asynchronous) iteration.
+    if (law == core::Law::Paper) {
+      const auto free = run_shuffled(cmd, start, false, 60);
+      double diff = 0;
+      for (int i = 0; i < 8; ++i) diff = std::max(diff, (free[i] - swarm.positions()[i]).norm());
+      CHECK(diff > 1e-6);
+    }
+  }
+}
+
+TEST_CASE("lockstep: wait for a lagging neighbour, a late joiner starts at the swarm's step", "[agent][lockstep]") {
+  core::Command cmd;
+  AgentLogic a(0, Vec2(1, 0), 60 * kMs, true, 3);
+  a.on_command(cmd, 1);
+  a.on_state(1, Vec2(-1, 0), 1, 0, 1, std::nullopt, 0.0);
+  CHECK(a.step());  // neighbour at step 0: step 0 -> 1
+  CHECK_FALSE(a.step());  // the neighbour has not published step 1 yet: hold
+  CHECK(a.model_time() == 1.0);
+  a.on_state(1, Vec2(-1, 0), 2, 0, 1, std::nullopt, 1.0);
+  CHECK(a.step());
+  CHECK(a.model_time() == 2.0);
+  // A neighbour that never advances is waited for at most max_wait_ticks (3) ticks.
+  int held = 0;
+  while (!a.step()) ++held;
+  CHECK(held == 3);
+  // A late joiner adopts the step of the swarm it joins.
+  AgentLogic late(5, Vec2(0, 3), 60 * kMs, true);
+  late.on_state(0, a.position(), 9, 0, 1, std::nullopt, a.model_time());
+  late.on_command(cmd, 1);
+  CHECK(late.model_time() == a.model_time());
 }

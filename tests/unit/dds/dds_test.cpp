@@ -573,35 +573,38 @@ TEST_CASE("loopback profile has no builtin transports and only unicast UDPv4 on 
   }
 }
 
-TEST_CASE("loopback multicast_data: discovery and user data on one multicast group, on lo only", "[dds][qos]") {
+TEST_CASE("multicast_data: State readers listen on one group on lo; nothing else changes", "[dds][qos]") {
   config::TransportConfig cfg;
   cfg.domain = 7;
+  const fdds::DomainParticipantQos plain = dds::participant_qos(cfg, "agent-1");
   cfg.multicast_data = true;
   const fdds::DomainParticipantQos q = dds::participant_qos(cfg, "agent-1");
-  CHECK_FALSE(q.transport().use_builtin_transports);
+  // The participant is the plain loopback one: unicast discovery and default locators on 127.0.0.1.
+  CHECK(q == plain);
   CHECK(only_udp(q)->interfaceWhiteList == std::vector<std::string>{"127.0.0.1"});
+  CHECK(q.wire_protocol().default_multicast_locator_list.empty());
 
-  const std::uint32_t port = 7400 + 250 * 7;  // the domain's discovery multicast port
-  auto is_group = [&](const frtps::Locator_t& l) {
-    return l.kind == LOCATOR_KIND_UDPv4 && frtps::IPLocator::toIPv4string(l) == "239.255.0.1" && l.port == port;
-  };
-  const auto& b = q.wire_protocol().builtin;
-  // Announcements go to the group once, not to every participant id.
-  REQUIRE(b.initialPeersList.size() == 1);
-  CHECK(is_group(*b.initialPeersList.begin()));
-  REQUIRE(b.metatrafficMulticastLocatorList.size() == 1);
-  CHECK(is_group(*b.metatrafficMulticastLocatorList.begin()));
-  REQUIRE(b.metatrafficUnicastLocatorList.size() == 1);
-  CHECK(is_loopback_locator(*b.metatrafficUnicastLocatorList.begin()));
-  // User endpoints advertise the group only (no unicast locator a writer could fall back to).
-  CHECK(q.wire_protocol().default_unicast_locator_list.empty());
-  REQUIRE(q.wire_protocol().default_multicast_locator_list.size() == 1);
-  CHECK(is_group(*q.wire_protocol().default_multicast_locator_list.begin()));
-  CHECK(dds::describe(cfg).find("multicast 239.255.0.1") != std::string::npos);
+  const frtps::Locator_t group = dds::data_multicast_locator(cfg);
+  CHECK(group.kind == LOCATOR_KIND_UDPv4);
+  CHECK(frtps::IPLocator::toIPv4string(group) == "239.255.0.1");
+  CHECK(group.port == 7400u + 250u * 7u + 1u);  // the domain's user multicast port
 
-  SECTION("off by default: no multicast locator at all") {
-    CHECK_FALSE(config::TransportConfig{}.multicast_data);
+  // Only the State reader gets the group, as its only locator; other readers keep the defaults.
+  const fdds::DataReaderQos state = dds::reader_qos(dds::TopicId::State, cfg);
+  REQUIRE(state.endpoint().multicast_locator_list.size() == 1);
+  CHECK(*state.endpoint().multicast_locator_list.begin() == group);
+  CHECK(state.endpoint().unicast_locator_list.empty());
+  for (dds::TopicId id : {dds::TopicId::Command, dds::TopicId::Target, dds::TopicId::Metrics, dds::TopicId::Status}) {
+    INFO(dds::topic_name(id));
+    CHECK(dds::reader_qos(id, cfg).endpoint().multicast_locator_list.empty());
+    CHECK(dds::reader_qos(id, cfg) == dds::reader_qos(id));
   }
+  cfg.multicast_data = false;
+  CHECK(dds::reader_qos(dds::TopicId::State, cfg) == dds::reader_qos(dds::TopicId::State));
+  cfg.multicast_data = true;
+  CHECK(dds::describe(cfg).find("multicast 239.255.0.1:9151") != std::string::npos);
+
+  SECTION("off by default") { CHECK_FALSE(config::TransportConfig{}.multicast_data); }
   SECTION("other profiles refuse it") {
     for (const char* profile : {"lan", "discovery-server"}) {
       cfg.profile = profile;
@@ -612,6 +615,7 @@ TEST_CASE("loopback multicast_data: discovery and user data on one multicast gro
       } catch (const std::runtime_error& e) {
         CHECK(std::string(e.what()).find("transport.multicast_data:") == 0);
       }
+      CHECK_THROWS_AS(dds::data_multicast_locator(cfg), std::runtime_error);
     }
   }
 }
