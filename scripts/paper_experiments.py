@@ -383,7 +383,9 @@ def cmd_run(a):
     # Every distributed run records every metrics tick: the supervisor samples each iteration.
     # A neighbour is dropped only after 0.5 s of silence (default 3 periods): no agent leaves in these
     # experiments, and a short stall of the machine should not change the law an agent computes.
-    extra = [f"supervisor.metrics_rate_hz={AGENT_RATE_HZ:g}", "agent.neighbour_timeout_periods=25"]
+    # Lockstep: every process takes step k+1 from its neighbours' step-k states, the simulator's update
+    # (agent.sync in config/README.md); free-running processes are the async model's columns.
+    extra = [f"supervisor.metrics_rate_hz={AGENT_RATE_HZ:g}", "agent.neighbour_timeout_periods=25", "agent.sync=lockstep"]
     failures = 0
     todo = [e for e in exps if not only or e.name in only or e.group in only]
     for idx, exp in enumerate(exps):
@@ -785,9 +787,16 @@ def cmd_report(a):
                 t.append(f"| {lab} | {fmt(dp)} | {fmt(sp)} | {rng(ap)} | | |")
         ds, ss = settle_step(r["dist"]["series"], K), settle_step(r["sim"]["series"], K)
         aset = async_settle(r["async"], K)
-        ok, cons = settle_ok(ds, ss), in_range(ds, aset, rel=0.2, abs_=0)
-        acc.append((s, "settling step", ds, ss, ok, cons))
-        t.append(f"| settling step | {fmt(ds)} | {fmt(ss)} | {rng(aset, '{:.0f}')} | {yn(ok)} | {yn(cons, '**no**')} |")
+        if s == "line":
+            # The line never settles (it keeps growing): the rule's "plateau" is a moving target and a
+            # step found by it is an accident of when the gap CV dips; not part of the check.
+            t.append(f"| settling step | {fmt(ds)} | {fmt(ss)} | {rng(aset, '{:.0f}')} | n/a: the line keeps "
+                     f"growing | |")
+        else:
+            ok, cons = settle_ok(ds, ss), in_range(ds, aset, rel=0.2, abs_=0)
+            acc.append((s, "settling step", ds, ss, ok, cons))
+            t.append(f"| settling step | {fmt(ds)} | {fmt(ss)} | {rng(aset, '{:.0f}')} | {yn(ok)} | "
+                     f"{yn(cons, '**no**')} |")
         shape_tables.append((s, (r, t)))
     n_ok = sum(1 for x in acc if x[4])
     bad = [x for x in acc if not x[4]]

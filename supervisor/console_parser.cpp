@@ -636,7 +636,8 @@ const HelpEntry kHelp[] = {
    "wait time T [timeout=S]\n"
    "  Holds further input until the condition holds or the timeout (wall seconds, >= 0;\n"
    "  default 60 for converged, 30 for agents, 600 for time) runs out. N is an integer >= 1;\n"
-   "  T is model time since the current command was published (one paper iteration = dt).\n"},
+   "  T is model time since the current command was published (one paper iteration = dt),\n"
+   "  counted by the agents: it holds until every agent on the command has reached T.\n"},
   {"sleep",
    "sleep S                                                     pause input for S seconds\n",
    "sleep S\n"

@@ -252,7 +252,10 @@ bool Supervisor::pending_done(std::int64_t now) {
     return false;
   }
   if (const auto* w = std::get_if<WaitTime>(&*pending_)) {
-    if (epoch_ != 0 && model_time(now) >= w->model_time) return true;
+    // Done when every agent on the current command has done T of model time by its own count (a
+    // loaded agent skips ticks, a lockstep agent waits for the others: wall time is not enough).
+    const auto t = monitor_.min_following_model_time(now);
+    if (t && monitor_.following_count(now) == monitor_.alive_count(now) && *t >= w->model_time - 1e-9) return true;
     if (timed_out) {
       out_ << "wait time: timed out after " << w->timeout_s << " s" << std::endl;
       exit_status_ = kExitWaitTimedOut;

@@ -58,6 +58,13 @@ int SwarmMonitor::following_count(std::int64_t now_ns) const {
   return n;
 }
 
+std::optional<double> SwarmMonitor::min_following_model_time(std::int64_t now_ns) const {
+  std::optional<double> t;
+  for (const auto& [id, a] : agents_)
+    if (alive(a, now_ns) && epoch_ != 0 && a.epoch == epoch_) t = t ? std::min(*t, a.model_time) : a.model_time;
+  return t;
+}
+
 std::vector<std::pair<std::int32_t, core::Vec2>> SwarmMonitor::alive_positions(std::int64_t now_ns) const {
   std::vector<std::pair<std::int32_t, core::Vec2>> out;
   for (const auto& [id, a] : agents_)

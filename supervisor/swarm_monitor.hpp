@@ -44,6 +44,9 @@ class SwarmMonitor {
   int following_count(std::int64_t now_ns) const;
   const std::map<std::int32_t, AgentView>& agents() const { return agents_; }
 
+  /// The smallest model time among alive agents following the current epoch (how far every one of them
+  /// has got), or nullopt when none follows it.
+  std::optional<double> min_following_model_time(std::int64_t now_ns) const;
   /// Ids and positions of alive agents, ascending id.
   std::vector<std::pair<std::int32_t, core::Vec2>> alive_positions(std::int64_t now_ns) const;
 
