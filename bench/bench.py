@@ -713,6 +713,14 @@ def git_commit() -> str:
 # --------------------------------------------------------------------------------------------
 
 
+def log_run(row: Row, k: int, r: dict) -> None:
+    log(f"{row.id}: run {k + 1}: heard {fmt(r.get('all_heard_s'), 's')} deliv {fmt(r.get('delivery'), 'r')} "
+        f"age p50 {fmt(r.get('age_p50_ms'), 'ms')} p99 {fmt(r.get('age_p99_ms'), 'ms')} "
+        f"cpu {fmt(r.get('cpu_pct'), '%')} host {fmt(r.get('host_busy_pct'), '%')} "
+        f"rcvbuf err/s {fmt(r.get('udp_rcvbuf_errors_per_s'), 'n')} conv {fmt(r.get('converge_s'), 's')} "
+        f"aborts {r.get('aborts')} other load {fmt(r.get('other_cpu_pct'), '%')}")
+
+
 def run_rows(ctx: Ctx, rows: list[Row], runs: int, store: dict) -> None:
     for row in rows:
         per = []
@@ -720,6 +728,7 @@ def run_rows(ctx: Ctx, rows: list[Row], runs: int, store: dict) -> None:
             for attempt in range(ctx.retries + 1):
                 log(f"{row.id}: run {k + 1}/{runs}" + (f" (retry {attempt})" if attempt else ""))
                 r = run_once(ctx, row, k)
+                log_run(row, k, r)
                 other = r.get("other_cpu_pct") or 0.0
                 if other <= ctx.max_other_pct:
                     break
@@ -727,11 +736,7 @@ def run_rows(ctx: Ctx, rows: list[Row], runs: int, store: dict) -> None:
                     f"(limit {ctx.max_other_pct:.0f} %)" + ("; repeating it" if attempt < ctx.retries else "; keeping it"))
             r["attempts"] = attempt + 1
             per.append(r)
-            log(f"{row.id}: run {k + 1}: heard {fmt(r.get('all_heard_s'), 's')} deliv {fmt(r.get('delivery'), 'r')} "
-                f"age p50 {fmt(r.get('age_p50_ms'), 'ms')} p99 {fmt(r.get('age_p99_ms'), 'ms')} "
-                f"cpu {fmt(r.get('cpu_pct'), '%')} host {fmt(r.get('host_busy_pct'), '%')} "
-                f"rcvbuf err/s {fmt(r.get('udp_rcvbuf_errors_per_s'), 'n')} conv {fmt(r.get('converge_s'), 's')} "
-                f"aborts {r.get('aborts')} other load {fmt(r.get('other_cpu_pct'), '%')}")
+
         entry = {"row": row.__dict__ | {"id": row.id}, "agg": aggregate(per), "runs": per,
                  "when": dt.datetime.now().isoformat(timespec="seconds")}
         store[row.id] = entry

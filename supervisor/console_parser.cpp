@@ -629,7 +629,7 @@ const HelpEntry kHelp[] = {
    "  Prints the latest metrics (shape error, gap CV, clusters, ...).\n"},
   {"wait",
    "wait converged [timeout=S]                                  wait for convergence\n"
-   "wait agents N [timeout=S]                                   wait for N agents alive\n"
+   "wait agents N [timeout=S]                                   wait for N agents hearing each other\n"
    "wait time T [timeout=S]                                     wait for model time T\n",
    "wait converged [timeout=S]\n"
    "wait agents N [timeout=S]\n"

@@ -90,6 +90,13 @@ class Supervisor {
     if (epoch_ == 0) return 0.0;
     return static_cast<double>(now - epoch_start_ns_) * 1e-9 * cfg_.agent.rate_hz * current_.dt;
   }
+  /// The model time the metrics are taken at: the supervisor's clock, or, in lockstep, where the agents
+  /// are (the slowest agent on the command: the others are at most one step ahead).
+  double metrics_time(std::int64_t now) const {
+    if (cfg_.agent.lockstep)
+      if (const auto t = monitor_.min_following_model_time(now)) return *t;
+    return model_time(now);
+  }
   void drain(std::int64_t now);
   void publish_target(std::int64_t now);
   void metrics_tick(std::int64_t now);
@@ -198,7 +205,7 @@ void Supervisor::print_metrics_line(const SwarmMonitor::Sample& s) {
 }
 
 void Supervisor::metrics_tick(std::int64_t now) {
-  const double t = model_time(now);
+  const double t = metrics_time(now);
   const SwarmMonitor::Sample s = monitor_.update(t, now);
   if (epoch_ != 0) metrics_writer_.write(dds::to_msg(s.metrics, epoch_, t, now, s.converged));
   const double wall = static_cast<double>(now - start_ns_) * 1e-9;
@@ -237,9 +244,11 @@ bool Supervisor::pending_done(std::int64_t now) {
     return false;
   }
   if (const auto* w = std::get_if<WaitAgents>(&*pending_)) {
+    // N agents alive, and each hears the others (its status says so): a command sent before discovery
+    // completes would be followed by agents that do not yet know all their neighbours.
     const int n = monitor_.alive_count(now);
-    if (n >= w->count) {
-      out_ << "agents: " << n << " alive" << std::endl;
+    if (n >= w->count && monitor_.all_hear(w->count - 1, now)) {
+      out_ << "agents: " << n << " alive, each hearing " << w->count - 1 << " or more" << std::endl;
       return true;
     }
     if (timed_out) {
@@ -342,7 +351,7 @@ void Supervisor::run_input(std::int64_t now) {
 }
 
 void Supervisor::print_summary(std::int64_t now) {
-  const double t = model_time(now);
+  const double t = metrics_time(now);
   const SwarmMonitor::Sample s = monitor_.update(t, now);
   nlohmann::json j = sim::metrics_json(s.metrics);
   j["name"] = cfg_.name;

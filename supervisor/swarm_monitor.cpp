@@ -58,6 +58,12 @@ int SwarmMonitor::following_count(std::int64_t now_ns) const {
   return n;
 }
 
+bool SwarmMonitor::all_hear(int count, std::int64_t now_ns) const {
+  for (const auto& [id, a] : agents_)
+    if (alive(a, now_ns) && (!a.neighbours_heard || *a.neighbours_heard < count)) return false;
+  return true;
+}
+
 std::optional<double> SwarmMonitor::min_following_model_time(std::int64_t now_ns) const {
   std::optional<double> t;
   for (const auto& [id, a] : agents_)

@@ -44,6 +44,8 @@ class SwarmMonitor {
   int following_count(std::int64_t now_ns) const;
   const std::map<std::int32_t, AgentView>& agents() const { return agents_; }
 
+  /// Whether every alive agent reported (in its latest status) hearing at least `count` neighbours.
+  bool all_hear(int count, std::int64_t now_ns) const;
   /// The smallest model time among alive agents following the current epoch (how far every one of them
   /// has got), or nullopt when none follows it.
   std::optional<double> min_following_model_time(std::int64_t now_ns) const;
