@@ -58,6 +58,8 @@ add_preset("mcbuf1ann", [MC, BUF1] + ANN, "multicast user data on lo + 1 MiB soc
 add_preset("mcbufann", [MC, BUF] + ANN, "multicast user data on lo + 4 MiB socket buffers + lease 10 s / announce 3 s")
 add_preset("ds", [], "discovery server on 127.0.0.1 (transport.profile=discovery-server)", ds=True)
 add_preset("dsbuf", [BUF], "discovery server on 127.0.0.1 + 4 MiB socket buffers", ds=True)
+add_preset("dsmcbufann", [MC, BUF] + ANN, "discovery server on 127.0.0.1 + State on multicast on lo + 4 MiB socket "
+           "buffers + lease 10 s / announce 3 s", ds=True)
 
 
 @dataclass

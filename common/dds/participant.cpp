@@ -91,8 +91,12 @@ void validate_common(const config::TransportConfig& cfg) {
   if (cfg.socket_buffer_bytes < 0) {
     fail("transport.socket_buffer_bytes: must be >= 0, got " + str(cfg.socket_buffer_bytes));
   }
-  if (cfg.multicast_data && cfg.profile != "loopback") {
-    fail("transport.multicast_data: only the loopback profile supports it, got profile " + quoted(cfg.profile));
+  if (cfg.multicast_data && !(cfg.profile == "loopback" ||
+                              (cfg.profile == "discovery-server" && cfg.discovery_server.rfind("127.", 0) == 0) ||
+                              (cfg.profile == "discovery-server" && cfg.discovery_server.rfind("localhost:", 0) == 0))) {
+    fail("transport.multicast_data: needs the loopback profile or a discovery server on 127.x (traffic on lo "
+         "only), got profile " + quoted(cfg.profile) +
+         (cfg.profile == "discovery-server" ? " with server " + quoted(cfg.discovery_server) : ""));
   }
 }
 

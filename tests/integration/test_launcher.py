@@ -132,8 +132,10 @@ class LauncherTest(harness.SwarmTestCase):
         """Starts a run to convergence (it would end by itself much later), interrupts it mid-run."""
         p = self.launch(["-n", "10", "--scenario", "circle", "--timeout", "300", "--set", "supervisor.converge.hold=100000"],
                         "launcher_group" if to_group else "launcher")
-        harness.poll(lambda: re.search(r"agents=10 following=10", p.log()), 60,
-                     "the launcher to show 10 agents following the command")
+        # Mid-run: every agent started and the command out and followed (the agents' discovery is
+        # not what this test is about, so not all ten need to be heard).
+        harness.poll(lambda: "started 10 agents" in p.log() and re.search(r"following=[1-9]", p.log()), 60,
+                     "the launcher to show agents following the command")
         run = self.run_folder(p)
         if to_group:
             os.killpg(p.pid, signal.SIGINT)  # a terminal's Ctrl-C: every process of the group
@@ -151,8 +153,10 @@ class LauncherTest(harness.SwarmTestCase):
         self.assertIn("interrupted", p.log())
         self.assertGreater(len(harness.read_csv(os.path.join(run, "record", "metrics.csv"))), 0)
 
-    def test_ctrl_c_stops_everything(self):
+    def test_ctrl_c_to_launcher(self):
         self.interrupt(to_group=False)
+
+    def test_ctrl_c_to_terminal_group(self):
         self.interrupt(to_group=True)
 
     BAD_ARGS = [

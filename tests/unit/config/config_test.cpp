@@ -731,7 +731,13 @@ TEST_CASE("multicast_data is off by default, read as a bool, and needs the loopb
   CHECK(load_string(to_yaml(c)).transport.multicast_data);
   CHECK(problem_of("schema_version: 1\ntransport:\n  multicast_data: 3\n").find("transport.multicast_data:") == 0);
   CHECK(problem_of("schema_version: 1\ntransport:\n  profile: lan\n  multicast_data: true\n") ==
-        "transport.multicast_data: needs transport.profile loopback (profile is lan), got true (line 4)");
+        "transport.multicast_data: needs transport.profile loopback, or discovery-server with a server on 127.x "
+        "(profile is lan), got true (line 4)");
+  CHECK(problem_of("schema_version: 1\ntransport:\n  profile: discovery-server\n  discovery_server: 10.0.0.5:11811\n"
+                   "  multicast_data: true\n")
+            .find("transport.multicast_data: needs") == 0);
+  CHECK(load_string("schema_version: 1\ntransport:\n  profile: discovery-server\n  multicast_data: true\n")
+            .transport.multicast_data);  // default server 127.0.0.1:11811
 }
 
 TEST_CASE("announce_s must be below lease_s") {

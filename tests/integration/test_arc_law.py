@@ -1,0 +1,54 @@
+#!/usr/bin/env python3
+"""The arc law on agent processes (issue 5): a polar star and a polygon formed by 12 processes through
+the launcher reach the law's plateau criteria (on the curve, evenly spaced by arc length)."""
+import argparse
+import glob
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import unittest
+
+ARGS = None
+
+
+class ArcLawOnProcesses(unittest.TestCase):
+    def launch(self, scenario, domain, size):
+        runs = tempfile.mkdtemp(prefix="arc-", dir=ARGS.workdir)
+        cmd = [os.path.join(ARGS.source, "scripts", "launch_swarm.sh"), "-n", "12", "--scenario", scenario,
+               "--domain", str(domain), "--json", "--timeout", "90", "--build", ARGS.build, "--runs", runs]
+        p = subprocess.run(cmd, stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=240)
+        lines = [l for l in p.stdout.splitlines() if l.startswith("{")]
+        if p.returncode != 0 or not lines:
+            for log in sorted(glob.glob(os.path.join(runs, "*", "*.log"))):
+                with open(log) as f:
+                    tail = f.read().splitlines()[-15:]
+                print(f"--- {log}\n" + "\n".join(tail), file=sys.stderr)
+            self.fail(f"{scenario}: launcher exit {p.returncode}\n{p.stderr[-3000:]}")
+        s = json.loads(lines[-1])
+        self.assertEqual(s["agents"], 12)
+        self.assertEqual(s["law"], "arc")
+        self.assertTrue(s["converged"], s)
+        # The plateau criteria of the arc law, on real processes.
+        self.assertLessEqual(s["curve_error_mean"], 1e-3 * size, s)
+        self.assertLessEqual(s["arc_gap_cv"], 0.01, s)
+        self.assertGreater(s["min_separation"], 0.5, s)
+        return s
+
+    def test_polar_star(self):
+        self.launch("polar_star", ARGS.domain, 5.0)
+
+    def test_polygon(self):
+        self.launch("polygon", ARGS.domain + 1, 5.0)
+
+
+if __name__ == "__main__":
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--bin", required=True)
+    ap.add_argument("--source", required=True)
+    ap.add_argument("--domain", type=int, default=144)
+    ap.add_argument("--workdir", default=tempfile.gettempdir())
+    ARGS, rest = ap.parse_known_args()
+    ARGS.build = os.path.dirname(os.path.abspath(ARGS.bin))
+    unittest.main(argv=[sys.argv[0], "-v", *rest])
