@@ -36,9 +36,10 @@ struct TransportConfig {
   double lease_s = 2.0;     ///< participant lease duration
   double announce_s = 0.5;  ///< participant announcement period
   int socket_buffer_bytes = 0;  ///< UDP send/receive buffer size; 0 = OS default
-  /// User data also on a multicast locator (239.255.0.1, user multicast port of the domain), on the
-  /// profile's interfaces only (loopback: lo): a writer sends one datagram per sample instead of one
-  /// per matched reader. Off by default.
+  /// State-topic readers listen on the multicast group 239.255.0.1 (the domain's user multicast port)
+  /// instead of a unicast port: a writer sends one datagram per sample instead of one per reader.
+  /// Loopback profile, or discovery-server with a server on 127.x / localhost (whitelist 127.0.0.1,
+  /// so the group stays on lo). Off by default.
   bool multicast_data = false;
 };
 

@@ -360,7 +360,8 @@ class SwarmTestCase(unittest.TestCase):
         result = getattr(outcome, "result", None)
         if result is None:
             return True
-        return any(t is self for t, _ in list(result.failures) + list(result.errors))
+        # Sub-tests are recorded as _SubTest objects that point back to their test case.
+        return any(getattr(t, "test_case", t) is self for t, _ in list(result.failures) + list(result.errors))
 
     def print_logs(self):
         names = []

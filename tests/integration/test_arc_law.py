@@ -15,6 +15,7 @@ ARGS = None
 
 class ArcLawOnProcesses(unittest.TestCase):
     def launch(self, scenario, domain, size):
+        os.makedirs(ARGS.workdir, exist_ok=True)
         runs = tempfile.mkdtemp(prefix="arc-", dir=ARGS.workdir)
         cmd = [os.path.join(ARGS.source, "scripts", "launch_swarm.sh"), "-n", "12", "--scenario", scenario,
                "--domain", str(domain), "--json", "--timeout", "90", "--build", ARGS.build, "--runs", runs]

@@ -49,7 +49,9 @@ class LauncherTest(harness.SwarmTestCase):
             name = os.path.basename(path)[:-5]
             with self.subTest(scenario=name):
                 expected = self.run_sim(path, ["--steps", "0"])  # the scenario's shape and size
-                p = self.launch(["--scenario", name, "--steps", "60", "--rate", "50", "--json"], "launcher_" + name)
+                # agent_timeout_s=5: an agent stalled by an overloaded host is still counted alive.
+                p = self.launch(["--scenario", name, "--steps", "60", "--rate", "50", "--json",
+                                 "--set", "supervisor.agent_timeout_s=5"], "launcher_" + name)
                 status = p.wait(120)
                 self.assertEqual(status, 0, "%s: launcher exit status" % name)
                 lines = p.out().splitlines()
