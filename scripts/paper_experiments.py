@@ -747,7 +747,9 @@ def cmd_report(a):
     w("")
     w("- **processes**: one `shapeform_agent` process per agent at 50 Hz (one tick = one Euler step of dt = 1, "
       "the paper's iteration) and a `shapeform_supervisor` recording every iteration "
-      "(`supervisor.metrics_rate_hz=50`), on loopback; a neighbour is "
+      "(`supervisor.metrics_rate_hz=50`), on loopback, in lockstep (`agent.sync=lockstep`: each process takes "
+      "step k+1 from its neighbours' step-k states, which is the simulator's synchronous update; free-running "
+      "processes, which see a mix of steps k and k+1, are what the async model columns show); a neighbour is "
       "dropped after 0.5 s of silence (`agent.neighbour_timeout_periods=25`; no agent leaves here). A run in "
       "which the supervisor lost an agent or the machine stalled is made again (up to 3 times) and flagged "
       "in section 5 if it never ran clean.")
@@ -878,11 +880,11 @@ def cmd_report(a):
           + ".")
         w("")
         if not bad_cons:
-            w(f"Every failing value lies within the range that the same law gives under the processes' schedule "
-              f"(async model, {draws} phasings, widened by the same tolerance). The difference is the schedule, "
-              f"not the implementation: the simulator steps all agents together (Jacobi), the processes each at "
-              f"their own phase (each agent sees a mix of neighbours at steps k and k+1), and for these shapes "
-              f"the resting formation depends on that order (see *Processes against simulator* at the end).")
+            w(f"Every failing value lies within the range that the same law gives under a free-running schedule "
+              f"(async model, {draws} phasings, widened by the same tolerance): a process that lost its neighbours "
+              f"for longer than the lockstep wait (the machine stalled) ran free for a while, and for these shapes "
+              f"the resting formation depends on the order of the updates (see *Processes against simulator* at "
+              f"the end).")
         else:
             w("Not explained by the schedule alone (outside the async model's range): " + "; ".join(
                 f"{s} {lab} (processes {fmt(d)})" for s, lab, d, _, _, _ in bad_cons) + ".")
