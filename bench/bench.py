@@ -189,6 +189,22 @@ def read_proc_rss_mb(pid: int) -> float | None:
         return None
 
 
+PF_KTHREAD = 0x00200000
+
+
+def read_user_proc_ticks(pid: int) -> int | None:
+    """utime + stime of a user-space process; None for kernel threads (ksoftirqd, kworkers: they mostly
+    carry our own network traffic) and vanished processes."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            parts = f.read().rsplit(")", 1)[1].split()
+        if int(parts[6]) & PF_KTHREAD:
+            return None
+        return int(parts[11]) + int(parts[12])
+    except (OSError, IndexError, ValueError):
+        return None
+
+
 def read_host_cpu() -> tuple[int, int]:
     with open("/proc/stat") as f:
         vals = [int(v) for v in f.readline().split()[1:]]
@@ -222,6 +238,13 @@ class Sampler(threading.Thread):
                 s[name + "_rss"] = read_proc_rss_mb(pid)
             # CPU of every process this run started (to tell our load from other jobs on the host).
             s["ours"] = {pid: read_proc_cpu_ticks(pid) for pid in list(self.ours)}
+            s["foreign"] = {}
+            ours = set(self.ours)
+            for name in os.listdir("/proc"):
+                if name.isdigit() and int(name) not in ours and int(name) != os.getpid():
+                    t = read_user_proc_ticks(int(name))
+                    if t is not None:
+                        s["foreign"][int(name)] = t
             self.samples.append(s)
             self._halt.wait(0.5)
 
@@ -606,8 +629,19 @@ def analyse(ctx: Ctx, row: Row, rdir: Path, res: dict, sampler: Sampler) -> None
             if ta is not None and tb is not None:
                 ours += tb - ta
         res["ours_cpu_pct"] = 100 * ours / CLK_TCK / span_s  # % of one core
+        # Other jobs: user-space processes this run did not start (present at both ends of the window,
+        # plus the part a process that appeared or vanished in between used while it was sampled).
+        foreign = 0
+        samples = [x for x in sampler.samples if a["t"] <= x["t"] <= b["t"]]
+        for prev, cur in zip(samples, samples[1:]):
+            for pid, tc in cur["foreign"].items():
+                tp = prev["foreign"].get(pid)
+                if tp is not None and tc >= tp:
+                    foreign += tc - tp
+        res["other_cpu_pct"] = 100 * foreign / CLK_TCK / span_s
         if res.get("host_busy_pct") is not None:
-            res["other_cpu_pct"] = max(0.0, res["host_busy_pct"] * (os.cpu_count() or 1) - res["ours_cpu_pct"])
+            res["kernel_and_unattributed_pct"] = max(0.0, res["host_busy_pct"] * (os.cpu_count() or 1)
+                                                      - res["ours_cpu_pct"] - res["other_cpu_pct"])
         ua, ub = a["udp"], b["udp"]
         res["udp_in_per_s"] = (ub["InDatagrams"] - ua["InDatagrams"]) / span_s
         res["udp_rcvbuf_errors_per_s"] = (ub["RcvbufErrors"] - ua["RcvbufErrors"]) / span_s
