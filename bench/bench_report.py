@@ -162,6 +162,25 @@ def baseline_for(rows: dict, e: dict) -> dict | None:
     return rows.get(bid2)
 
 
+def pair_effect(rows: dict, a_id: str, b_id: str) -> str:
+    """One line: how the key figures changed from row a to row b."""
+    a, b = rows[a_id]["agg"], rows[b_id]["agg"]
+
+    def ch(key, f):
+        va, vb = a.get(key), b.get(key)
+        if va is None and vb is None:
+            return None
+        return f"{f(va)} -> {f(vb)}"
+
+    parts = [("delivery", ch("delivery", f_pct)), ("age p50", ch("age_p50_ms", f_ms)), ("age p99", ch("age_p99_ms", f_ms)),
+             ("all hear all", ch("all_heard_s", f_s)),
+             ("receive-buffer drops/s", ch("udp_rcvbuf_errors_per_s", lambda v: f_num(v, "{:,.0f}"))),
+             ("UDP datagrams received/s", ch("udp_in_per_s", lambda v: f_num(v, "{:,.0f}"))),
+             ("CPU %/agent", ch("cpu_pct", lambda v: f_num(v, "{:.2f}"))),
+             ("aborts", ch("aborts_total", lambda v: "-" if v is None else str(int(v))))]
+    return f"`{a_id}` -> `{b_id}`: " + ", ".join(f"{k} {v}" for k, v in parts if v)
+
+
 # --------------------------------------------------------------------------------------------
 # Targets.
 
@@ -276,6 +295,10 @@ def render(store: dict, path: Path, plan: dict) -> None:
     for lv in plan.get("levers", []):
         o.append(f"### {lv['name']}\n\n{lv['question']}\n\n")
         present = [rid for rid in lv["rows"] if rid in rows]
+        if not lv["rows"]:
+            if lv.get("note"):
+                o.append(lv["note"] + "\n\n")
+            continue
         if not present:
             o.append("_not run yet: `scripts/bench.sh --levers`_\n\n")
             continue
@@ -291,6 +314,9 @@ def render(store: dict, path: Path, plan: dict) -> None:
                 o.append(f"| `{rid}` | {f_num(a.get('udp_in_per_s'), '{:.0f}')} | {f_num(a.get('udp_out_per_s'), '{:.0f}')} "
                          f"| {f_num(a.get('udp_rcvbuf_errors_per_s'), '{:.0f}')} | {f_num(a.get('ours_cpu_pct'), '{:.0f}')} |\n")
             o.append("\n")
+        effects = [pair_effect(rows, a, b) for a, b in lv.get("pairs", []) if a in rows and b in rows]
+        if effects:
+            o.append("Measured effect:\n\n" + "".join(f"- {e}\n" for e in effects) + "\n")
         if lv.get("note"):
             o.append(lv["note"] + "\n\n")
 

@@ -67,14 +67,16 @@ def main() -> int:
     ax2.set_ylabel("data age p99, ms (log)")
     ax2.set_yscale("log")
     ax2.axhline(100, color="grey", lw=0.8, ls=":")
+    ax2.text(10, 110, "target at N=100: 100 ms", color="grey", fontsize=8)
     ax2.axhline(5, color="grey", lw=0.8, ls=":")
+    ax2.text(10, 5.5, "target at N=25: 5 ms", color="grey", fontsize=8)
     ax2.set_title("Receive time minus sender stamp, p99")
     for ax in (ax1, ax2):
         ax.set_xscale("log")
         ax.set_xticks([10, 25, 50, 100])
         ax.get_xaxis().set_major_formatter(matplotlib.ticker.ScalarFormatter())
         ax.grid(True, which="both", alpha=0.3)
-    ax2.legend(fontsize=7, loc="upper left")
+    ax2.legend(fontsize=7, loc="lower right")
     m = store.get("machine", {})
     fig.suptitle(f"shapeform on {m.get('host_cpus', '?')} CPUs ({m.get('cpu', '?')}), commit {store.get('commit', '?')}",
                  fontsize=9)

@@ -573,14 +573,18 @@ TEST_CASE("loopback profile has no builtin transports and only unicast UDPv4 on 
   }
 }
 
-TEST_CASE("multicast_data: State readers listen on one group on lo; nothing else changes", "[dds][qos]") {
+TEST_CASE("multicast_data: State readers listen on one group on lo, nothing else changes", "[dds][qos]") {
   config::TransportConfig cfg;
   cfg.domain = 7;
   const fdds::DomainParticipantQos plain = dds::participant_qos(cfg, "agent-1");
   cfg.multicast_data = true;
   const fdds::DomainParticipantQos q = dds::participant_qos(cfg, "agent-1");
   // The participant is the plain loopback one: unicast discovery and default locators on 127.0.0.1.
-  CHECK(q == plain);
+  // (The QoS objects hold their transport descriptors by pointer: compare what they point to.)
+  CHECK(q.wire_protocol() == plain.wire_protocol());
+  CHECK(q.transport().use_builtin_transports == plain.transport().use_builtin_transports);
+  REQUIRE(q.transport().user_transports.size() == plain.transport().user_transports.size());
+  CHECK(*only_udp(q) == *only_udp(plain));
   CHECK(only_udp(q)->interfaceWhiteList == std::vector<std::string>{"127.0.0.1"});
   CHECK(q.wire_protocol().default_multicast_locator_list.empty());
 
