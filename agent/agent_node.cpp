@@ -83,6 +83,7 @@ int run_agents(const std::vector<std::int32_t>& ids, const std::vector<core::Vec
     util::ThrottledLog throttled(5.0);
     util::CpuMeter cpu;
     util::RateLoop loop(cfg.agent.rate_hz);
+    const auto log_every = std::max<std::uint64_t>(1, static_cast<std::uint64_t>(std::llround(cfg.agent.rate_hz)));  // ~1 s
     const auto status_every = std::max<std::uint64_t>(1, static_cast<std::uint64_t>(std::llround(cfg.agent.rate_hz / cfg.agent.status_rate_hz)));
     const double share = 1.0 / static_cast<double>(ids.size());  // of the process figures, per agent
     std::vector<msg::AgentState> outs(ids.size());
@@ -171,7 +172,7 @@ int run_agents(const std::vector<std::int32_t>& ids, const std::vector<core::Vec
 
       int heard = logics.front()->neighbours();
       for (const auto& l : logics) heard = std::min(heard, l->neighbours());
-      if (heard != heard_logged && ticks % static_cast<std::uint64_t>(cfg.agent.rate_hz) == 0) {
+      if (heard != heard_logged && ticks % log_every == 0) {
         heard_logged = heard;
         util::log_info(std::string(group ? "every hosted agent hears at least " : "hearing ") + std::to_string(heard) +
                        " neighbours");

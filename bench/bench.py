@@ -796,7 +796,7 @@ def run_rows(ctx: Ctx, rows: list[Row], runs: int, store: dict) -> None:
             per.append(r)
 
         entry = {"row": row.__dict__ | {"id": row.id}, "agg": aggregate(per), "runs": per,
-                 "when": dt.datetime.now().isoformat(timespec="seconds")}
+                 "when": dt.datetime.now().isoformat(timespec="seconds"), "commit": git_commit()}
         store[row.id] = entry
 
 
@@ -889,7 +889,9 @@ def main(argv=None) -> int:
     if not args.no_main:
         selected += all_rows
     if args.levers:
-        selected += lever_rows
+        # With --no-main, a lever row that is also a main row keeps its stored main result (median of its runs).
+        selected += [r for r in lever_rows if not (args.no_main and r.id in {m.id for m in all_rows}
+                                                  and r.id in store["rows"])]
     for spec in args.row:
         parts = spec.split(":")
         r = Row(parts[0], int(parts[1]), float(parts[2]), parts[3] if len(parts) > 3 else "default",
@@ -1041,8 +1043,10 @@ def report_plan(store: dict) -> dict:
 - **Baseline**: `bench/baseline.cpp`, one participant from `dds::create_participant` (same transport config),
   one AgentState writer and reader with the topic table's QoS, a listener that books age and sequence gaps in
   place, the same RateLoop and the same AgentStatus reports; no mailbox, no control law, no other topics.
-- **Aborts**: processes that died of a signal other than our SIGTERM (the Fast DDS 2.9 asserts of
-  FASTDDS_NOTES.md section 5 are the usual cause)."""
+- **Aborts**: processes that died of a signal other than our SIGTERM. The usual cause is an assert that is
+  live in Debian's Fast DDS 2.9 build: `PDP.cpp check_remote_participant_liveliness: Assertion
+  GUID_t::unknown() != remote_participant->m_guid` (SIGABRT), when a remote participant's lease timer runs after
+  its proxy was released; seen with simple discovery at N >= 50 on a saturated host."""
     return {"main": main, "targets": [(n100, targets_100), (g50, targets_100), (n25, targets_25)],
             "headline": headline, "limits": limits,
             "main_intro": f"Main rows use the large-swarm transport settings (`{MAIN_PRESET}`: "

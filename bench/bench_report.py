@@ -5,6 +5,7 @@ comes from that file, which bench.py fills from the processes' own reports.
 """
 from __future__ import annotations
 
+import datetime
 import json
 import math
 import statistics
@@ -23,7 +24,8 @@ SIM_TARGETS = {1000: 200.0, 10000: 2.0}  # Euler steps/s, fast implementation, o
 
 def sim_rows(bindir: Path, quick: bool) -> dict:
     exe = bindir / "shapeform_bench_sim"
-    out: dict = {"available": exe.exists(), "rows": []}
+    out: dict = {"available": exe.exists(), "rows": [],
+                 "when": datetime.datetime.now().isoformat(timespec="seconds")}
     if not exe.exists():
         return out
     runs = 1 if quick else 3
@@ -252,7 +254,8 @@ def render(store: dict, path: Path, plan: dict) -> None:
              "lateness, neighbours heard, samples received, data age percentiles, CPU, RSS), recorded by "
              "`shapeform_bench_probe`; convergence from the supervisor's `SwarmMetrics`; supervisor and host CPU and "
              "the kernel's UDP counters from `/proc`.\n\n")
-    o.append(f"- **Date**: {store.get('date', '-')}; **commit**: `{store.get('commit', '-')}`"
+    o.append(f"- **Date**: {store.get('date', '-')}; **commit**: `{store.get('commit', '-')}` (of the last invocation; "
+             "each row's own commit and time are in the last table)"
              f"{'; **quick mode** (1 run per row, short windows)' if store.get('quick') else ''}\n")
     o.append(f"- **Machine**: {m.get('cpu', '?')}, {m.get('host_cpus', '?')} CPUs, {m.get('mem_gb', '?')} GB RAM, "
              f"{m.get('os', '?')}, kernel {m.get('kernel', '?')}, Fast DDS {m.get('fastdds', '?')}\n")
@@ -362,12 +365,13 @@ def render(store: dict, path: Path, plan: dict) -> None:
         o.append("\n")
 
     # Rerun commands
-    o.append("## Rerun a row\n\n| row | command |\n|---|---|\n")
+    o.append("## Rerun a row\n\n| row | measured | command |\n|---|---|---|\n")
     for rid in sorted(rows):
-        o.append(f"| `{rid}` | `{rows[rid].get('command', '-')}` |\n")
+        e = rows[rid]
+        o.append(f"| `{rid}` | {e.get('when', '-')}, `{e.get('commit', '-')}` | `{e.get('command', '-')}` |\n")
     if sim.get("available"):
         for r in sim["rows"]:
-            o.append(f"| sim {r['agents']} {r['impl']} | `{r['command']}` |\n")
+            o.append(f"| sim {r['agents']} {r['impl']} | {sim.get('when', '-')} | `{r['command']}` |\n")
     o.append("\n")
 
     # Method

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Installs the Debian dependencies (when run as root) and builds shapeform into build/ (Release).
+# Installs the Debian dependencies (as root; without root it stops if any is missing) and builds
+# shapeform into build/ (Release).
 # Idempotent: a second run only rebuilds what changed. Extra arguments go to the configure step.
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -170,7 +170,7 @@ domain_busy() {
   done
   return 1
 }
-# Derived domains are 10..100: the integration tests use 101..130 and the DDS unit tests 150..229.
+# Derived domains are 10..100: the integration tests use 101..146 and the DDS unit tests 150..229.
 if [ -z "$domain" ]; then
   d0=$(($$ % 91))
   for ((k = 0; k < 91; k++)); do

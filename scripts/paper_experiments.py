@@ -8,8 +8,9 @@ simulator from the same start, and writes docs/RESULTS.md from what they recorde
 `run` writes, per experiment, DATA/<name>/start.csv (the simulator's seeded start, given to both
 runs), DATA/<name>/sim/{metrics.csv,positions.csv,summary.json} and DATA/<name>/dist/{metrics.csv,
 positions.csv,summary.json,logs/}; simulator-only studies of the model's limits go to DATA/limits/.
-DATA/manifest.json lists what ran. `report` reads only those files. Standard library only (the
-figures are scripts/plot_paper.py). Every child process is ours and is stopped by its own pid.
+DATA/manifest.json lists what ran. `report` reads only those files. Standard library only, except the
+asynchronous-model study (paper_async_model.py, numpy); the figures are scripts/plot_paper.py. Every child
+process is ours and is stopped by its own pid.
 """
 import argparse
 import csv

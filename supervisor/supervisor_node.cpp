@@ -352,7 +352,7 @@ void Supervisor::run_input(std::int64_t now) {
 
 void Supervisor::print_summary(std::int64_t now) {
   const double t = metrics_time(now);
-  const SwarmMonitor::Sample s = monitor_.update(t, now);
+  const SwarmMonitor::Sample s = monitor_.measure(t, now);
   nlohmann::json j = sim::metrics_json(s.metrics);
   j["name"] = cfg_.name;
   j["shape"] = std::string(core::to_string(current_.shape.kind));

@@ -78,7 +78,7 @@ std::vector<std::pair<std::int32_t, core::Vec2>> SwarmMonitor::alive_positions(s
   return out;
 }
 
-SwarmMonitor::Sample SwarmMonitor::update(double model_time, std::int64_t now_ns) {
+SwarmMonitor::Sample SwarmMonitor::measure(double model_time, std::int64_t now_ns) const {
   Sample s;
   s.model_time = model_time;
   s.alive = alive_count(now_ns);
@@ -88,6 +88,16 @@ SwarmMonitor::Sample SwarmMonitor::update(double model_time, std::int64_t now_ns
     x.reserve(agents_.size());
     for (const auto& [id, p] : alive_positions(now_ns)) x.push_back(p);
     s.metrics = core::compute_metrics(*command_, x, model_time);
+  } else {
+    s.metrics.agents = s.alive;
+  }
+  s.converged = detector_.converged();
+  return s;
+}
+
+SwarmMonitor::Sample SwarmMonitor::update(double model_time, std::int64_t now_ns) {
+  Sample s = measure(model_time, now_ns);
+  if (command_) {
     if (s.alive > 0 && s.following == s.alive) {
       const auto uniform = core::uniformity(*command_, s.metrics);
       detector_.add(model_time, s.metrics.shape_error_mean, uniform);
@@ -98,8 +108,6 @@ SwarmMonitor::Sample SwarmMonitor::update(double model_time, std::int64_t now_ns
       detector_.reset();  // agents still switching to the new command
     }
     s.converged = detector_.converged();
-  } else {
-    s.metrics.agents = s.alive;
   }
   last_ = s;
   return s;

@@ -52,8 +52,7 @@ class SwarmMonitor {
   /// Ids and positions of alive agents, ascending id.
   std::vector<std::pair<std::int32_t, core::Vec2>> alive_positions(std::int64_t now_ns) const;
 
-  /// Computes the metrics of the alive agents at model time t, feeds the convergence detector and the
-  /// settling history. Converged needs every alive agent on the current epoch. No command: all null.
+  /// The metrics of the alive agents at model time t. No command: all null.
   struct Sample {
     double model_time = 0.0;
     core::Metrics metrics;
@@ -61,7 +60,12 @@ class SwarmMonitor {
     int alive = 0;
     int following = 0;
   };
+  /// Computes the sample and feeds it to the convergence detector and the settling history.
+  /// Converged needs every alive agent on the current epoch.
   Sample update(double model_time, std::int64_t now_ns);
+  /// The same sample without feeding anything: `converged` is the detector's verdict so far (the
+  /// final summary reports what the published metrics said, not one more sample).
+  Sample measure(double model_time, std::int64_t now_ns) const;
   const std::optional<Sample>& last() const { return last_; }
   bool converged() const { return detector_.converged(); }
   /// Model time at which the current epoch settled (core::settle_index over this epoch's samples).

@@ -144,7 +144,7 @@ bool parse_real(std::string_view s, double& out) {
     out = negative ? -kInf : kInf;
     return true;
   }
-  if (s == ".nan" || s == ".NaN" || s == ".NAN") {
+  if (body == ".nan" || body == ".NaN" || body == ".NAN") {
     out = std::numeric_limits<double>::quiet_NaN();
     return true;
   }
@@ -557,9 +557,28 @@ void assign(const std::optional<U>& v, T& out) {
   if (v) out = static_cast<T>(*v);
 }
 
+/// "a.b.c.d" with each part 0..255 (the transport takes IPv4 literals only).
+bool valid_ipv4(const std::string& s) {
+  int parts = 0;
+  std::size_t pos = 0;
+  while (pos <= s.size()) {
+    const std::size_t dot = std::min(s.find('.', pos), s.size());
+    const std::string part = s.substr(pos, dot - pos);
+    if (part.empty() || part.size() > 3 || part.find_first_not_of("0123456789") != std::string::npos ||
+        std::stoi(part) > 255)
+      return false;
+    ++parts;
+    pos = dot + 1;
+  }
+  return parts == 4;
+}
+
+/// "host:port" with host an IPv4 literal or localhost and port 1..65535.
 bool valid_host_port(const std::string& s) {
   const auto colon = s.rfind(':');
   if (colon == std::string::npos || colon == 0) return false;
+  const std::string host = s.substr(0, colon);
+  if (host != "localhost" && !valid_ipv4(host)) return false;
   long long port = 0;
   return parse_integer(s.substr(colon + 1), port) == IntParse::Ok && s[colon + 1] != '+' &&
          s[colon + 1] != '-' && port >= 1 && port <= 65535;
@@ -792,7 +811,7 @@ Config convert(const YAML::Node& root, bool version_required, Reader& rd) {
       if (valid_host_port(*v))
         tr.discovery_server = *v;
       else
-        rd.bad(server, "must be host:port with port 1..65535");
+        rd.bad(server, "must be host:port with host an IPv4 address or localhost and port 1..65535");
     }
     const Entry lease = get(m, s, "lease_s");
     const Entry announce = get(m, s, "announce_s");

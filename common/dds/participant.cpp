@@ -17,8 +17,9 @@ namespace {
 namespace fdds = eprosima::fastdds::dds;
 namespace frtps = eprosima::fastrtps::rtps;
 
-/// Largest max_participants accepted (ids probed per initial peer; ~100 per host is the practical limit).
-constexpr int kMaxParticipantsLimit = 1000;
+/// Largest max_participants accepted, the config loader's limit (ids probed per initial peer; about 100
+/// participants per host is the practical limit, and ids from 120 up use ports of the next domain's block).
+constexpr int kMaxParticipantsLimit = 230;
 
 [[noreturn]] void fail(const std::string& what) { throw std::runtime_error(what); }
 

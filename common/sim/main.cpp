@@ -133,7 +133,7 @@ int main(int argc, char** argv) {
     const core::ShapeSpec s = core::shape_at(cmd, r.model_time);
     const auto curve = core::curve_of(s);
     // The line is infinite: draw the stretch the agents span, with a margin.
-    double lo = 0, hi = curve->length();
+    double lo = 0, hi = s.scale * curve->length();  // world units, as closest_point's s
     if (!std::isfinite(hi)) {
       lo = 1e300, hi = -1e300;
       for (const auto& p : r.final_positions) {

@@ -60,6 +60,27 @@ TEST_CASE("metrics with the core functions; converged only when every agent foll
   CHECK(*m.settle_time({}) == 21.0);
 }
 
+TEST_CASE("measure reports the metrics now without feeding the convergence detector", "[supervisor]") {
+  core::ConvergenceDetector::Params p;
+  p.hold = 10;
+  SwarmMonitor m(kS, p);
+  m.set_command(circle(), 1, 0);
+  for (int k = 0; k <= 20; ++k) {
+    ring(m, 12, 3.9, 1, k * 1000);
+    m.update(k, k * 1000);
+  }
+  REQUIRE(m.converged());
+  // The swarm has just moved off the plateau: the summary shows where it is, and still reports the
+  // verdict of the samples the detector saw; update() would have reset it.
+  ring(m, 12, 3.0, 1, 21 * 1000);
+  const auto s = m.measure(21, 21 * 1000);
+  CHECK(*s.metrics.shape_error_mean == Approx(1.0));
+  CHECK(s.converged);
+  CHECK(m.converged());
+  CHECK(m.last()->model_time == 20.0);
+  CHECK_FALSE(m.update(21, 21 * 1000).converged);
+}
+
 TEST_CASE("a restarted supervisor learns the newest epoch followed", "[supervisor]") {
   SwarmMonitor m(kS, {});
   ring(m, 3, 4.0, 7, 0);

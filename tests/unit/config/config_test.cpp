@@ -365,7 +365,7 @@ agent: {rate_hz: 1000, neighbour_timeout_periods: 1, status_rate_hz: 0.5}
 supervisor: {metrics_rate_hz: 5, target_rate_hz: 20, agent_timeout_s: 0.5, flush_s: 2,
              converge: {band_abs: 0, band_rel: 0, gap_cv_max: 0.3, hold: 0}}
 transport: {profile: lan, domain: 232, max_participants: 230, interfaces: [192.168.1.2],
-            peers: [192.168.1.3, 192.168.1.4], discovery_server: "server.local:1",
+            peers: [192.168.1.3, 192.168.1.4], discovery_server: "10.0.0.9:1",
             lease_s: 10, announce_s: 9.5, socket_buffer_bytes: 2147483647}
 )");
   CHECK(c.name == "everything");
@@ -414,7 +414,7 @@ transport: {profile: lan, domain: 232, max_participants: 230, interfaces: [192.1
   CHECK(c.transport.max_participants == 230);
   CHECK(c.transport.interfaces == std::vector<std::string>{"192.168.1.2"});
   CHECK(c.transport.peers == std::vector<std::string>{"192.168.1.3", "192.168.1.4"});
-  CHECK(c.transport.discovery_server == "server.local:1");
+  CHECK(c.transport.discovery_server == "10.0.0.9:1");
   CHECK(c.transport.lease_s == 10.0);
   CHECK(c.transport.announce_s == 9.5);
   CHECK(c.transport.socket_buffer_bytes == 2147483647);
@@ -749,14 +749,18 @@ TEST_CASE("announce_s must be below lease_s") {
 
 TEST_CASE("discovery_server must be host and port") {
   for (const std::string bad :
-       {"localhost", ":11811", "host:0", "host:65536", "host:port", "host:"}) {
+       {"localhost", ":11811", "10.0.0.1:0", "10.0.0.1:65536", "10.0.0.1:port", "10.0.0.1:", "server.local:11811",
+        "10.0.0:11811", "10.0.0.256:11811", "10..0.1:11811", "10.0.0.1.2:11811"}) {
     INFO(bad);
     CHECK(problem_of("schema_version: 1\ntransport: {discovery_server: \"" + bad + "\"}\n") ==
-          "transport.discovery_server: must be host:port with port 1..65535, got \"" + bad +
+          "transport.discovery_server: must be host:port with host an IPv4 address or localhost and port "
+          "1..65535, got \"" + bad +
               "\" (line 2)");
   }
   CHECK(load_string("schema_version: 1\ntransport: {discovery_server: \"10.1.2.3:65535\"}\n")
             .transport.discovery_server == "10.1.2.3:65535");
+  CHECK(load_string("schema_version: 1\ntransport: {discovery_server: \"localhost:11811\"}\n")
+            .transport.discovery_server == "localhost:11811");
 }
 
 TEST_CASE("non-finite numbers are rejected") {

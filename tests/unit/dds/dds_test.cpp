@@ -713,6 +713,8 @@ TEST_CASE("bad transport configs are refused with the field named", "[dds][qos]"
   c = cfg;
   c.max_participants = 0;
   CHECK(problem(c).find("transport.max_participants:") == 0);
+  c.max_participants = 231;  // the loader's limit too
+  CHECK(problem(c).find("transport.max_participants:") == 0);
   c = cfg;
   c.lease_s = 0;
   CHECK(problem(c).find("transport.lease_s:") == 0);
