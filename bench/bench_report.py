@@ -288,7 +288,7 @@ def render(store: dict, path: Path, plan: dict) -> None:
     o.append(RATIO_HEAD)
     for rid in plan.get("main", []):
         e = rows.get(rid)
-        if e and e["row"]["kind"] != "baseline":
+        if e and e["row"]["kind"] == "agents":  # grouped rows have no baseline of the same shape
             o.append(ratio_line(rid, e, baseline_for(rows, e)))
     o.append("\n![delivery and p99 data age against N](figures/bench_scaling.png)\n\n")
 
