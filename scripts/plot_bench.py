@@ -78,7 +78,8 @@ def main() -> int:
         ax.grid(True, which="both", alpha=0.3)
     ax2.legend(fontsize=7, loc="lower right")
     m = store.get("machine", {})
-    fig.suptitle(f"shapeform on {m.get('host_cpus', '?')} CPUs ({m.get('cpu', '?')}), commit {store.get('commit', '?')}",
+    commits = sorted({e.get("commit", "?") for e in rows.values() if e["row"].get("section") == "main"})
+    fig.suptitle(f"shapeform on {m.get('host_cpus', '?')} CPUs ({m.get('cpu', '?')}), commit {', '.join(commits)}",
                  fontsize=9)
     fig.tight_layout()
     out.parent.mkdir(parents=True, exist_ok=True)
