@@ -967,7 +967,7 @@ TEST_CASE("to_yaml round-trips every field") {
   c.transport.max_participants = 4;
   c.transport.interfaces = {"127.0.0.1", "10.0.0.1"};
   c.transport.peers = {"host-a", "null", "1.5"};
-  c.transport.discovery_server = "ds.example:7400";
+  c.transport.discovery_server = "10.20.30.40:7400";
   c.transport.lease_s = 5;
   c.transport.announce_s = 1;
   c.transport.socket_buffer_bytes = 1 << 20;
