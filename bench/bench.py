@@ -927,7 +927,7 @@ def main(argv=None) -> int:
     store["machine"] = machine_info()
     store["commit"] = git_commit()
     store["date"] = dt.datetime.now().isoformat(timespec="seconds")
-    store["quick"] = bool(args.quick)
+    store.pop("quick", None)  # per row since rows of several invocations share the file
     main_ids = {r.id for r in all_rows}
     for row in selected:
         if row.id in main_ids:
@@ -937,6 +937,7 @@ def main(argv=None) -> int:
         run_rows(ctx, [row], n_runs, store["rows"])
         store["rows"][row.id]["row"]["section"] = row.section
         store["rows"][row.id]["command"] = rerun_command(row, args, n_runs)
+        store["rows"][row.id]["quick"] = bool(args.quick)
         results_path.parent.mkdir(parents=True, exist_ok=True)
         results_path.write_text(json.dumps(store, indent=1, default=str))
         render(store, Path(args.report), report_plan(store))  # partial results stay readable

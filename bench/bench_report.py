@@ -254,9 +254,11 @@ def render(store: dict, path: Path, plan: dict) -> None:
              "lateness, neighbours heard, samples received, data age percentiles, CPU, RSS), recorded by "
              "`shapeform_bench_probe`; convergence from the supervisor's `SwarmMetrics`; supervisor and host CPU and "
              "the kernel's UDP counters from `/proc`.\n\n")
+    quick = sorted(k for k, e in rows.items() if e.get("quick"))
     o.append(f"- **Date**: {store.get('date', '-')}; **commit**: `{store.get('commit', '-')}` (of the last invocation; "
              "each row's own commit and time are in the last table)"
-             f"{'; **quick mode** (1 run per row, short windows)' if store.get('quick') else ''}\n")
+             + (f"; **quick mode** (1 run, short window) for {', '.join(f'`{k}`' for k in quick)}" if quick else "")
+             + "\n")
     o.append(f"- **Machine**: {m.get('cpu', '?')}, {m.get('host_cpus', '?')} CPUs, {m.get('mem_gb', '?')} GB RAM, "
              f"{m.get('os', '?')}, kernel {m.get('kernel', '?')}, Fast DDS {m.get('fastdds', '?')}\n")
     o.append(f"- **Kernel socket limits**: net.core.rmem_max = {m.get('rmem_max', '?')}, wmem_max = {m.get('wmem_max', '?')}, "
