@@ -2,6 +2,7 @@
 // target, computes/publishes/records metrics, and runs console and script commands between ticks.
 #include "supervisor_node.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -79,7 +80,9 @@ class Supervisor {
       : cfg_(cfg),
         opt_(opt),
         out_(opt.json ? std::cerr : std::cout),
-        monitor_(static_cast<std::int64_t>(cfg.supervisor.agent_timeout_s * 1e9), cfg.supervisor.converge),
+        // Agents publish once per period: never call one dead before it missed 3 periods.
+        monitor_(static_cast<std::int64_t>(std::max(cfg.supervisor.agent_timeout_s, 3.0 / cfg.agent.rate_hz) * 1e9),
+                 cfg.supervisor.converge),
         recorder_(cfg.supervisor.flush_s),
         current_(cfg.command) {}
 
@@ -295,7 +298,7 @@ void Supervisor::execute(const Action& a, std::int64_t now) {
         } else if constexpr (std::is_same_v<T, Status>) {
           out_ << monitor_.status_table(now, model_time(now)) << std::flush;
         } else if constexpr (std::is_same_v<T, ShowMetrics>) {
-          const auto s = monitor_.update(model_time(now), now);
+          const auto s = monitor_.measure(model_time(now), now);  // a query: the detector sees only the metrics ticks
           nlohmann::json j = sim::metrics_json(s.metrics);
           j["epoch"] = epoch_;
           j["model_time"] = s.model_time;

@@ -8,6 +8,8 @@
   and the survivors re-space.
 - The supervisor killed with SIGKILL and restarted: the agents keep the last command and stay on
   the shape; the new supervisor sees every agent with its epoch and continues after that epoch.
+- Agents slower than 1 Hz (agent.rate_hz = 0.5, which the config allows) run, hear each other and
+  follow the command.
 
 Re-spacing is checked through the gap CV: one agent more or less without re-spacing leaves one
 gap of about half or twice the others, a gap CV of about 0.3 for 10 agents, twice the supervisor's
@@ -138,6 +140,25 @@ class MembershipTest(harness.SwarmTestCase):
         harness.poll(on_new_circle, 60, "every agent on epoch 2 and on the circle of radius 3", 0.5)
         sup2.send("quit")
         self.assertEqual(sup2.wait(20), 0)
+
+
+    def test_agents_below_one_hertz(self):
+        config = harness.scenario("circle")
+        sets = ["--set", "agent.rate_hz=0.5", "--set", "swarm.agents=3", "--set", "agent.neighbour_timeout_periods=3"]
+        sup = self.start_supervisor(config, extra=sets)
+        agents = self.start_agents(3, config, seed=1, extra=sets)
+        self.assertTrue(sup.wait_agents(3, 60), "the supervisor hears every agent")
+        self.assertEqual(sup.command("start"), 1)
+        # Each agent logs what it hears about once a second (here: every tick, 2 s apart).
+        harness.poll(lambda: all("hearing 2 neighbours" in a.log() for a in agents), 60,
+                     "every agent to hear the other two")
+        start = len(sup.out())
+        sup.send("wait time 2 timeout=60")  # every agent on the command, 2 iterations done by its own count
+        m = sup.metrics(timeout=90)  # answered once the wait is over
+        self.assertNotIn("wait time: timed out", sup.out()[start:])
+        self.assertEqual(m["agents"], 3)
+        self.assert_all_alive(agents)
+        self.assertTrue(sup.running())
 
 
 if __name__ == "__main__":

@@ -774,6 +774,8 @@ TEST_CASE("non-finite numbers are rejected") {
         "tracking.phase: must be finite, got 1e999 (line 3)");
   CHECK(problem_of("schema_version: 1\ntracking:\n  point: [0, .NaN]\n") ==
         "tracking.point[1]: must be finite, got .NaN (line 3)");
+  CHECK(problem_of("schema_version: 1\ndynamics:\n  k2: -.nan\n") ==
+        "dynamics.k2: must be finite, got -.nan (line 3)");
 }
 
 TEST_CASE("schema_version is required in a file and must be 1") {
