@@ -1,0 +1,63 @@
+#!/usr/bin/env python3
+"""Several agents in one process (`shapeform_agent_group`), the mode the benchmarks use for N = 100.
+
+- One group process hosting agents 0..5 and two single agent processes (6, 7) make one swarm: the
+  supervisor hears 8 agents, every hosted agent hears the 7 others (in the process and over DDS), the
+  circle converges and every agent stands apart.
+- SIGTERM to the group process disposes every hosted agent: the supervisor sees the 6 leave at once and
+  the two single agents go on, hearing only each other.
+- A bad --ids list exits with status 2 and a message naming --ids.
+"""
+import os
+import signal
+import subprocess
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import harness  # noqa: E402
+
+HOSTED, SINGLE = 6, 2
+N = HOSTED + SINGLE
+
+
+class GroupTest(harness.SwarmTestCase):
+
+    def test_group_and_single_agents_form_one_swarm(self):
+        config = harness.scenario("circle")
+        sets = ["--set", "swarm.agents=%d" % N]
+        sup = self.start_supervisor(config, extra=sets)
+        group = self.start("group", [harness.bin_path("shapeform_agent_group"), "--ids", "0-%d" % (HOSTED - 1),
+                                     "--config", config, "--domain", str(self.domain), "--seed", "1"] + sets)
+        singles = self.start_agents(SINGLE, config, seed=1, extra=sets, first=HOSTED)
+        self.assertTrue(sup.wait_agents(N, 60), "the supervisor hears all %d agents" % N)
+        harness.poll(lambda: "every hosted agent hears at least %d neighbours" % (N - 1) in group.log(), 60,
+                     "every hosted agent to hear the %d others" % (N - 1))
+        self.assertEqual(sup.command("start"), 1)
+        self.assertTrue(sup.wait_converged(60), "the circle converges")
+        m = sup.metrics()
+        self.assertEqual(m["agents"], N)
+        self.assertEqual(m["clusters"], N, "every agent apart from the others")
+        self.assert_all_alive([group] + singles)
+
+        before = {a.name: len(a.log()) for a in singles}
+        group.signal(signal.SIGTERM)
+        self.assertEqual(group.wait(30), 0, "the group process stops cleanly")
+        harness.poll(lambda: sup.metrics()["agents"] == SINGLE, 30, "the supervisor to drop the hosted agents")
+        # Disposed, not timed out: the supervisor says each one left.
+        for i in range(HOSTED):
+            self.assertIn("agent %d left" % i, sup.log())
+        for a in singles:
+            harness.poll(lambda a=a: "hearing %d neighbours" % (SINGLE - 1) in a.log()[before[a.name]:], 30,
+                         "%s to hear only the other single agent" % a.name)
+        self.assert_all_alive(singles)
+
+    def test_bad_ids_exit_2(self):
+        for ids in ("5-2", "1,1", "x", "0-10000", ""):
+            r = subprocess.run([harness.bin_path("shapeform_agent_group"), "--ids", ids, "--domain",
+                                str(self.domain)], capture_output=True, text=True, timeout=30)
+            self.assertEqual(r.returncode, 2, "--ids %r: %s" % (ids, r.stderr))
+            self.assertIn("--ids", r.stderr, "--ids %r" % ids)
+
+
+if __name__ == "__main__":
+    harness.main()
