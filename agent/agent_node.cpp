@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <memory>
 #include <sstream>
 
@@ -36,6 +37,19 @@ constexpr std::size_t kAgeCapacity = 4096;
 
 int run_agent(std::int32_t id, const core::Vec2& start, const config::Config& cfg) {
   return run_agents({id}, {start}, cfg);
+}
+
+std::optional<config::Config> load_config(const std::string& prog, const std::string& path,
+                                          std::vector<std::string> sets, std::optional<int> domain,
+                                          std::optional<long long> seed) {
+  if (domain) sets.push_back("transport.domain=" + std::to_string(*domain));
+  if (seed) sets.push_back("swarm.seed=" + std::to_string(*seed));
+  try {
+    return config::load(path, sets);
+  } catch (const config::ConfigError& e) {
+    for (const auto& p : e.problems()) std::cerr << prog << ": " << p << '\n';
+    return std::nullopt;
+  }
 }
 
 int run_agents(const std::vector<std::int32_t>& ids, const std::vector<core::Vec2>& starts,

@@ -1,11 +1,20 @@
 #pragma once
 #include <cstdint>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "config/config.hpp"
 #include "core/types.hpp"
 
 namespace shapeform::agent {
+
+/// The agent executables' configuration: the file at `path` (empty: the defaults) with the `sets`
+/// overrides, then --domain and --seed when given. Problems go to stderr as "prog: problem"; nullopt
+/// then (exit status 2).
+std::optional<config::Config> load_config(const std::string& prog, const std::string& path,
+                                          std::vector<std::string> sets, std::optional<int> domain,
+                                          std::optional<long long> seed);
 
 /// Runs the agent's fixed-rate loop on DDS until SIGINT/SIGTERM. Returns the process exit status
 /// (0 clean stop, 1 runtime failure such as a participant that cannot be created).

@@ -76,17 +76,12 @@ int main(int argc, char** argv) {
     std::cerr << "shapeform_agent_group: --ids: " << error << '\n';
     return 2;
   }
-  if (app.count("--domain")) sets.push_back("transport.domain=" + std::to_string(domain));
-  if (app.count("--seed")) sets.push_back("swarm.seed=" + std::to_string(seed));
-  config::Config cfg;
-  try {
-    cfg = config::load(config_path, sets);
-  } catch (const config::ConfigError& e) {
-    for (const auto& p : e.problems()) std::cerr << "shapeform_agent_group: " << p << '\n';
-    return 2;
-  }
+  const auto cfg = agent::load_config("shapeform_agent_group", config_path, sets,
+                                      app.count("--domain") ? std::optional<int>(domain) : std::nullopt,
+                                      app.count("--seed") ? std::optional<long long>(seed) : std::nullopt);
+  if (!cfg) return 2;
   std::vector<core::Vec2> starts;
   for (const auto id : ids)
-    starts.push_back(agent::seeded_start(id, cfg.swarm.agents, cfg.swarm.seed, cfg.swarm.init_half_width));
-  return agent::run_agents(ids, starts, cfg);
+    starts.push_back(agent::seeded_start(id, cfg->swarm.agents, cfg->swarm.seed, cfg->swarm.init_half_width));
+  return agent::run_agents(ids, starts, *cfg);
 }

@@ -34,16 +34,10 @@ int main(int argc, char** argv) {
     std::cerr << "shapeform_agent: --id must be in 0..9999, got " << id << '\n';
     return 2;
   }
-  if (app.count("--domain")) sets.push_back("transport.domain=" + std::to_string(domain));
-  if (app.count("--seed")) sets.push_back("swarm.seed=" + std::to_string(seed));
-
-  config::Config cfg;
-  try {
-    cfg = config::load(config_path, sets);
-  } catch (const config::ConfigError& e) {
-    for (const auto& p : e.problems()) std::cerr << "shapeform_agent: " << p << '\n';
-    return 2;
-  }
+  const auto cfg = agent::load_config("shapeform_agent", config_path, sets,
+                                      app.count("--domain") ? std::optional<int>(domain) : std::nullopt,
+                                      app.count("--seed") ? std::optional<long long>(seed) : std::nullopt);
+  if (!cfg) return 2;
 
   core::Vec2 x0;
   if (!start.empty()) {
@@ -56,7 +50,7 @@ int main(int argc, char** argv) {
     }
     x0 = core::Vec2(a, b);
   } else {
-    x0 = agent::seeded_start(id, cfg.swarm.agents, cfg.swarm.seed, cfg.swarm.init_half_width);
+    x0 = agent::seeded_start(id, cfg->swarm.agents, cfg->swarm.seed, cfg->swarm.init_half_width);
   }
-  return agent::run_agent(id, x0, cfg);
+  return agent::run_agent(id, x0, *cfg);
 }

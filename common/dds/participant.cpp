@@ -126,7 +126,7 @@ bool parse_ipv4(const std::string& text, std::array<std::uint8_t, 4>& octets) {
 fdds::DomainParticipantQos participant_qos(const config::TransportConfig& cfg, const std::string& name) {
   validate_common(cfg);
 
-  // Built by hand: get_default_participant_qos() / PARTICIPANT_QOS_DEFAULT would pick up XML profiles
+  // Built by hand: the library's default participant QoS would pick up XML profiles
   // and builtin transports (UDPv4 on every interface + SHM).
   fdds::DomainParticipantQos pq;
   pq.name(name);
