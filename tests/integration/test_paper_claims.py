@@ -10,14 +10,14 @@ and a supervisor on loopback; fixed seeds; each test's runs one after another on
   same formation around a fixed centre at C(0) from the same start (the static problem in the centre's
   frame), on both paths.
 
-  The issue's bound, centroid and ring errors within 0.1 of the fixed-centre run, is checked exactly in
-  the simulator, where it is a property of the law (on the line path the two runs are identical). For
-  the processes the ring error is held to the same 0.1, the centroid error to 0.3: each process ticks
-  at its own phase, so every agent sees some neighbours one step older than others, and the resting
-  ring settles off-centre by an amount that depends on the phases (fixed-centre runs alone spread over
-  about 0.05..0.25, feed-forward runs over 0.1..0.4, because a stale neighbour is then also one step of
-  the centre's motion behind). Without feed-forward the centroid error is about 4. docs/RESULTS.md has
-  the numbers and the asynchronous model that reproduces them.
+  The issue's bound, centroid and ring errors within 0.1 of the fixed-centre run, is a property of the
+  law, checked in the simulator (on the line path the two runs are identical) and on processes in
+  lockstep (agent.sync=lockstep: every process uses the same neighbour snapshot per iteration). Free-
+  running processes tick at their own phases, so every agent sees some neighbours one step older than
+  others, and the resting ring settles off-centre by an amount that depends on the phases (fixed-centre
+  runs alone spread over about 0.05..0.25, feed-forward runs over 0.1..0.4): the bound does not hold
+  there run by run, and docs/RESULTS.md has the numbers and the asynchronous model that reproduces
+  them. Without feed-forward the centroid error is about 4.
 
   On the line path the swarm starts around C(0) (the seeded start shifted by C(0) = (-10, -10)): from
   the paper's start, 14 units away, agents that fall behind on the approach escape for ever under the
@@ -140,12 +140,16 @@ class PaperClaimsTest(harness.SwarmTestCase):
 
     def test_feedforward_processes_match_a_fixed_centre(self):
         T = 300
+        # Lockstep: every process takes the same neighbour snapshot per iteration (the simulator's
+        # numbers), so the bound holds as it does in the simulator instead of depending on
+        # the tick phases of free-running processes.
+        sync = ["agent.sync=lockstep"]
         for path in ("line", "circle"):
             with self.subTest(path=path):
                 start = self.start_csv(f"track_{path}", C0[path] if path == "line" else (0.0, 0.0))
-                _, ff = self.launch(f"{path}_ff", f"track_{path}", 10, T, start, ["tracking.feedforward=true"])
+                _, ff = self.launch(f"{path}_ff", f"track_{path}", 10, T, start, sync + ["tracking.feedforward=true"])
                 _, fx = self.launch(f"{path}_fixed", f"track_{path}", 10, T, start,
-                                    ["tracking.path=fixed", f"tracking.point=[{C0[path][0]:g},{C0[path][1]:g}]"])
+                                    sync + ["tracking.path=fixed", f"tracking.point=[{C0[path][0]:g},{C0[path][1]:g}]"])
                 c_ff, c_fx = self.window(ff, "centroid_error", 200, T), self.window(fx, "centroid_error", 200, T)
                 r_ff, r_fx = self.window(ff, "ring_error", 200, T), self.window(fx, "ring_error", 200, T)
                 msg = (f"{path}: feed-forward centroid {c_ff:.3f} ring {r_ff:.3f}; fixed centre centroid {c_fx:.3f} "
@@ -154,7 +158,7 @@ class PaperClaimsTest(harness.SwarmTestCase):
                 self.assertLess(c_ff, 0.5, msg)  # surrounds the moving centre
                 self.assertLess(r_ff, 0.7, msg)  # on a ring of radius about r0 around it
                 self.assertLessEqual(abs(r_ff - r_fx), 0.1, msg)
-                self.assertLessEqual(abs(c_ff - c_fx), 0.3, msg)
+                self.assertLessEqual(abs(c_ff - c_fx), 0.1, msg)
 
 
 if __name__ == "__main__":
