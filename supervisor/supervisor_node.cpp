@@ -298,7 +298,7 @@ void Supervisor::execute(const Action& a, std::int64_t now) {
         } else if constexpr (std::is_same_v<T, Status>) {
           out_ << monitor_.status_table(now, model_time(now)) << std::flush;
         } else if constexpr (std::is_same_v<T, ShowMetrics>) {
-          const auto s = monitor_.measure(model_time(now), now);  // a query: the detector sees only the metrics ticks
+          const auto s = monitor_.measure(metrics_time(now), now);  // a query: the detector sees only the metrics ticks
           nlohmann::json j = sim::metrics_json(s.metrics);
           j["epoch"] = epoch_;
           j["model_time"] = s.model_time;

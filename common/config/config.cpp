@@ -831,9 +831,7 @@ Config convert(const YAML::Node& root, bool version_required, Reader& rd) {
            tr.socket_buffer_bytes);
     const Entry multicast = get(m, s, "multicast_data");
     assign(rd.boolean(multicast), tr.multicast_data);
-    const bool ds_on_lo = tr.profile == "discovery-server" && (tr.discovery_server.rfind("127.", 0) == 0 ||
-                                                               tr.discovery_server.rfind("localhost:", 0) == 0);
-    if (tr.multicast_data && tr.profile != "loopback" && !ds_on_lo)
+    if (tr.multicast_data && !tr.on_loopback())
       rd.bad(multicast, "needs transport.profile loopback, or discovery-server with a server on 127.x (profile is " +
                             tr.profile + ")");
   }

@@ -41,6 +41,13 @@ struct TransportConfig {
   /// Loopback profile, or discovery-server with a server on 127.x / localhost (whitelist 127.0.0.1,
   /// so the group stays on lo). Off by default.
   bool multicast_data = false;
+
+  /// Whether every participant's traffic stays on lo: the loopback profile, or a discovery server on
+  /// 127.x / localhost. multicast_data needs it (the loader and the participant factory both check).
+  bool on_loopback() const {
+    return profile == "loopback" || (profile == "discovery-server" && (discovery_server.rfind("127.", 0) == 0 ||
+                                                                       discovery_server.rfind("localhost:", 0) == 0));
+  }
 };
 
 /// Agent process settings.

@@ -92,9 +92,7 @@ void validate_common(const config::TransportConfig& cfg) {
   if (cfg.socket_buffer_bytes < 0) {
     fail("transport.socket_buffer_bytes: must be >= 0, got " + str(cfg.socket_buffer_bytes));
   }
-  if (cfg.multicast_data && !(cfg.profile == "loopback" ||
-                              (cfg.profile == "discovery-server" && cfg.discovery_server.rfind("127.", 0) == 0) ||
-                              (cfg.profile == "discovery-server" && cfg.discovery_server.rfind("localhost:", 0) == 0))) {
+  if (cfg.multicast_data && !cfg.on_loopback()) {
     fail("transport.multicast_data: needs the loopback profile or a discovery server on 127.x (traffic on lo "
          "only), got profile " + quoted(cfg.profile) +
          (cfg.profile == "discovery-server" ? " with server " + quoted(cfg.discovery_server) : ""));
@@ -245,7 +243,7 @@ std::string describe(const config::TransportConfig& cfg) {
   os << ", domain " << cfg.domain << ", lease " << cfg.lease_s << " s, announce " << cfg.announce_s
      << " s";
   if (cfg.socket_buffer_bytes > 0) os << ", socket buffers " << cfg.socket_buffer_bytes << " B";
-  if (cfg.multicast_data) os << ", state on multicast 239.255.0.1:" << (7400 + 250 * cfg.domain + 1);
+  if (cfg.multicast_data) os << ", state on multicast 239.255.0.1:" << user_multicast_port(cfg.domain);
   return os.str();
 }
 
