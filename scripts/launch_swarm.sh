@@ -153,6 +153,11 @@ if [ -n "$init" ]; then
 fi
 [ -n "$n" ] || n=$cfg_agents
 [ -n "$seed" ] || seed=$cfg_seed
+# N agents and the supervisor each take one of the domain's participant slots on this host.
+max_participants=$(yaml_key transport max_participants)
+if [ -n "$max_participants" ] && [ $((n + 1)) -gt "$max_participants" ]; then
+  die "-n $n: $n agents and the supervisor need $((n + 1)) participants on this host, transport.max_participants is $max_participants (--set transport.max_participants=$((n + 1)) or more)"
+fi
 # Every process sees the swarm size, so seeded starts match shapeform_sim --agents N --seed S.
 sets+=("swarm.agents=$n")
 setargs=()

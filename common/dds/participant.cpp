@@ -1,8 +1,12 @@
 #include "dds/participant.hpp"
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <limits>
 #include <memory>
+#include <optional>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -74,6 +78,56 @@ frtps::Locator_t loopback_locator(std::uint32_t port) { return udp_locator({127,
 /// RTPS well-known user-data multicast port of a domain: PB + DG * domain + d2 = 7400 + 250 d + 1.
 std::uint32_t user_multicast_port(int domain) { return 7400u + 250u * static_cast<std::uint32_t>(domain) + 1u; }
 
+/// RTPS metatraffic unicast port of participant slot 0 of a domain: PB + DG * domain + d1 = 7400 + 250 d + 10.
+/// Slot k has it at + 2k and its user unicast port right after (d3 = 11).
+std::uint32_t metatraffic_unicast_port0(int domain) {
+  return 7410u + 250u * static_cast<std::uint32_t>(domain);
+}
+
+/// The UDP ports this process has bound: socket inodes from /proc/self/fd matched against
+/// /proc/self/net/udp. nullopt where /proc cannot tell (not Linux).
+std::optional<std::set<std::uint32_t>> own_udp_ports() {
+  namespace fs = std::filesystem;
+  std::set<unsigned long> inodes;
+  std::error_code ec;
+  for (fs::directory_iterator it("/proc/self/fd", ec), end; !ec && it != end; it.increment(ec)) {
+    std::error_code lec;
+    const std::string target = fs::read_symlink(it->path(), lec).string();
+    if (!lec && target.rfind("socket:[", 0) == 0) inodes.insert(std::strtoul(target.c_str() + 8, nullptr, 10));
+  }
+  std::ifstream udp("/proc/self/net/udp");
+  if (ec || !udp) return std::nullopt;
+  std::set<std::uint32_t> ports;
+  std::string line;
+  std::getline(udp, line);  // header
+  while (std::getline(udp, line)) {
+    // sl local_address rem_address st tx_queue:rx_queue tr:tm->when retrnsmt uid timeout inode ...
+    std::istringstream fields(line);
+    std::string sl, local, remote, st, queues, timer, retransmits, uid, timeout;
+    unsigned long inode = 0;
+    if (!(fields >> sl >> local >> remote >> st >> queues >> timer >> retransmits >> uid >> timeout >> inode)) continue;
+    const auto colon = local.find(':');
+    if (colon != std::string::npos && inodes.count(inode) != 0) {
+      ports.insert(static_cast<std::uint32_t>(std::strtoul(local.c_str() + colon + 1, nullptr, 16)));
+    }
+  }
+  return ports;
+}
+
+/// True when `after` holds a metatraffic + user unicast port pair of `domain` that `before` did not:
+/// the participant created in between can be reached. Fast DDS 2.9 creates a participant even when
+/// every port slot it tried was taken, and that participant silently hears nothing.
+bool gained_unicast_ports(int domain, const std::set<std::uint32_t>& before, const std::set<std::uint32_t>& after) {
+  const std::uint32_t port0 = metatraffic_unicast_port0(domain);
+  for (const std::uint32_t p : after) {
+    if (p >= port0 && (p - port0) % 2 == 0 && before.count(p) == 0 && after.count(p + 1) != 0 &&
+        before.count(p + 1) == 0) {
+      return true;
+    }
+  }
+  return false;
+}
+
 void validate_common(const config::TransportConfig& cfg) {
   if (cfg.domain < 0 || cfg.domain > kMaxDomainId) {
     fail("transport.domain: must be in 0.." + str(kMaxDomainId) + ", got " + str(cfg.domain));
@@ -138,6 +192,10 @@ fdds::DomainParticipantQos participant_qos(const config::TransportConfig& cfg, c
   }
 
   auto& builtin = pq.wire_protocol().builtin;
+  // A participant whose ports are taken moves to the next participant slot, at most mutation_tries
+  // times (Fast DDS default 100: the 102nd participant of a domain on one host got no port at all).
+  // Slots 0..max_participants-1 are the ones the initial peers probe.
+  builtin.mutation_tries = static_cast<std::uint32_t>(cfg.max_participants - 1);
   builtin.discovery_config.leaseDuration = eprosima::fastrtps::Duration_t(cfg.lease_s);
   builtin.discovery_config.leaseDuration_announcementperiod =
       eprosima::fastrtps::Duration_t(cfg.announce_s);
@@ -199,11 +257,19 @@ fdds::DomainParticipant* create_participant(const config::TransportConfig& cfg, 
   }
   auto* factory = fdds::DomainParticipantFactory::get_instance();
   if (factory == nullptr) fail("create_participant: DomainParticipantFactory unavailable");
+  const auto ports_before = own_udp_ports();
   fdds::DomainParticipant* participant =
       factory->create_participant(static_cast<fdds::DomainId_t>(cfg.domain), pq);
   if (participant == nullptr) {
     fail("create_participant failed for " + quoted(name) + " on " + describe(cfg) +
          " (see Fast DDS log above; ports in use or bad interface address?)");
+  }
+  const auto ports_after = own_udp_ports();
+  if (ports_before && ports_after && !gained_unicast_ports(cfg.domain, *ports_before, *ports_after)) {
+    factory->delete_participant(participant);
+    fail("create_participant: " + quoted(name) + " found no free participant port on domain " + str(cfg.domain) +
+         ": this host already runs transport.max_participants (" + str(cfg.max_participants) +
+         ") participants on it; raise transport.max_participants or use another domain");
   }
   return participant;
 }

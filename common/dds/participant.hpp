@@ -33,6 +33,8 @@ inline constexpr int kMaxDomainId = 232;
 ///    if local participants must meet.
 ///  - "discovery-server": CLIENT of server id 0 at `discovery_server` "host:port" (host an IPv4
 ///    address or "localhost"); UDPv4 whitelisted to 127.0.0.1 when the host is a loopback address.
+/// A participant whose port slot is taken moves to the next one, up to slot max_participants - 1
+/// (builtin.mutation_tries; the library's default of 100 left the 102nd participant on a host deaf).
 /// Lease and announcement period come from lease_s / announce_s; socket_buffer_bytes > 0 sets the
 /// UDP send and receive buffer sizes (the kernel caps them at net.core.rmem_max / wmem_max).
 /// multicast_data (loopback only) changes no participant setting: see data_multicast_locator().
@@ -51,7 +53,9 @@ eprosima::fastdds::dds::DomainParticipantQos participant_qos(const config::Trans
 eprosima::fastrtps::rtps::Locator_t data_multicast_locator(const config::TransportConfig& cfg);
 
 /// Creates a participant on cfg.domain from participant_qos(cfg, name). Never returns null:
-/// throws std::runtime_error naming the problem. Free it with delete_participant().
+/// throws std::runtime_error naming the problem, including a participant that got no unicast port
+/// (every participant slot it may take, max_participants of them, is in use on this host: Fast DDS
+/// itself would create it deaf). Free it with delete_participant().
 eprosima::fastdds::dds::DomainParticipant* create_participant(const config::TransportConfig& cfg,
                                                               const std::string& name);
 

@@ -178,6 +178,8 @@ class LauncherTest(harness.SwarmTestCase):
         (["--scenario", "circle", "--set", "dynamics.speed=1"], r"^launch_swarm: .*unknown key"),
         (["--scenario", "circle", "--init", "/nonexistent/init.csv"], r"^launch_swarm: --init: "),
         (["--scenario", "circle", "--frobnicate"], r"^launch_swarm: unknown argument '--frobnicate'"),
+        (["--scenario", "circle", "-n", "120"], r"^launch_swarm: -n 120: .* need 121 participants on this host, "
+                                                r"transport\.max_participants is 120"),
     ]
 
     def test_bad_arguments_exit_2(self):

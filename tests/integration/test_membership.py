@@ -8,6 +8,8 @@
   and the survivors re-space.
 - The supervisor killed with SIGKILL and restarted: the agents keep the last command and stay on
   the shape; the new supervisor sees every agent with its epoch and continues after that epoch.
+- A participant that finds every port slot of its domain taken (transport.max_participants) is an
+  error, not a deaf agent.
 - Agents slower than 1 Hz (agent.rate_hz = 0.5, which the config allows) run, hear each other and
   follow the command.
 
@@ -86,7 +88,7 @@ class MembershipTest(harness.SwarmTestCase):
                   and all(r["alive"] == "yes" and r["heard"] == AGENTS - 2 for r in live.values()))
             return rows if ok else None
 
-        # Far below the 20 s lease: the application's neighbour timeout (3 periods) did it.
+        # Far below the 20 s lease: the application's neighbour timeout (10 periods here) did it.
         harness.poll(dropped, 12, "every survivor to drop agent 4 (heard = %d) and agent 4 DEAD" % (AGENTS - 2), 0.2)
 
         def respaced():
@@ -141,6 +143,22 @@ class MembershipTest(harness.SwarmTestCase):
         sup2.send("quit")
         self.assertEqual(sup2.wait(20), 0)
 
+
+    def test_no_free_participant_slot_is_an_error(self):
+        # transport.max_participants = 2: two agents take the domain's two participant port slots on
+        # this host. Fast DDS would create a third participant without any port (deaf and unheard:
+        # the 102nd participant of a swarm did exactly that with the library's 100 slot tries); the
+        # factory refuses it with a message instead, and the two others carry on.
+        config = harness.scenario("circle")
+        sets = ["--set", "transport.max_participants=2"]
+        pair = self.start_agents(2, config, seed=1, extra=sets)
+        harness.poll(lambda: all("hearing 1 neighbours" in a.log() for a in pair), 60,
+                     "the two agents to hear each other")
+        third = self.start_agent(2, config, seed=1, extra=sets)
+        self.assertEqual(third.wait(60), 1)
+        self.assertIn("found no free participant port on domain %d" % self.domain, third.log())
+        self.assertIn("transport.max_participants (2)", third.log())
+        self.assert_all_alive(pair)
 
     def test_agents_below_one_hertz(self):
         config = harness.scenario("circle")
