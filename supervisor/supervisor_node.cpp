@@ -82,7 +82,7 @@ class Supervisor {
         out_(opt.json ? std::cerr : std::cout),
         // Agents publish once per period: never call one dead before it missed 3 periods.
         monitor_(static_cast<std::int64_t>(std::max(cfg.supervisor.agent_timeout_s, 3.0 / cfg.agent.rate_hz) * 1e9),
-                 cfg.supervisor.converge),
+                 cfg.supervisor.converge, cfg.agent.lockstep),
         recorder_(cfg.supervisor.flush_s),
         current_(cfg.command) {}
 
@@ -159,7 +159,8 @@ void Supervisor::drain(std::int64_t now) {
       throttled_.warn("state", "agent state rejected: " + why);
       continue;
     }
-    monitor_.on_state(s.msg.id(), core::Vec2(s.msg.x(), s.msg.y()), s.msg.epoch(), s.msg.model_time(), now);
+    monitor_.on_state(s.msg.id(), core::Vec2(s.msg.x(), s.msg.y()), core::Vec2(s.msg.prev_x(), s.msg.prev_y()),
+                      s.msg.epoch(), s.msg.model_time(), now);
   }
   status_reader_.drain(statuses_);
   for (const auto& s : statuses_)
@@ -216,7 +217,7 @@ void Supervisor::metrics_tick(std::int64_t now) {
     try {
       recorder_.write_metrics({wall, t, epoch_, s.alive, s.metrics, s.converged});
       const auto step = static_cast<std::int64_t>(std::llround(t / current_.dt));
-      for (const auto& [id, x] : monitor_.alive_positions(now)) recorder_.write_positions(wall, t, step, id, x.x(), x.y());
+      for (const auto& [id, x] : monitor_.alive_positions(now, t)) recorder_.write_positions(wall, t, step, id, x.x(), x.y());
       recorder_.flush_if_due(Recorder::Clock::now());
     } catch (const std::exception& e) {
       throttled_.error("record", std::string("recording: ") + e.what());

@@ -6,13 +6,14 @@
 
 namespace shapeform::supervisor {
 
-SwarmMonitor::SwarmMonitor(std::int64_t agent_timeout_ns, core::ConvergenceDetector::Params converge)
-    : agent_timeout_ns_(agent_timeout_ns), detector_(converge) {}
+SwarmMonitor::SwarmMonitor(std::int64_t agent_timeout_ns, core::ConvergenceDetector::Params converge, bool lockstep)
+    : agent_timeout_ns_(agent_timeout_ns), detector_(converge), lockstep_(lockstep) {}
 
-void SwarmMonitor::on_state(std::int32_t id, const core::Vec2& x, std::uint32_t epoch, double model_time,
-                            std::int64_t now_ns) {
+void SwarmMonitor::on_state(std::int32_t id, const core::Vec2& x, const core::Vec2& prev_x, std::uint32_t epoch,
+                            double model_time, std::int64_t now_ns) {
   AgentView& a = agents_[id];
   a.x = x;
+  a.prev_x = prev_x;
   a.epoch = epoch;
   a.model_time = model_time;
   a.last_seen_ns = now_ns;
@@ -71,10 +72,15 @@ std::optional<double> SwarmMonitor::min_following_model_time(std::int64_t now_ns
   return t;
 }
 
-std::vector<std::pair<std::int32_t, core::Vec2>> SwarmMonitor::alive_positions(std::int64_t now_ns) const {
+std::vector<std::pair<std::int32_t, core::Vec2>> SwarmMonitor::alive_positions(std::int64_t now_ns,
+                                                                               std::optional<double> at) const {
   std::vector<std::pair<std::int32_t, core::Vec2>> out;
-  for (const auto& [id, a] : agents_)
-    if (alive(a, now_ns)) out.emplace_back(id, a.x);
+  for (const auto& [id, a] : agents_) {
+    if (!alive(a, now_ns)) continue;
+    // In lockstep an agent is at most one step past the slowest one: its previous state is at `at`.
+    const bool ahead = lockstep_ && at && a.epoch == epoch_ && a.model_time > *at;
+    out.emplace_back(id, ahead ? a.prev_x : a.x);
+  }
   return out;
 }
 
@@ -86,7 +92,7 @@ SwarmMonitor::Sample SwarmMonitor::measure(double model_time, std::int64_t now_n
   if (command_) {
     std::vector<core::Vec2> x;
     x.reserve(agents_.size());
-    for (const auto& [id, p] : alive_positions(now_ns)) x.push_back(p);
+    for (const auto& [id, p] : alive_positions(now_ns, model_time)) x.push_back(p);
     s.metrics = core::compute_metrics(*command_, x, model_time);
   } else {
     s.metrics.agents = s.alive;

@@ -14,6 +14,7 @@ namespace shapeform::supervisor {
 
 struct AgentView {
   core::Vec2 x = core::Vec2::Zero();
+  core::Vec2 prev_x = core::Vec2::Zero();  ///< position one step earlier (AgentState.prev_x/prev_y)
   std::uint32_t epoch = 0;      ///< command epoch the agent follows
   double model_time = 0.0;      ///< the agent's model time
   std::int64_t last_seen_ns = 0;
@@ -25,9 +26,12 @@ struct AgentView {
 
 class SwarmMonitor {
  public:
-  SwarmMonitor(std::int64_t agent_timeout_ns, core::ConvergenceDetector::Params converge);
+  /// lockstep: the agents step together (agent.sync = lockstep), so a sample at model time t takes
+  /// every agent at step t, the previous position of those already one step further.
+  SwarmMonitor(std::int64_t agent_timeout_ns, core::ConvergenceDetector::Params converge, bool lockstep = false);
 
-  void on_state(std::int32_t id, const core::Vec2& x, std::uint32_t epoch, double model_time, std::int64_t now_ns);
+  void on_state(std::int32_t id, const core::Vec2& x, const core::Vec2& prev_x, std::uint32_t epoch,
+                double model_time, std::int64_t now_ns);
   void on_status(std::int32_t id, int neighbours_heard, std::uint64_t samples_rejected);
   void on_departed(std::int32_t id);
 
@@ -49,8 +53,10 @@ class SwarmMonitor {
   /// The smallest model time among alive agents following the current epoch (how far every one of them
   /// has got), or nullopt when none follows it.
   std::optional<double> min_following_model_time(std::int64_t now_ns) const;
-  /// Ids and positions of alive agents, ascending id.
-  std::vector<std::pair<std::int32_t, core::Vec2>> alive_positions(std::int64_t now_ns) const;
+  /// Ids and positions of alive agents, ascending id: the latest, or in lockstep those at model time
+  /// `at` when given.
+  std::vector<std::pair<std::int32_t, core::Vec2>> alive_positions(std::int64_t now_ns,
+                                                                   std::optional<double> at = std::nullopt) const;
 
   /// The metrics of the alive agents at model time t. No command: all null.
   struct Sample {
@@ -77,6 +83,7 @@ class SwarmMonitor {
  private:
   std::int64_t agent_timeout_ns_;
   core::ConvergenceDetector detector_;
+  bool lockstep_;
   std::map<std::int32_t, AgentView> agents_;
   std::optional<core::Command> command_;
   std::uint32_t epoch_ = 0;

@@ -9,7 +9,7 @@
 namespace shapeform::core {
 
 std::optional<double> coefficient_of_variation(const std::vector<double>& v) {
-  if (v.size() < 2) return std::nullopt;
+  if (v.empty()) return std::nullopt;  // one gap (two agents on an open curve) is trivially even: 0
   const double n = static_cast<double>(v.size());
   const double mean = std::accumulate(v.begin(), v.end(), 0.0) / n;
   // A mean this small means every value is zero up to rounding (e.g. all agents on one point).
@@ -111,14 +111,16 @@ Metrics compute_metrics(const Command& cmd, const std::vector<Vec2>& x, double t
 
   if (cmd.tracking.enabled) {
     const Vec2 c = s.centre;
+    const double radius = s.scale * s.r0;  // the ring as drawn: r0 scaled about the centre
     Vec2 mean = Vec2::Zero();
     double ring = 0.0;
     for (const Vec2& xi : x) {
       mean += xi;
-      ring += std::abs((xi - c).norm() - s.r0);
+      ring += std::abs((xi - c).norm() - radius);
     }
     m.centroid_error = (mean / static_cast<double>(n) - c).norm();
-    m.ring_error = ring / static_cast<double>(n);
+    // A ring only around a tracked circle; another tracked shape has its shape error instead.
+    if (s.kind == ShapeKind::Circle) m.ring_error = ring / static_cast<double>(n);
   }
   if (n < 2) return m;
   m.gap_cv = coefficient_of_variation(consecutive_gaps(s, x));

@@ -18,7 +18,7 @@ struct Metrics {
   std::optional<int> clusters;             ///< single-linkage clusters at cluster_link
   std::optional<double> extent;            ///< largest pairwise distance
   std::optional<double> centroid_error;    ///< tracking: |mean(x) - C(t)|
-  std::optional<double> ring_error;        ///< tracking: mean | |x_i - C(t)| - r0 |
+  std::optional<double> ring_error;        ///< tracking a circle: mean | |x_i - C(t)| - scale r0 |; null for other shapes
   std::optional<double> curve_error_mean;  ///< mean distance to the true closest point of the shape
   std::optional<double> curve_error_max;   ///< max distance to the true closest point
   std::optional<double> arc_gap_cv;        ///< std/mean of arc-length gaps between consecutive agents
@@ -27,7 +27,7 @@ struct Metrics {
 /// Single-linkage distance under which agents count as one cluster.
 inline constexpr double kClusterLink = 0.05;
 
-/// std/mean of values (population std); nullopt when fewer than 2 values or the mean is 0
+/// std/mean of values (population std; 0 for a single value); nullopt when there is none or the mean is 0
 /// (below 1e-12: every value zero up to rounding).
 std::optional<double> coefficient_of_variation(const std::vector<double>& v);
 

@@ -114,18 +114,18 @@ std::optional<std::set<std::uint32_t>> own_udp_ports() {
   return ports;
 }
 
-/// True when `after` holds a metatraffic + user unicast port pair of `domain` that `before` did not:
-/// the participant created in between can be reached. Fast DDS 2.9 creates a participant even when
-/// every port slot it tried was taken, and that participant silently hears nothing.
+/// True when `after` holds a metatraffic and a user unicast port of `domain` (slots 0..249) that
+/// `before` did not: the participant created in between can be reached. The two need not be of the
+/// same slot (processes starting together take them in different orders). Fast DDS 2.9 creates a
+/// participant even when every port slot it tried was taken, and that participant silently hears nothing.
 bool gained_unicast_ports(int domain, const std::set<std::uint32_t>& before, const std::set<std::uint32_t>& after) {
   const std::uint32_t port0 = metatraffic_unicast_port0(domain);
+  bool metatraffic = false, user = false;
   for (const std::uint32_t p : after) {
-    if (p >= port0 && (p - port0) % 2 == 0 && before.count(p) == 0 && after.count(p + 1) != 0 &&
-        before.count(p + 1) == 0) {
-      return true;
-    }
+    if (p < port0 || p >= port0 + 500 || before.count(p) != 0) continue;
+    ((p - port0) % 2 == 0 ? metatraffic : user) = true;
   }
-  return false;
+  return metatraffic && user;
 }
 
 void validate_common(const config::TransportConfig& cfg) {

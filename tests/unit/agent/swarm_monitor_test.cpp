@@ -18,7 +18,8 @@ core::Command circle() {
 void ring(SwarmMonitor& m, int n, double radius, std::uint32_t epoch, std::int64_t now) {
   for (int i = 0; i < n; ++i) {
     const double a = 2 * M_PI * i / n;
-    m.on_state(i, radius * Vec2(std::cos(a), std::sin(a)), epoch, 0.0, now);
+    const Vec2 x = radius * Vec2(std::cos(a), std::sin(a));
+    m.on_state(i, x, x, epoch, 0.0, now);
   }
 }
 }  // namespace
@@ -29,7 +30,7 @@ TEST_CASE("alive, dead and departed agents", "[supervisor]") {
   CHECK(m.alive_count(kS / 2) == 4);
   m.on_departed(2);
   CHECK(m.alive_count(kS / 2) == 3);
-  m.on_state(0, Vec2(4, 0), 0, 0, kS);
+  m.on_state(0, Vec2(4, 0), Vec2(4, 0), 0, 0, kS);
   CHECK(m.alive_count(kS + kS / 2) == 1);  // the others unheard for 1.5 s
   const std::string table = m.status_table(kS + kS / 2, 0);
   CHECK(table.find("DEAD") != std::string::npos);
@@ -85,4 +86,39 @@ TEST_CASE("a restarted supervisor learns the newest epoch followed", "[superviso
   SwarmMonitor m(kS, {});
   ring(m, 3, 4.0, 7, 0);
   CHECK(m.max_epoch_seen() == 7);
+}
+
+namespace {
+
+SwarmMonitor monitor_with_two_agents(bool lockstep) {
+  SwarmMonitor m(kS, core::ConvergenceDetector::Params{}, lockstep);
+  m.set_command(core::Command{}, 1, 0);
+  // Agent 0 has done step 3; agent 1 already step 4 (its step-3 position is prev).
+  m.on_state(0, Vec2(1, 0), Vec2(0.5, 0), 1, 3.0, 0);
+  m.on_state(1, Vec2(-1, 2), Vec2(-1, 1), 1, 4.0, 0);
+  return m;
+}
+
+}  // namespace
+
+TEST_CASE("swarm monitor: in lockstep a sample at step t takes every agent at step t", "[supervisor][monitor]") {
+  const SwarmMonitor m = monitor_with_two_agents(true);
+  REQUIRE(m.min_following_model_time(0) == Approx(3.0));
+  const auto at3 = m.alive_positions(0, 3.0);
+  REQUIRE(at3.size() == 2);
+  CHECK(at3[0].second == Vec2(1, 0));   // at step 3: its current state
+  CHECK(at3[1].second == Vec2(-1, 1));  // one step ahead: its previous state
+  const auto latest = m.alive_positions(0);
+  CHECK(latest[1].second == Vec2(-1, 2));
+  // The metrics of the aligned sample are those of the step-3 positions.
+  const auto s = m.measure(3.0, 0);
+  REQUIRE(s.metrics.agents == 2);
+  CHECK(s.metrics.extent.value() == Approx((Vec2(1, 0) - Vec2(-1, 1)).norm()));
+}
+
+TEST_CASE("swarm monitor: free-running agents are sampled at their latest state", "[supervisor][monitor]") {
+  const SwarmMonitor m = monitor_with_two_agents(false);
+  const auto at3 = m.alive_positions(0, 3.0);
+  CHECK(at3[1].second == Vec2(-1, 2));
+  CHECK(m.measure(3.0, 0).metrics.extent.value() == Approx((Vec2(1, 0) - Vec2(-1, 2)).norm()));
 }

@@ -99,7 +99,9 @@ TEST_CASE("undefined metrics are null, never 0 or NaN", "[metrics]") {
   CHECK_FALSE(merged.nn_cv);
   CHECK(*merged.min_separation == 0.0);
   CHECK(*merged.clusters == 1);
-  CHECK_FALSE(coefficient_of_variation({1.0}));
+  CHECK_FALSE(coefficient_of_variation({}));
+  CHECK(*coefficient_of_variation({1.0}) == 0.0);  // two agents on a line: one gap, evenly spaced
+  CHECK_FALSE(coefficient_of_variation({0.0}));    // ... unless they are on one point
   CHECK(*coefficient_of_variation({1.0, 3.0}) == Approx(0.5));
 }
 
@@ -117,6 +119,17 @@ TEST_CASE("tracking metrics: centroid and ring errors about C(t)", "[metrics][tr
   CHECK(*on.centroid_error < 1e-12);
   CHECK(*on.ring_error < 1e-12);
   CHECK(*on.shape_error_mean < 1e-12);
+  // The ring as drawn: r0 = 2 at scale 1.5 is a ring of radius 3.
+  c.shape.scale = 1.5;
+  const Metrics scaled = compute_metrics(c, ring(10, 3.0, Vec2(-5, -5)), 50);
+  CHECK(*scaled.ring_error < 1e-12);
+  CHECK(*scaled.shape_error_mean < 1e-12);
+  // Another tracked shape has no ring: its shape error says how far the agents are from it.
+  c.shape.kind = ShapeKind::Square;
+  c.shape.a = 2.0;
+  const Metrics square = compute_metrics(c, ring(10, 2.0, Vec2(-5, -5)), 50);
+  CHECK(square.centroid_error);
+  CHECK_FALSE(square.ring_error);
 }
 
 TEST_CASE("cluster counting is single linkage at 0.05", "[metrics]") {
