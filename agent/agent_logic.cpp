@@ -30,11 +30,12 @@ bool AgentLogic::on_command(const core::Command& cmd, std::uint32_t epoch) {
   return true;
 }
 
-void AgentLogic::on_target(const TargetSample& t) {
+void AgentLogic::on_target(const TargetSample& t, std::int64_t now_ns) {
   if (t.epoch != epoch_) return;  // a target of another command (older, or not adopted yet)
   if (target_ && t.model_time < target_->model_time) return;  // out of order
   target_ = t;
   target_age_ = 0.0;
+  target_seen_ns_ = now_ns;
 }
 
 void AgentLogic::on_state(std::int32_t id, const core::Vec2& x, std::uint64_t seq, std::int64_t now_ns,
@@ -74,11 +75,12 @@ void AgentLogic::drop_stale(std::int64_t now_ns) {
       ++it;
     }
   }
+  if (target_ && now_ns - target_seen_ns_ > kTargetTimeout_ns) target_.reset();
 }
 
 std::optional<core::Vec2> AgentLogic::tracked_centre() const {
   if (!cmd_.tracking.enabled) return std::nullopt;
-  if (target_ && !lockstep_) return target_->centre + target_age_ * target_->velocity;
+  if (following_target()) return target_->centre + target_age_ * target_->velocity;
   return core::centre_at(cmd_.tracking.path, t_);
 }
 
@@ -96,7 +98,7 @@ core::Command AgentLogic::effective_command() const {
 
 std::optional<double> AgentLogic::arc() const {
   if (!has_command()) return std::nullopt;
-  const bool follow_target = cmd_.tracking.enabled && target_ && !lockstep_;
+  const bool follow_target = following_target();
   const core::Command local = follow_target ? effective_command() : cmd_;
   const double t = follow_target ? 0.0 : t_;
   const core::ShapeSpec s = core::shape_at(local, t);
@@ -138,7 +140,7 @@ bool AgentLogic::step() {
   // Deterministic neighbour order (ids ascending) so results never depend on hash order.
   std::sort(nbrs_.begin(), nbrs_.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
 
-  const bool follow_target = cmd_.tracking.enabled && target_ && !lockstep_;
+  const bool follow_target = following_target();
   const core::StepResult r =
       core::agent_step(follow_target ? effective_command() : cmd_, id_, x_, nbrs_, follow_target ? 0.0 : t_);
   arc_prev_ = arc_law ? arc() : std::nullopt;

@@ -36,8 +36,8 @@ class AgentLogic {
 
   /// Adopts cmd if epoch is newer than the one followed; returns whether it did. Model time restarts.
   bool on_command(const core::Command& cmd, std::uint32_t epoch);
-  /// Keeps the newest target of the followed epoch.
-  void on_target(const TargetSample& t);
+  /// Keeps the newest target of the followed epoch, received at now_ns.
+  void on_target(const TargetSample& t, std::int64_t now_ns);
   /// A valid neighbour state received at now_ns. Own samples are ignored. epoch and arc: the command
   /// the neighbour follows and its arc length along that command's shape (used by the arc law only
   /// when the epoch is the one this agent follows).
@@ -51,8 +51,13 @@ class AgentLogic {
   void on_gone(std::int32_t id);
   void count_rejected() { ++counters_.samples_rejected; }
 
-  /// Drops neighbours unheard since now_ns - timeout.
+  /// Drops neighbours unheard since now_ns - timeout, and a tracking target unheard for
+  /// kTargetTimeout_ns (the supervisor is gone): the centre then follows the command's own path on the
+  /// agent's model clock instead of flying off along the last target's velocity.
   void drop_stale(std::int64_t now_ns);
+  static constexpr std::int64_t kTargetTimeout_ns = 1'000'000'000;
+  /// Whether a tracking target from the supervisor is in use (false: none yet, lost, or lockstep).
+  bool following_target() const { return cmd_.tracking.enabled && target_ && !lockstep_; }
   /// One control step: the law for the command and target in force, integrated over cmd.dt.
   /// Before the first command the agent holds its position.
   /// Lockstep (agent.sync: lockstep): step k -> k+1 is taken only once every neighbour has published
@@ -108,6 +113,7 @@ class AgentLogic {
   double t_ = 0.0;  ///< model time since the command was adopted
   std::optional<TargetSample> target_;
   double target_age_ = 0.0;  ///< model time since the target was received
+  std::int64_t target_seen_ns_ = 0;
   std::unordered_map<std::int32_t, Entry> table_;
   std::vector<core::Neighbour> nbrs_;  ///< reused every step
   AgentCounters counters_;

@@ -41,9 +41,9 @@ int run_agent(std::int32_t id, const core::Vec2& start, const config::Config& cf
 
 std::optional<config::Config> load_config(const std::string& prog, const std::string& path,
                                           std::vector<std::string> sets, std::optional<int> domain,
-                                          std::optional<long long> seed) {
+                                          std::optional<std::string> seed) {
   if (domain) sets.push_back("transport.domain=" + std::to_string(*domain));
-  if (seed) sets.push_back("swarm.seed=" + std::to_string(*seed));
+  if (seed) sets.push_back("swarm.seed=" + *seed);  // the loader checks it (64-bit, >= 0)
   try {
     return config::load(path, sets);
   } catch (const config::ConfigError& e) {
@@ -133,7 +133,7 @@ int run_agents(const std::vector<std::int32_t>& ids, const std::vector<core::Vec
         }
         const TargetSample ts{t.msg.epoch(), t.msg.model_time(), core::Vec2(t.msg.cx(), t.msg.cy()),
                               core::Vec2(t.msg.vx(), t.msg.vy())};
-        for (auto& l : logics) l->on_target(ts);
+        for (auto& l : logics) l->on_target(ts, t.receive_stamp_ns);
       }
       state_reader.drain(states);
       for (const auto& s : states) {
@@ -163,7 +163,10 @@ int run_agents(const std::vector<std::int32_t>& ids, const std::vector<core::Vec
       const std::int64_t stamp = util::steady_ns();
       for (std::size_t k = 0; k < logics.size(); ++k) {
         AgentLogic& l = *logics[k];
+        const bool had_target = l.following_target();
         l.drop_stale(now);
+        if (k == 0 && had_target && !l.following_target())
+          util::log_warn("tracking target unheard for 1 s: the centre follows the command's path on this agent's clock");
         l.step();
         msg::AgentState& out = outs[k];
         out.seq(seq);

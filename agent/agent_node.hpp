@@ -14,7 +14,7 @@ namespace shapeform::agent {
 /// then (exit status 2).
 std::optional<config::Config> load_config(const std::string& prog, const std::string& path,
                                           std::vector<std::string> sets, std::optional<int> domain,
-                                          std::optional<long long> seed);
+                                          std::optional<std::string> seed);
 
 /// Runs the agent's fixed-rate loop on DDS until SIGINT/SIGTERM. Returns the process exit status
 /// (0 clean stop, 1 runtime failure such as a participant that cannot be created).

@@ -56,7 +56,7 @@ int main(int argc, char** argv) {
   std::string ids_text, config_path;
   std::vector<std::string> sets;
   int domain = -1;
-  long long seed = -1;
+  std::string seed;
   app.add_option("--ids", ids_text, "agent ids hosted here: 0-49, or 0,3,5, or 0-9,20-29 (unique in the swarm)")
       ->required();
   app.add_option("--config", config_path, "YAML config (default: built-in defaults)");
@@ -78,7 +78,7 @@ int main(int argc, char** argv) {
   }
   const auto cfg = agent::load_config("shapeform_agent_group", config_path, sets,
                                       app.count("--domain") ? std::optional<int>(domain) : std::nullopt,
-                                      app.count("--seed") ? std::optional<long long>(seed) : std::nullopt);
+                                      app.count("--seed") ? std::optional<std::string>(seed) : std::nullopt);
   if (!cfg) return 2;
   std::vector<core::Vec2> starts;
   for (const auto id : ids)

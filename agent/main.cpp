@@ -15,7 +15,7 @@ int main(int argc, char** argv) {
   std::string config_path, start;
   std::vector<std::string> sets;
   int domain = -1;
-  long long seed = -1;
+  std::string seed;
   app.add_option("--id", id, "agent id, 0..9999 (unique in the swarm)")->required();
   app.add_option("--config", config_path, "YAML config (default: built-in defaults)");
   app.add_option("--domain", domain, "DDS domain id 0..232 (overrides transport.domain)");
@@ -36,7 +36,7 @@ int main(int argc, char** argv) {
   }
   const auto cfg = agent::load_config("shapeform_agent", config_path, sets,
                                       app.count("--domain") ? std::optional<int>(domain) : std::nullopt,
-                                      app.count("--seed") ? std::optional<long long>(seed) : std::nullopt);
+                                      app.count("--seed") ? std::optional<std::string>(seed) : std::nullopt);
   if (!cfg) return 2;
 
   core::Vec2 x0;

@@ -51,25 +51,23 @@ Recorder::Recorder(double flush_s) {
 Recorder::~Recorder() { close(); }
 
 void Recorder::open(const std::filesystem::path& dir) {
-  close();
-  dir_ = dir;
-  metrics_rows_ = position_rows_ = write_errors_ = 0;
   std::error_code ec;
+  // Reopening the folder being written: finish it first (new streams would truncate its files).
+  if (open_ && std::filesystem::equivalent(dir, dir_, ec)) close();
   std::filesystem::create_directories(dir, ec);
   if (ec) {
     throw std::runtime_error("cannot create recording directory " + dir.string() + ": " +
                              ec.message());
   }
-  try {
-    open_file(metrics_, dir / "metrics.csv", kMetricsHeader);
-    open_file(positions_, dir / "positions.csv", kPositionsHeader);
-  } catch (...) {
-    metrics_.close();
-    positions_.close();
-    metrics_.clear();
-    positions_.clear();
-    throw;
-  }
+  // The new files first: if they cannot be made, a recording in progress goes on untouched.
+  std::ofstream metrics, positions;
+  open_file(metrics, dir / "metrics.csv", kMetricsHeader);
+  open_file(positions, dir / "positions.csv", kPositionsHeader);
+  close();
+  metrics_ = std::move(metrics);
+  positions_ = std::move(positions);
+  dir_ = dir;
+  metrics_rows_ = position_rows_ = write_errors_ = 0;
   open_ = true;
   last_flush_ = Clock::now();
 }

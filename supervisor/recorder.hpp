@@ -43,8 +43,8 @@ class Recorder {
   Recorder& operator=(const Recorder&) = delete;
 
   /// Creates `dir` (and parents) and opens DIR/metrics.csv and DIR/positions.csv, truncating
-  /// them, and writes the headers. Closes a previous recording first.
-  /// Throws std::runtime_error naming the path on failure (nothing is left open then).
+  /// them, and writes the headers; then closes a previous recording.
+  /// Throws std::runtime_error naming the path on failure; a recording in progress then goes on.
   void open(const std::filesystem::path& dir);
   bool is_open() const { return open_; }
   /// The directory of the current (or last) recording.

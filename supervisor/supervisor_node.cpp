@@ -282,7 +282,8 @@ bool Supervisor::pending_done(std::int64_t now) {
 void Supervisor::execute(const Action& a, std::int64_t now) {
   const auto block = [&](double seconds) {
     pending_ = a;
-    pending_deadline_ns_ = now + static_cast<std::int64_t>(seconds * 1e9);
+    // Capped at 10^9 s (32 years), so that any accepted number of seconds stays inside int64 ns.
+    pending_deadline_ns_ = now + static_cast<std::int64_t>(std::min(seconds, 1e9) * 1e9);
   };
   std::visit(
       [&](const auto& act) {
@@ -315,8 +316,7 @@ void Supervisor::execute(const Action& a, std::int64_t now) {
           block(act.seconds);
         } else if constexpr (std::is_same_v<T, RecordStart>) {
           try {
-            recorder_.close();
-            recorder_.open(act.dir);
+            recorder_.open(act.dir);  // closes the current recording only once the new one is open
             out_ << "recording into " << act.dir << std::endl;
           } catch (const std::exception& e) {
             std::cerr << "record start: " << e.what() << std::endl;

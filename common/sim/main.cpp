@@ -1,6 +1,7 @@
 // shapeform_sim: the headless simulator. Prints ONE JSON object on stdout.
 #include <CLI/CLI.hpp>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -21,7 +22,7 @@ int main(int argc, char** argv) {
   std::string config_path, init_path, csv_path, positions_path, integrator;
   std::vector<std::string> sets;
   int agents = 0;
-  long long seed = -1, steps = -1;
+  std::string seed, steps;  // checked by the config loader (as swarm.seed and sim.steps)
   double dt = 0.0;
   bool verbose = false;
   std::string kernel = "auto";
@@ -52,8 +53,8 @@ int main(int argc, char** argv) {
 
   // Flags are overrides like any other, so the one validation applies to them.
   if (app.count("--agents")) sets.push_back("swarm.agents=" + std::to_string(agents));
-  if (app.count("--seed")) sets.push_back("swarm.seed=" + std::to_string(seed));
-  if (app.count("--steps")) sets.push_back("sim.steps=" + std::to_string(steps));
+  if (app.count("--seed")) sets.push_back("swarm.seed=" + seed);
+  if (app.count("--steps")) sets.push_back("sim.steps=" + steps);
   if (app.count("--dt")) {
     char buf[64];
     std::snprintf(buf, sizeof buf, "integration.dt=%.17g", dt);

@@ -100,6 +100,10 @@ class BadInput(unittest.TestCase):
         self.assert_rejected(["--dt", "-1"], "integration.dt")
         self.assert_rejected(["--dt", "nan"], "integration.dt")
         self.assert_rejected(["--steps", "-3"], "sim.steps")
+        self.assert_rejected(["--steps", "99999999999999999999"], "got 99999999999999999999")
+        # Seeds are 64-bit: one beyond that, or negative, is refused, not clamped or wrapped.
+        self.assert_rejected(["--seed", "18446744073709551616"], "swarm.seed")
+        self.assert_rejected(["--seed", "-1"], "swarm.seed")
         self.assert_rejected(["--bogus"], "--bogus")
         self.assert_rejected(["--set", "shape.radius=3"], "shape.radius")
         self.assert_rejected(["--set", "nonsense"], "nonsense")

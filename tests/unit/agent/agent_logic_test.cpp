@@ -96,15 +96,26 @@ TEST_CASE("tracking follows the latest target, extrapolated over model time", "[
   a.on_command(c, 1);
   // Without a target yet: the command's own path at the agent's model time.
   CHECK((*a.tracked_centre() - Vec2(-10, -10)).norm() < 1e-12);
-  a.on_target({2, 0.0, Vec2(50, 50), Vec2(0, 0)});  // another epoch: ignored
+  a.on_target({2, 0.0, Vec2(50, 50), Vec2(0, 0)}, 0);  // another epoch: ignored
   CHECK((*a.tracked_centre() - Vec2(-10, -10)).norm() < 1e-12);
-  a.on_target({1, 30.0, Vec2(-7, -7), Vec2(0.1, 0.1)});
+  a.on_target({1, 30.0, Vec2(-7, -7), Vec2(0.1, 0.1)}, 0);
+  CHECK(a.following_target());
   CHECK((*a.tracked_centre() - Vec2(-7, -7)).norm() < 1e-12);
   a.step();
   a.step();
   CHECK((*a.tracked_centre() - Vec2(-6.8, -6.8)).norm() < 1e-12);
-  a.on_target({1, 20.0, Vec2(-8, -8), Vec2(0.1, 0.1)});  // older than the one held: ignored
+  a.on_target({1, 20.0, Vec2(-8, -8), Vec2(0.1, 0.1)}, 0);  // older than the one held: ignored
   CHECK((*a.tracked_centre() - Vec2(-6.8, -6.8)).norm() < 1e-12);
+  // The supervisor goes quiet: still the target within the timeout, then the command's own path at
+  // the agent's model time (2 steps: (-10, -10) + 2 (0.1, 0.1)), not the last target flown on for ever.
+  a.drop_stale(AgentLogic::kTargetTimeout_ns);
+  CHECK(a.following_target());
+  a.drop_stale(AgentLogic::kTargetTimeout_ns + 1);
+  CHECK_FALSE(a.following_target());
+  CHECK((*a.tracked_centre() - Vec2(-9.8, -9.8)).norm() < 1e-12);
+  // A target heard again is followed again.
+  a.on_target({1, 40.0, Vec2(-6, -6), Vec2(0.1, 0.1)}, 2 * AgentLogic::kTargetTimeout_ns);
+  CHECK((*a.tracked_centre() - Vec2(-6, -6)).norm() < 1e-12);
 }
 
 TEST_CASE("seeded starts match the simulator's uniform start", "[agent]") {

@@ -261,6 +261,26 @@ TEST_CASE("open failures throw naming the path", "[supervisor][recorder]") {
   // The recorder is still usable afterwards.
   rec.open(tmp.path() / "ok");
   CHECK(rec.is_open());
+
+  // A failed open leaves the recording in progress as it was: still open, nothing lost.
+  rec.write_metrics(full_row());
+  CHECK_THROWS(rec.open(blocker / "run"));
+  CHECK(rec.is_open());
+  CHECK(rec.dir() == tmp.path() / "ok");
+  rec.write_metrics(full_row());
+  rec.close();
+  CHECK(read_lines(tmp.path() / "ok" / "metrics.csv").size() == 3);
+}
+
+TEST_CASE("reopening the folder being recorded starts it afresh", "[supervisor][recorder]") {
+  TempDir tmp;
+  Recorder rec;
+  rec.open(tmp.path() / "a");
+  rec.write_metrics(full_row());
+  rec.open(tmp.path() / "a");
+  rec.write_metrics(full_row());
+  rec.close();
+  CHECK(read_lines(tmp.path() / "a" / "metrics.csv").size() == 2);
 }
 
 TEST_CASE("flush period must be positive", "[supervisor][recorder]") {
