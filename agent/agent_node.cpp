@@ -96,7 +96,7 @@ int run_agents(const std::vector<std::int32_t>& ids, const std::vector<core::Vec
     ages_us.reserve(kAgeCapacity);
     util::ThrottledLog throttled(5.0);
     util::CpuMeter cpu;
-    util::RateLoop loop(cfg.agent.rate_hz, util::LoopClock::steady(), cfg.agent.phase_align);
+    util::RateLoop loop(cfg.agent.rate_hz);
     const auto log_every = std::max<std::uint64_t>(1, static_cast<std::uint64_t>(std::llround(cfg.agent.rate_hz)));  // ~1 s
     const auto status_every = std::max<std::uint64_t>(1, static_cast<std::uint64_t>(std::llround(cfg.agent.rate_hz / cfg.agent.status_rate_hz)));
     const double share = 1.0 / static_cast<double>(ids.size());  // of the process figures, per agent

@@ -150,7 +150,7 @@ int run(std::int32_t id, const config::Config& cfg) {
     const auto timeout_ns = static_cast<std::int64_t>(cfg.agent.neighbour_timeout_periods * period_s * 1e9);
     const auto status_every = std::max<std::uint64_t>(
         1, static_cast<std::uint64_t>(std::llround(cfg.agent.rate_hz / cfg.agent.status_rate_hz)));
-    util::RateLoop loop(cfg.agent.rate_hz, util::LoopClock::steady(), cfg.agent.phase_align);
+    util::RateLoop loop(cfg.agent.rate_hz);
     util::CpuMeter cpu;
     std::vector<double> ages;
     ages.reserve(kAgeCapacity);

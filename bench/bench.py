@@ -60,9 +60,6 @@ add_preset("ds", [], "discovery server on 127.0.0.1 (transport.profile=discovery
 add_preset("dsbuf", [BUF], "discovery server on 127.0.0.1 + 4 MiB socket buffers", ds=True)
 add_preset("dsmcbufann", [MC, BUF] + ANN, "discovery server on 127.0.0.1 + State on multicast on lo + 4 MiB socket "
            "buffers + lease 10 s / announce 3 s", ds=True)
-PA = "agent.phase_align=true"
-add_preset("mcbufannpa", [MC, BUF, PA] + ANN, "mcbufann + phase-aligned ticks (agent.phase_align)")
-add_preset("dsmcbufannpa", [MC, BUF, PA] + ANN, "dsmcbufann + phase-aligned ticks (agent.phase_align)", ds=True)
 
 
 @dataclass
@@ -189,15 +186,6 @@ LEVERS: list[dict] = [
                  "5 threads (main loop, Fast DDS event thread, receive threads); 2.9 has no setting that removes "
                  "any of them.",
      "rows": []},
-    {"name": "8. Phase-aligned ticks",
-     "question": "`agent.phase_align`: every process ticks on the host-wide grid k / rate of the steady clock, so all "
-                 "publish at the same instant and each receive thread takes the others' samples in one burst "
-                 "instead of being woken N-1 times per period at scattered moments.",
-     "rows": [_lv(B, 100, "mcbufann"), _lv(B, 100, "mcbufannpa"), _lv(A, 100, "mcbufann"), _lv(A, 100, "mcbufannpa"),
-              _lv(A, 100, "dsmcbufann"), _lv(A, 100, "dsmcbufannpa")],
-     "pairs": [(_lv(B, 100, "mcbufann"), _lv(B, 100, "mcbufannpa")),
-               (_lv(A, 100, "mcbufann"), _lv(A, 100, "mcbufannpa")),
-               (_lv(A, 100, "dsmcbufann"), _lv(A, 100, "dsmcbufannpa"))]},
 ]
 
 # --------------------------------------------------------------------------------------------

@@ -96,7 +96,7 @@ const std::map<std::string, std::vector<std::string>>& schema_sections() {
        {"k1", "k2", "sigma", "beta", "r", "max_speed", "law", "k_normal", "k_tangent", "spacing"}},
       {"integration", {"integrator", "dt"}},
       {"sim", {"steps"}},
-      {"agent", {"rate_hz", "neighbour_timeout_periods", "status_rate_hz", "sync", "phase_align"}},
+      {"agent", {"rate_hz", "neighbour_timeout_periods", "status_rate_hz", "sync"}},
       {"supervisor",
        {"metrics_rate_hz", "target_rate_hz", "agent_timeout_s", "flush_s", "converge"}},
       {"supervisor.converge", {"band_abs", "band_rel", "gap_cv_max", "hold"}},
@@ -780,7 +780,6 @@ Config convert(const YAML::Node& root, bool version_required, Reader& rd) {
            c.agent.neighbour_timeout_periods);
     assign(rd.real(get(m, s, "status_rate_hz"), above(0)), c.agent.status_rate_hz);
     assign(rd.choice(get(m, s, "sync"), kSyncNames), c.agent.lockstep);
-    assign(rd.boolean(get(m, s, "phase_align")), c.agent.phase_align);
   }
   {
     const std::string s = "supervisor";
@@ -1003,7 +1002,6 @@ std::string to_yaml(const Config& c) {
   put_real(e, "neighbour_timeout_periods", c.agent.neighbour_timeout_periods);
   put_real(e, "status_rate_hz", c.agent.status_rate_hz);
   e << YAML::Key << "sync" << YAML::Value << name_of(kSyncNames, c.agent.lockstep);
-  e << YAML::Key << "phase_align" << YAML::Value << c.agent.phase_align;
   e << YAML::EndMap;
 
   const auto& sup = c.supervisor;

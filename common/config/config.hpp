@@ -58,9 +58,6 @@ struct AgentConfig {
   /// How agents step: false = free running (each on its own clock, using the newest neighbour states);
   /// true = lockstep (step k+1 waits for every neighbour's step k: the simulator's synchronous update).
   bool lockstep = false;
-  /// Ticks on the host-wide grid k / rate_hz of the steady clock, so that every agent of a host
-  /// publishes at the same instant and receivers take the others' samples in one burst.
-  bool phase_align = false;
 };
 
 /// Supervisor settings.

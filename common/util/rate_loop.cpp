@@ -34,8 +34,8 @@ LoopClock LoopClock::steady() {
                    [](SteadyTime t) { std::this_thread::sleep_until(t); }};
 }
 
-RateLoop::RateLoop(double rate_hz, LoopClock clock, bool aligned)
-    : rate_hz_(rate_hz), period_(period_from_rate(rate_hz)), clock_(std::move(clock)), aligned_(aligned) {
+RateLoop::RateLoop(double rate_hz, LoopClock clock)
+    : rate_hz_(rate_hz), period_(period_from_rate(rate_hz)), clock_(std::move(clock)) {
   if (!clock_.now || !clock_.sleep_until) {
     throw std::invalid_argument("RateLoop: clock must provide now and sleep_until");
   }
@@ -47,10 +47,6 @@ bool RateLoop::wait_next(const std::atomic<bool>& stop) {
   if (!started_) {
     started_ = true;
     deadline_ = now + period_;
-    if (aligned_) {
-      const auto into = deadline_.time_since_epoch() % period_;
-      if (into.count() != 0) deadline_ += period_ - into;
-    }
   } else {
     stats_.work_max_us = std::max(stats_.work_max_us, to_us(now - last_return_));
   }

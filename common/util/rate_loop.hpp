@@ -4,9 +4,7 @@
 ///   RateLoop loop(rate_hz);
 ///   while (loop.wait_next(stop_flag())) { ...one tick of work... }
 ///
-/// Deadlines sit on a fixed grid t0 + k * period, where t0 is the time of the first wait_next call,
-/// or, with `aligned`, on the clock's own grid k * period (steady_clock is host-wide, so aligned loops
-/// of different processes at the same rate tick together).
+/// Deadlines sit on a fixed grid t0 + k * period, where t0 is the time of the first wait_next call.
 /// After a tick the deadline moves forward by exactly one period; if the loop is late by one or
 /// more whole periods, those periods are skipped (never run back to back) and counted as overruns,
 /// and the next deadline stays on the original grid. Not thread-safe: use one RateLoop from one
@@ -51,13 +49,12 @@ class RateLoop {
 
   /// rate_hz: ticks per second, finite and > 0 (throws std::invalid_argument otherwise).
   /// The period is 1/rate_hz rounded to whole nanoseconds.
-  explicit RateLoop(double rate_hz, LoopClock clock = LoopClock::steady(), bool aligned = false);
+  explicit RateLoop(double rate_hz, LoopClock clock = LoopClock::steady());
 
   /// Sleeps until the next deadline, waking at least every kMaxSleepSlice to check `stop`.
   /// Returns false as soon as `stop` is seen set (the tick is not taken), true at the deadline.
-  /// The first call anchors the grid: its deadline is (time of the first call) + period, or aligned,
-  /// the first multiple of the period after that; set-up time before the loop never counts as lateness
-  /// or overruns.
+  /// The first call anchors the grid: its deadline is (time of the first call) + period, so set-up
+  /// time before the loop never counts as lateness or overruns.
   bool wait_next(const std::atomic<bool>& stop);
 
   /// Snapshot of the statistics. Computes the p99 on demand without allocating.
@@ -80,7 +77,6 @@ class RateLoop {
   double rate_hz_;
   std::chrono::nanoseconds period_;
   LoopClock clock_;
-  bool aligned_;
   bool started_ = false;
   SteadyTime deadline_{};
   SteadyTime last_return_{};

@@ -89,35 +89,6 @@ TEST_CASE("RateLoop grid is anchored at the first wait_next, not at construction
   CHECK(loop.stats().lateness_max_us == 0.0);
 }
 
-TEST_CASE("aligned RateLoops started at different times tick on the clock's common grid",
-          "[util][rate_loop]") {
-  const std::atomic<bool> stop{false};
-  std::vector<SteadyTime> firsts;
-  for (const std::chrono::nanoseconds start : {std::chrono::nanoseconds(1000s + 3ms), std::chrono::nanoseconds(1000s + 17ms),
-                                              std::chrono::nanoseconds(1000s + 49ms + 999us)}) {
-    auto ft = std::make_shared<FakeTime>();
-    ft->t = SteadyTime(start);
-    RateLoop loop(20.0, fake_clock(ft), true);  // period 50 ms
-    REQUIRE(loop.wait_next(stop));
-    CHECK(ft->t - SteadyTime(start) >= 50ms);   // at least one period after the first call
-    CHECK(ft->t - SteadyTime(start) < 100ms);
-    CHECK(ft->t.time_since_epoch() % 50ms == 0ns);
-    firsts.push_back(ft->t);
-    REQUIRE(loop.wait_next(stop));
-    CHECK(ft->t == firsts.back() + 50ms);
-    CHECK(loop.stats().overruns == 0);
-  }
-  CHECK(firsts[0] == SteadyTime(1000s + 100ms));
-  CHECK(firsts[1] == SteadyTime(1000s + 100ms));
-  CHECK(firsts[2] == SteadyTime(1000s + 100ms));
-  // Unaligned, the same starts keep their own phases.
-  auto ft = std::make_shared<FakeTime>();
-  ft->t = SteadyTime(1000s + 17ms);
-  RateLoop free_loop(20.0, fake_clock(ft));
-  REQUIRE(free_loop.wait_next(stop));
-  CHECK(ft->t == SteadyTime(1000s + 67ms));
-}
-
 TEST_CASE("RateLoop sleeps in slices of at most 50 ms", "[util][rate_loop]") {
   auto ft = std::make_shared<FakeTime>();
   const SteadyTime t0 = ft->t;
