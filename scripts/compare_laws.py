@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Compares the paper's law and the arc law on the same starts; writes docs/LAW_COMPARISON.md and
-docs/figures/law_comparison.png. Simulator runs for every shape and N = 3, 12, 50, 200; agent-process
+docs/figures/law_comparison.png. Simulator runs for every shape and N = 2, 3, 12, 50, 200; agent-process
 runs (through scripts/launch_swarm.sh) for a few shapes unless --no-distributed.
 
   scripts/compare_laws.py [--build build] [--quick] [--no-distributed]
@@ -22,8 +22,13 @@ SHAPES = [  # name, scenario file, overrides giving the shape
     ("polar star", "polar_star", []),
     ("polygon", "polygon", []),
     ("implicit", "implicit", []),
+    ("parametric, closed", "polygon", ["--set", "shape.kind=parametric", "--set", "shape.x_expr=4*cos(2*_pi*s)",
+                                       "--set", "shape.y_expr=2*sin(2*_pi*s)+sin(6*_pi*s)", "--set", "shape.closed=true"]),
+    ("parametric, open", "polygon", ["--set", "shape.kind=parametric", "--set", "shape.x_expr=8*s-4",
+                                     "--set", "shape.y_expr=2*sin(2*_pi*s)", "--set", "shape.closed=false"]),
+    ("polygon, open", "polygon", ["--set", "shape.closed=false"]),
 ]
-SIZES = [3, 12, 50, 200]
+SIZES = [2, 3, 12, 50, 200]
 
 
 def sim(build, scenario, law, n, steps, seed, extra=()):
@@ -49,7 +54,11 @@ def size_of(result, name):
     # The shape's size: radius-like. Read from the scenario via the sim's positions is not possible, so
     # use the known sizes of the scenario files.
     return {"circle": 4.0, "ellipse": 4.0, "square": 5.0, "line": 1.0, "polar star": 5.0, "polygon": 5.0,
-            "implicit": 4.0}[name]
+            "implicit": 4.0, "parametric, closed": 4.0, "parametric, open": 4.0, "polygon, open": 5.0}[name]
+
+
+def dash(v):
+    return "–" if v is None else str(v)
 
 
 def fmt(v, spec=".2e"):
@@ -72,16 +81,16 @@ def main():
     ap.add_argument("--no-distributed", action="store_true", help="simulator only")
     args = ap.parse_args()
     build = os.path.abspath(args.build)
-    sizes = [3, 12, 50] if args.quick else SIZES
+    sizes = [2, 3, 12, 50] if args.quick else SIZES
     steps = 300 if args.quick else 1000
     seed = 1
     rows = []
     finals = {}
-    for name, scen, _ in SHAPES:
+    for name, scen, extra in SHAPES:
         for n in sizes:
             for law in ("paper", "arc"):
                 print(f"compare_laws: sim {name:10s} N={n:3d} {law}", file=sys.stderr, flush=True)
-                r = sim(build, scen, law, n, steps, seed)
+                r = sim(build, scen, law, n, steps, seed, extra)
                 rows.append((name, n, law, r))
                 if n == 12 or (n == 50 and name in ("circle", "square")):
                     finals[(name, n, law)] = (r["final_positions"], r["outline"])
@@ -94,7 +103,8 @@ def main():
     dist_rows = []
     if not args.no_distributed:
         domain = 160
-        for name, scen, n in (("circle", "circle", 12), ("polar star", "polar_star", 12), ("square", "square", 25)):
+        for name, scen, n in (("circle", "circle", 12), ("polar star", "polar_star", 12), ("square", "square", 25),
+                              ("circle", "circle", 50)):
             for law in ("paper", "arc"):
                 print(f"compare_laws: agents {name} N={n} {law}", file=sys.stderr, flush=True)
                 d = launch(build, scen, law, n, 300, seed, domain)
@@ -120,7 +130,7 @@ def main():
             w for w, ok in (("error", e), ("spacing", u), ("still", st)) if not ok) + ")"
         out.append(f"| {name} | {n} | {law} | {fmt(r['curve_error_mean'])} | {fmt(r['arc_gap_cv'])} | "
                    f"{fmt(r['gap_cv'], '.3f')} | {fmt(r['max_step'])} | {fmt(r['min_separation'], '.3f')} | "
-                   f"{fmt(r['extent'], '.2f')} | {r['settle_step'] if r['settle_step'] is not None else '–'} | {crit} |")
+                   f"{fmt(r['extent'], '.2f')} | {dash(r['settle_step'])} | {crit} |")
     out.append("\n## Tracking with feed-forward (10 agents, r0 = 2, step 200)\n")
     out.append("| path | law | centroid error | ring error | gap CV |")
     out.append("|---|---|---|---|---|")
@@ -133,7 +143,8 @@ def main():
         out.append("|---|---|---|---|---|---|---|---|---|")
         for name, n, law, d, s in dist_rows:
             out.append(f"| {name} | {n} | {law} | {fmt(d.get('curve_error_mean'))} | {fmt(s['curve_error_mean'])} | "
-                       f"{fmt(d.get('arc_gap_cv'))} | {fmt(s['arc_gap_cv'])} | {d.get('settle_step')} | {s['settle_step']} |")
+                       f"{fmt(d.get('arc_gap_cv'))} | {fmt(s['arc_gap_cv'])} | {dash(d.get('settle_step'))} | "
+                       f"{dash(s['settle_step'])} |")
     out.append("\n![final formations of both laws](figures/law_comparison.png)\n")
     with open(os.path.join(ROOT, "docs", "LAW_COMPARISON.md"), "w") as f:
         f.write("\n".join(out) + "\n")

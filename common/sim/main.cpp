@@ -18,7 +18,7 @@ int fail(const std::string& msg) {
 
 int main(int argc, char** argv) {
   using namespace shapeform;
-  CLI::App app{"shapeform_sim: N agents of the paper's law in one process, no DDS. Prints one JSON object."};
+  CLI::App app{"shapeform_sim: N agents of the configured law (paper or arc) in one process, no DDS. Prints one JSON object."};
   std::string config_path, init_path, csv_path, positions_path, integrator;
   std::vector<std::string> sets;
   int agents = 0;
