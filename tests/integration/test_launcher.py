@@ -76,6 +76,22 @@ class LauncherTest(harness.SwarmTestCase):
                 self.assertIn("recording: " + os.path.join(run, "record"), p.log())
                 self.assert_nothing_left(p)
 
+    def test_readme_main_command(self):
+        # The README's main job, as written there (12 agent processes, the paper's circle, until
+        # converged), with --json for the summary. Issue 3's acceptance: converged, shape error mean
+        # within 0.02 of the simulator's plateau for the same scenario and starts, gap CV <= 0.10.
+        sim = self.run_sim(harness.scenario("circle"), ["--steps", "500"])
+        p = self.launch(["-n", "12", "--scenario", "circle", "--json"])
+        self.assertEqual(p.wait(150), 0, "launcher exit status (0: converged)")
+        summary = json.loads(p.out().splitlines()[-1])
+        self.assertTrue(summary["converged"])
+        self.assertEqual(summary["agents"], 12)
+        self.assertLessEqual(abs(summary["shape_error_mean"] - sim["shape_error_mean"]), 0.02,
+                             "processes %.4f, simulator %.4f" % (summary["shape_error_mean"], sim["shape_error_mean"]))
+        self.assertLessEqual(summary["gap_cv"], 0.10)
+        self.assertIn("converged at t=", p.log())
+        self.assert_nothing_left(p)
+
     def agent_starts(self, run, n):
         starts = []
         for i in range(n):
