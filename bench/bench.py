@@ -155,9 +155,12 @@ LEVERS: list[dict] = [
      "note": "Reading of the runs of 2026-11-22: runs measured before commit f23146a (see the row's commit in the "
              "last table) had one process more on the domain than Fast DDS 2.9 gave ports to (the server, the probe "
              "and 100 clients: 103 participants, 101 port slots): one client ran the whole window hearing nobody "
-             "and unheard (two in the staggered run), which the delivery ratio counts. It was not the server's "
-             "fault, as first read here. With the fix the server matched every client, took the agents' data age "
-             "p99 below that of simple discovery, and nothing aborted.",
+             "and unheard (two in the staggered run), which the delivery ratio counts: the port slots, not the "
+             "server, as first read here. After the fix (the three agent runs at N = 100): in two runs every "
+             "client matched every other, after 43 and 71 s; in the third, the agents never all heard each other "
+             "within the run (each heard at most 98 of 99, although the probe heard all 100), which looks like "
+             "the server overload that eProsima/Fast-DDS #5767 and #6359 report for 75 to 100 simultaneous "
+             "starts. The server halved the agents' data age p99 against simple discovery, and nothing aborted.",
      "extra": True},
     {"name": "5. Staggered launch",
      "question": "Starting 100 processes at once (the launcher itself needs about 4 s) makes a discovery storm on 2 "
@@ -166,10 +169,9 @@ LEVERS: list[dict] = [
               _lv(A, 100, "mcbufann", 0.05)],
      "pairs": [(_lv(B, 100, "mcbufann"), _lv(B, 100, "mcbufann", 0.05)),
                (_lv(A, 100, "mcbufann"), _lv(A, 100, "mcbufann", 0.05))],
-     "note": "Reading of the runs of 2026-11-22 (before commit f23146a: in the agent rows one agent of 102 "
-             "participants got no port, see 'What limits N = 100'): staggering did not help. At N = 100 the steady "
-             "state (198,000 deliveries/s) saturates the host whatever the start, and single runs there differ by "
-             "as much as the effect."},
+     "note": "Reading of the runs of 2026-11-22 (the agent rows measured after the port-slot fix, see 'What "
+             "limits N = 100'): staggering did not help. At N = 100 the steady state (198,000 deliveries/s) "
+             "saturates the host whatever the start, and runs there differ by as much as the effect."},
     {"name": "6. Several agents per process",
      "question": "`shapeform_agent_group --ids A-B`: the same loop and AgentLogic, one participant per process. The "
                  "host carries P x (N-1) x rate deliveries between P processes instead of N x (N-1) x rate; agents "
@@ -735,6 +737,7 @@ def aggregate(runs: list[dict]) -> dict:
     for k in ("aborts", "bad_exits", "assert_lines"):
         agg[k + "_total"] = sum(r.get(k, 0) for r in runs)
     agg["sup_converged_runs"] = sum(1 for r in runs if r.get("sup_converged"))
+    agg["converged_runs"] = sum(1 for r in runs if r.get("converge_s") is not None)
     return agg
 
 
@@ -1030,11 +1033,11 @@ def report_plan(store: dict) -> dict:
         "on one clock grid (tried: `agent.phase_align`, single runs at N = 100: all hear all 34.6 s against 35.8 s, "
         "CPU per agent 1.9 % in both; removed again) does not make a receive cheaper. On a saturated host, the "
         "discovery of the last processes (N x N endpoint matching with simple discovery, about 100 process "
-        "start-ups) waits for CPU, which is why 'everyone hears everyone' takes 20 to 40 s instead of 10; with "
+        "start-ups) waits for CPU, which is why 'everyone hears everyone' takes 35 s or more instead of 10; with "
         "simple discovery, Fast DDS 2.9 also aborts now and then on an assert in PDP.cpp (a lease timer of an "
         "already released participant proxy). The discovery server removes the aborts and halves the data age"
-        + (f" (host {ds_busy:.0f} % busy)" if ds_busy is not None else "")
-        + ". Hosting several agents per process divides the deliveries "
+        + (f" (the host still {ds_busy:.0f} % busy)" if ds_busy is not None else "")
+        + ", but its matching of about 100 clients starting at once is no faster here (lever 4). Hosting several agents per process divides the deliveries "
         "between processes: 2 processes of 50 agents carry 2 x 99 x 20 = 3,960 inter-process deliveries/s instead "
         "of 198,000"
         + (f", and the host was {g_busy:.0f} % busy" if g_busy is not None else "")

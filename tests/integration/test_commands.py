@@ -3,6 +3,8 @@
 
 - A shape change mid-run (circle, then `shape square a=5`) re-converges on the new epoch.
 - Bad console lines are each rejected with one line naming the problem; the swarm is unaffected.
+- Equation and point shapes from the console (arc law): a polar star and a polygon are formed; a
+  malformed expression is refused and the swarm keeps its shape.
 - A --script with a bad line exits with status 2 and sends nothing.
 """
 import os
@@ -102,6 +104,48 @@ class CommandsTest(harness.SwarmTestCase):
                              "%s followed exactly one command" % a.name)
         sup.send("quit")
         self.assertEqual(sup.wait(20), 0, "bad console lines do not change the exit status")
+
+    def test_equation_shapes_from_the_console(self):
+        # Issue 5's acceptance at the console of a running swarm (arc law, 10 processes): a polar star
+        # and a polygon are formed exactly and evenly; a malformed expression is refused with a message
+        # and the swarm keeps the shape it has.
+        config = harness.scenario("arc_circle")
+        sup = self.start_supervisor(config, extra=SETS)
+        agents = self.start_agents(AGENTS, config, seed=1, extra=SETS)
+        self.assertTrue(sup.wait_agents(AGENTS, 60), "the supervisor hears every agent")
+        self.assertEqual(sup.command("start"), 1)
+        self.assertTrue(sup.wait_converged(60), "the circle converges")
+
+        def formed(epoch, size):
+            self.assertTrue(sup.wait_converged(90), "epoch %d converges" % epoch)
+            m = sup.metrics()
+            self.assertEqual(m["epoch"], epoch)
+            self.assertLessEqual(m["curve_error_mean"], 1e-3 * size, m)
+            self.assertLessEqual(m["arc_gap_cv"], 0.01, m)
+            rows, _ = sup.status()
+            self.assertTrue(all(r["epoch"] == epoch for r in rows.values()), rows)
+            return m
+
+        self.assertEqual(sup.command('shape polar r="4+cos(5*phi)"'), 2)
+        star = formed(2, 5.0)
+
+        log_start, out_start = len(sup.log()), len(sup.out())
+        sup.send('shape polar r="4+cos(5*phi"')  # malformed: unbalanced parenthesis
+        after = sup.metrics()
+        new_err = [l for l in sup.log()[log_start:].splitlines() if not l.startswith("[supervisor]")]
+        self.assertEqual(len(new_err), 1, new_err)
+        self.assertRegex(new_err[0], r"^shape polar: r\(phi\) = '4\+cos\(5\*phi'")
+        self.assertNotRegex(sup.out()[out_start:], r"(?m)^epoch \d+:")
+        self.assertEqual(after["epoch"], 2)
+        self.assertTrue(after["converged"])
+        self.assertLessEqual(after["curve_error_mean"], 1e-3 * 5.0)
+        self.assertAlmostEqual(after["curve_error_mean"], star["curve_error_mean"], delta=1e-3)
+
+        self.assertEqual(sup.command('shape polygon points="-4,-3;4,-3;4,2;0,5;-4,2"'), 3)
+        formed(3, 5.0)
+        self.assert_all_alive(agents + [sup])
+        sup.send("quit")
+        self.assertEqual(sup.wait(20), 0)
 
     def test_bad_script_exits_2_and_sends_nothing(self):
         config = harness.scenario("circle")

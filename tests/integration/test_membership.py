@@ -8,6 +8,7 @@
   and the survivors re-space.
 - The supervisor killed with SIGKILL and restarted: the agents keep the last command and stay on
   the shape; the new supervisor sees every agent with its epoch and continues after that epoch.
+- An agent stopped with SIGTERM exits 0 and the others drop it on its dispose, not by timeout.
 - A participant that finds every port slot of its domain taken (transport.max_participants) is an
   error, not a deaf agent.
 - Agents slower than 1 Hz (agent.rate_hz = 0.5, which the config allows) run, hear each other and
@@ -21,6 +22,7 @@ import math
 import os
 import signal
 import sys
+import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness  # noqa: E402
@@ -143,6 +145,25 @@ class MembershipTest(harness.SwarmTestCase):
         sup2.send("quit")
         self.assertEqual(sup2.wait(20), 0)
 
+
+    def test_stopped_agent_is_dropped_at_once(self):
+        # SIGTERM: the agent disposes its instance and exits 0; the others drop it on the dispose, long
+        # before their neighbour timeout (here 1000 periods = 20 s) could.
+        config = harness.scenario("circle")
+        sets = ["--set", "agent.neighbour_timeout_periods=1000"]
+        agents = self.start_agents(4, config, seed=1, extra=sets)
+        harness.poll(lambda: all("hearing 3 neighbours" in a.log() for a in agents), 60,
+                     "the four agents to hear each other")
+        leaving, stay = agents[3], agents[:3]
+        marks = [len(a.log()) for a in stay]
+        t0 = time.monotonic()
+        leaving.signal(signal.SIGTERM)
+        self.assertEqual(leaving.wait(20), 0)
+        harness.poll(lambda: all("hearing 2 neighbours" in a.log()[m:] for a, m in zip(stay, marks)), 10,
+                     "the three others to drop the stopped agent")
+        self.assertLess(time.monotonic() - t0, 10.0)  # far inside the 20 s neighbour timeout
+        self.assertIn("stopping after", leaving.log())
+        self.assert_all_alive(stay)
 
     def test_no_free_participant_slot_is_an_error(self):
         # transport.max_participants = 2: two agents take the domain's two participant port slots on
