@@ -146,8 +146,9 @@ def fig2(data, out, K, agent=0):
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
     fig.suptitle("Fig. 2 analogue: one agent's position components against time, agent processes (dark) and "
-                 "simulator (light) from the same start\n(the wiggle is Euler dt=1 chatter; in the processes the "
-                 "resting ring slowly turns, an effect of the agents' unsynchronised ticks)", fontsize=11)
+                 "simulator (light) from the same start, in lockstep the same curves\n(the wiggle is Euler dt=1 "
+                 "chatter; the resting ring slowly turns, in the simulator as in the processes)",
+                 fontsize=11)
     fig.tight_layout()
     save(fig, out, "paper_fig2_agent_states.png")
 
