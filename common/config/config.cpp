@@ -804,8 +804,16 @@ Config convert(const YAML::Node& root, bool version_required, Reader& rd) {
     assign(rd.choice(profile, kProfileNames), tr.profile);
     assign(rd.integer(get(m, s, "domain"), 0, 232), tr.domain);
     assign(rd.integer(get(m, s, "max_participants"), 1, 230), tr.max_participants);
-    assign(rd.text_list(get(m, s, "interfaces")), tr.interfaces);
-    assign(rd.text_list(get(m, s, "peers")), tr.peers);
+    for (const char* key : {"interfaces", "peers"}) {
+      const Entry e = get(m, s, key);
+      if (const auto v = rd.text_list(e)) {
+        const auto bad = std::find_if(v->begin(), v->end(), [](const std::string& a) { return !valid_ipv4(a); });
+        if (bad == v->end())
+          (std::string(key) == "interfaces" ? tr.interfaces : tr.peers) = *v;
+        else
+          rd.bad(e, "must be a list of IPv4 addresses (\"" + *bad + "\" is not one)");
+      }
+    }
     const Entry server = get(m, s, "discovery_server");
     if (const auto v = rd.text(server)) {
       if (valid_host_port(*v))

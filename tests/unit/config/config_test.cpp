@@ -740,6 +740,16 @@ TEST_CASE("multicast_data is off by default, read as a bool, and needs the loopb
             .transport.multicast_data);  // default server 127.0.0.1:11811
 }
 
+TEST_CASE("transport interfaces and peers are IPv4 addresses") {
+  CHECK(problem_of("schema_version: 1\ntransport:\n  interfaces: [192.168.1.2, foo]\n") ==
+        "transport.interfaces: must be a list of IPv4 addresses (\"foo\" is not one), got [192.168.1.2, foo] "
+        "(line 3)");
+  CHECK(problem_of("schema_version: 1\ntransport:\n  peers: [999.1.1.1]\n").find("transport.peers: must be a list of "
+                                                                                 "IPv4 addresses") == 0);
+  CHECK(load("", {"transport.peers=[10.0.0.2, 10.0.0.3]"}).transport.peers ==
+        std::vector<std::string>{"10.0.0.2", "10.0.0.3"});
+}
+
 TEST_CASE("announce_s must be below lease_s") {
   CHECK(problem_of("schema_version: 1\ntransport:\n  lease_s: 1\n  announce_s: 1\n") ==
         "transport.announce_s: must be < transport.lease_s (1), got 1 (line 4)");
