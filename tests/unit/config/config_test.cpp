@@ -742,8 +742,7 @@ TEST_CASE("multicast_data is off by default, read as a bool, and needs the loopb
 
 TEST_CASE("transport interfaces and peers are IPv4 addresses") {
   CHECK(problem_of("schema_version: 1\ntransport:\n  interfaces: [192.168.1.2, foo]\n") ==
-        "transport.interfaces: must be a list of IPv4 addresses (\"foo\" is not one), got [192.168.1.2, foo] "
-        "(line 3)");
+        "transport.interfaces: must be a list of IPv4 addresses (\"foo\" is not one), got a list (line 3)");
   CHECK(problem_of("schema_version: 1\ntransport:\n  peers: [999.1.1.1]\n").find("transport.peers: must be a list of "
                                                                                  "IPv4 addresses") == 0);
   CHECK(load("", {"transport.peers=[10.0.0.2, 10.0.0.3]"}).transport.peers ==
@@ -978,7 +977,7 @@ TEST_CASE("to_yaml round-trips every field") {
   c.transport.domain = 17;
   c.transport.max_participants = 4;
   c.transport.interfaces = {"127.0.0.1", "10.0.0.1"};
-  c.transport.peers = {"host-a", "null", "1.5"};
+  c.transport.peers = {"10.0.0.2", "192.168.7.1"};
   c.transport.discovery_server = "10.20.30.40:7400";
   c.transport.lease_s = 5;
   c.transport.announce_s = 1;
