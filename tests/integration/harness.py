@@ -399,6 +399,13 @@ class SwarmTestCase(unittest.TestCase):
             time.sleep(0.02)  # stagger: no discovery storm
         return agents
 
+    def start_meshed_agents(self, n, config, extra=(), timeout=60):
+        """Starts agents 0..n-1 (seed 1) and waits until each logs hearing the n-1 others."""
+        agents = self.start_agents(n, config, seed=1, extra=extra)
+        poll(lambda: all("hearing %d neighbours" % (n - 1) in a.log() for a in agents), timeout,
+             "the %d agents to hear each other" % n)
+        return agents
+
     def start_supervisor(self, config, domain=None, script=None, record=None, json_mode=False, extra=(),
                          console=True, name="supervisor"):
         argv = [bin_path("shapeform_supervisor"), "--config", config,

@@ -20,14 +20,14 @@ SETS = ["--set", "swarm.agents=%d" % AGENTS]
 
 class CommandsTest(harness.SwarmTestCase):
 
-    def converged_swarm(self):
-        """10 agents on the circle scenario, started and converged; returns (supervisor, agents)."""
-        config = harness.scenario("circle")
+    def converged_swarm(self, scenario="circle"):
+        """10 agents on a scenario's shape, started and converged; returns (supervisor, agents)."""
+        config = harness.scenario(scenario)
         sup = self.start_supervisor(config, extra=SETS)
         agents = self.start_agents(AGENTS, config, seed=1, extra=SETS)
         self.assertTrue(sup.wait_agents(AGENTS, 60), "the supervisor hears every agent")
         self.assertEqual(sup.command("start"), 1)
-        self.assertTrue(sup.wait_converged(60), "the circle converges")
+        self.assertTrue(sup.wait_converged(60), "the %s scenario converges" % scenario)
         return sup, agents
 
     def test_shape_change_reconverges(self):
@@ -109,12 +109,7 @@ class CommandsTest(harness.SwarmTestCase):
         # Issue 5's acceptance at the console of a running swarm (arc law, 10 processes): a polar star
         # and a polygon are formed exactly and evenly; a malformed expression is refused with a message
         # and the swarm keeps the shape it has.
-        config = harness.scenario("arc_circle")
-        sup = self.start_supervisor(config, extra=SETS)
-        agents = self.start_agents(AGENTS, config, seed=1, extra=SETS)
-        self.assertTrue(sup.wait_agents(AGENTS, 60), "the supervisor hears every agent")
-        self.assertEqual(sup.command("start"), 1)
-        self.assertTrue(sup.wait_converged(60), "the circle converges")
+        sup, agents = self.converged_swarm("arc_circle")
 
         def formed(epoch, size):
             self.assertTrue(sup.wait_converged(90), "epoch %d converges" % epoch)
@@ -149,10 +144,8 @@ class CommandsTest(harness.SwarmTestCase):
 
     def test_bad_script_exits_2_and_sends_nothing(self):
         config = harness.scenario("circle")
-        agents = self.start_agents(2, config, seed=1, extra=SETS)
         # The two agents hear each other: the domain works, so a command sent would arrive.
-        harness.poll(lambda: all("hearing 1 neighbours" in a.log() for a in agents), 30,
-                     "the two agents to hear each other")
+        agents = self.start_meshed_agents(2, config, SETS, timeout=30)
         script = self.write("bad_script.txt",
                             "wait agents 2 timeout=10\n"
                             "shape circle r=3\n"       # fine, but must not be sent

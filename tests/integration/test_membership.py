@@ -150,10 +150,7 @@ class MembershipTest(harness.SwarmTestCase):
         # SIGTERM: the agent disposes its instance and exits 0; the others drop it on the dispose, long
         # before their neighbour timeout (here 1000 periods = 20 s) could.
         config = harness.scenario("circle")
-        sets = ["--set", "agent.neighbour_timeout_periods=1000"]
-        agents = self.start_agents(4, config, seed=1, extra=sets)
-        harness.poll(lambda: all("hearing 3 neighbours" in a.log() for a in agents), 60,
-                     "the four agents to hear each other")
+        agents = self.start_meshed_agents(4, config, ["--set", "agent.neighbour_timeout_periods=1000"])
         leaving, stay = agents[3], agents[:3]
         marks = [len(a.log()) for a in stay]
         t0 = time.monotonic()
@@ -172,9 +169,7 @@ class MembershipTest(harness.SwarmTestCase):
         # factory refuses it with a message instead, and the two others carry on.
         config = harness.scenario("circle")
         sets = ["--set", "transport.max_participants=2"]
-        pair = self.start_agents(2, config, seed=1, extra=sets)
-        harness.poll(lambda: all("hearing 1 neighbours" in a.log() for a in pair), 60,
-                     "the two agents to hear each other")
+        pair = self.start_meshed_agents(2, config, sets)
         third = self.start_agent(2, config, seed=1, extra=sets)
         self.assertEqual(third.wait(60), 1)
         self.assertIn("found no free participant port on domain %d" % self.domain, third.log())
