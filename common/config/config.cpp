@@ -804,12 +804,12 @@ Config convert(const YAML::Node& root, bool version_required, Reader& rd) {
     assign(rd.choice(profile, kProfileNames), tr.profile);
     assign(rd.integer(get(m, s, "domain"), 0, 232), tr.domain);
     assign(rd.integer(get(m, s, "max_participants"), 1, 230), tr.max_participants);
-    for (const char* key : {"interfaces", "peers"}) {
+    for (auto [key, field] : {std::pair{"interfaces", &tr.interfaces}, std::pair{"peers", &tr.peers}}) {
       const Entry e = get(m, s, key);
       if (const auto v = rd.text_list(e)) {
         const auto bad = std::find_if(v->begin(), v->end(), [](const std::string& a) { return !valid_ipv4(a); });
         if (bad == v->end())
-          (std::string(key) == "interfaces" ? tr.interfaces : tr.peers) = *v;
+          *field = *v;
         else
           rd.bad(e, "must be a list of IPv4 addresses (\"" + *bad + "\" is not one)");
       }
