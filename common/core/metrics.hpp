@@ -54,7 +54,8 @@ inline std::optional<double> uniformity(const Command& cmd, const Metrics& m) {
 }
 
 /// Settling: the first index k such that for every sample j >= k the shape error is within
-/// max(band_abs, band_rel * plateau) of the plateau (the last sample) and gap CV <= gap_cv_max.
+/// max(band_abs, band_rel * plateau) of the plateau (the median of the last tenth of the samples, at
+/// least 10) and gap CV <= gap_cv_max.
 struct SettleParams {
   double band_abs = 0.02;
   double band_rel = 0.1;

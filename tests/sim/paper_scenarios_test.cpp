@@ -97,6 +97,7 @@ TEST_CASE("repulsion study: without repulsion the agents clump", "[sim][paper][r
     CHECK(without.median(gap) >= 1.0);
     CHECK(without.median(gap) >= 10 * with.median(gap));
     CHECK(with.min(clusters) == 12);
+    CHECK(run_seeds(scenario(shape), 1000).min(clusters) == 12);  // with r = 0.1 all 12 stay apart
     const Runs without_long = run_seeds(scenario(shape + "_no_repulsion"), 1000);
     // Medians over 20 seeds, as the claim is stated: a few seeds leave two clumps on opposite sides of
     // the square, where cohesion at distance 12 is too weak to pull them together.
@@ -121,7 +122,7 @@ TEST_CASE("tracking without feed-forward: the swarm trails the centre as a blob"
 
 TEST_CASE("RK4 with dt = 0.05 removes Euler's chatter", "[sim][paper][rk4]") {
   const config::Config c = scenario("circle", {"integration.integrator=rk4", "integration.dt=0.05"});
-  const Runs r = run_seeds(c, 10000, 5);  // t = 500
+  const Runs r = run_seeds(c, 10000);  // t = 500, 20 seeds like the other claims
   CHECK(r.median(gap) <= 0.005);
   CHECK(r.median(err) >= 0.16);  // the same off-shape plateau: a fact of the model, not of Euler
   CHECK(r.median(err) <= 0.18);
