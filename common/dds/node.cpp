@@ -115,7 +115,8 @@ fdds::DataWriter* Node::create_writer(TopicId id) {
 
 fdds::DataReader* Node::create_reader(TopicId id, fdds::DataReaderListener* listener) {
   fdds::DataReader* r = entities_->subscriber->create_datareader(topic(id), reader_qos(id, entities_->transport), listener,
-                                                                 fdds::StatusMask::data_available());
+                                                                 fdds::StatusMask::data_available() <<
+                                                                     fdds::StatusMask::subscription_matched());
   if (r == nullptr) {
     throw std::runtime_error(std::string("create_datareader failed for topic ") + topic_name(id) +
                              " (node " + entities_->name + ")");

@@ -6,6 +6,7 @@
 /// other thread is Fast DDS's receive thread, which only appends to a Reader's mailbox.
 /// Lifetime: handles may be destroyed before or after their Node; after the Node is gone they do nothing
 /// (write() returns false, drain() returns what was already received).
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -111,6 +112,8 @@ class Mailbox final : public eprosima::fastdds::dds::DataReaderListener {
         if (info.valid_data) {
           key = MsgTraits<Msg>::key(sample);
           if (keys_.find(info.instance_handle) == keys_.end()) keys_.emplace(info.instance_handle, key);
+          auto& of_writer = writer_keys_[info.publication_handle];
+          if (std::find(of_writer.begin(), of_writer.end(), key) == of_writer.end()) of_writer.push_back(key);
         } else {
           const auto it = keys_.find(info.instance_handle);
           if (it != keys_.end()) key = it->second;
@@ -122,6 +125,28 @@ class Mailbox final : public eprosima::fastdds::dds::DataReaderListener {
       }
       // An invalid sample carries no data (take leaves `sample` as it was): hand out a default Msg.
       pending_.push_back(Received<Msg>{info.valid_data ? sample : Msg{}, now, info.valid_data, state, key});
+    }
+  }
+
+  /// A writer that left (deleted, or its participant gone or lost): every instance it published is
+  /// handed out as NoWriters. Fast DDS 2.9 sends no such sample itself, so without this a peer whose
+  /// dispose was lost (best effort) would stay until the application's timeout.
+  void on_subscription_matched(eprosima::fastdds::dds::DataReader*,
+                               const eprosima::fastdds::dds::SubscriptionMatchedStatus& status) override {
+    if constexpr (MsgTraits<Msg>::keyed) {
+      if (status.current_count_change >= 0) return;
+      const std::int64_t now = steady_now_ns();
+      std::lock_guard<std::mutex> lock(mutex_);
+      const auto it = writer_keys_.find(status.last_publication_handle);
+      if (it == writer_keys_.end()) return;
+      for (const std::int32_t key : it->second) {
+        if (pending_.size() >= capacity_) {
+          ++overflowed_;
+          continue;
+        }
+        pending_.push_back(Received<Msg>{Msg{}, now, false, InstanceState::NoWriters, key});
+      }
+      writer_keys_.erase(it);
     }
   }
 
@@ -144,6 +169,8 @@ class Mailbox final : public eprosima::fastdds::dds::DataReaderListener {
   std::vector<Received<Msg>> pending_;
   std::uint64_t overflowed_ = 0;
   std::map<eprosima::fastdds::dds::InstanceHandle_t, std::int32_t> keys_;
+  /// Keys each writer published (one entry per writer, one key per agent it hosts).
+  std::map<eprosima::fastdds::dds::InstanceHandle_t, std::vector<std::int32_t>> writer_keys_;
 };
 
 }  // namespace detail

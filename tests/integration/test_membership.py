@@ -8,7 +8,8 @@
   and the survivors re-space.
 - The supervisor killed with SIGKILL and restarted: the agents keep the last command and stay on
   the shape; the new supervisor sees every agent with its epoch and continues after that epoch.
-- An agent stopped with SIGTERM exits 0 and the others drop it on its dispose, not by timeout.
+- An agent stopped with SIGTERM exits 0 and the others drop it on its dispose, not by timeout; one
+  killed with SIGKILL is dropped when the participant lease removes its writer.
 - A participant that finds every port slot of its domain taken (transport.max_participants) is an
   error, not a deaf agent.
 - Agents slower than 1 Hz (agent.rate_hz = 0.5, which the config allows) run, hear each other and
@@ -147,8 +148,10 @@ class MembershipTest(harness.SwarmTestCase):
 
 
     def test_stopped_agent_is_dropped_at_once(self):
-        # SIGTERM: the agent disposes its instance and exits 0; the others drop it on the dispose, long
-        # before their neighbour timeout (here 1000 periods = 20 s) could.
+        # SIGTERM: the agent disposes its instance and exits 0; the others drop it on the dispose (or, if
+        # that best-effort sample is lost, when its writer leaves), long before their neighbour timeout
+        # (here 1000 periods = 20 s) could. SIGKILL: no dispose; the others drop it when the participant
+        # lease (2 s) removes its writer, still long before their own timeout.
         config = harness.scenario("circle")
         agents = self.start_meshed_agents(4, config, ["--set", "agent.neighbour_timeout_periods=1000"])
         leaving, stay = agents[3], agents[:3]
@@ -160,6 +163,15 @@ class MembershipTest(harness.SwarmTestCase):
                      "the three others to drop the stopped agent")
         self.assertLess(time.monotonic() - t0, 10.0)  # far inside the 20 s neighbour timeout
         self.assertIn("stopping after", leaving.log())
+        self.assert_all_alive(stay)
+
+        killed, stay = stay[2], stay[:2]
+        marks = [len(a.log()) for a in stay]
+        t0 = time.monotonic()
+        killed.kill_group()
+        harness.poll(lambda: all("hearing 1 neighbours" in a.log()[m:] for a, m in zip(stay, marks)), 12,
+                     "the two others to drop the killed agent when its lease expires")
+        self.assertLess(time.monotonic() - t0, 12.0)
         self.assert_all_alive(stay)
 
     def test_no_free_participant_slot_is_an_error(self):
