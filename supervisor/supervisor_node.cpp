@@ -147,7 +147,11 @@ void Supervisor::drain(std::int64_t now) {
   state_reader_.drain(states_);
   for (const auto& s : states_) {
     if (!s.valid_data) {
-      if (s.instance == dds::InstanceState::Disposed && s.key_id >= 0) {
+      // Disposed, or its writer left (its dispose, best effort, may be lost) while it was still heard:
+      // a clean exit, logged once. A writer leaving after the agent fell silent (a lease expiring after
+      // a kill) changes nothing: that agent is shown dead already.
+      const auto it = monitor_.agents().find(s.key_id);
+      if (s.instance != dds::InstanceState::Alive && it != monitor_.agents().end() && monitor_.alive(it->second, now)) {
         monitor_.on_departed(s.key_id);
         util::log_info("agent " + std::to_string(s.key_id) + " left");
       }
