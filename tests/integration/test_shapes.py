@@ -158,7 +158,9 @@ class ShapesTest(harness.SwarmTestCase):
                          % (t_on, reached["extent"], later["model_time"], later["shape_error_mean"], later["extent"],
                             SEED, sim["shape_error_mean"], sim["extent"]))
         self.assertLess(sim["shape_error_mean"], 0.01)  # the simulator's fact for this seed
-        self.assertGreaterEqual(later["model_time"], t_on + more)
+        # `wait time` counts the agents' own iterations; the metrics are stamped with the supervisor's
+        # wall-clock model time, which can trail the agents' count by a fraction of an iteration.
+        self.assertGreaterEqual(later["model_time"], t_on + more - 1)
         self.assertEqual(later["agents"], AGENTS)
         self.assertLess(later["shape_error_mean"], 0.02, "the agents stay on the line")
         self.assertLess(later["shape_error_max"], 0.05, "every agent lies on the line")
