@@ -6,7 +6,6 @@
 /// other thread is Fast DDS's receive thread, which only appends to a Reader's mailbox.
 /// Lifetime: handles may be destroyed before or after their Node; after the Node is gone they do nothing
 /// (write() returns false, drain() returns what was already received).
-#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -107,16 +106,17 @@ class Mailbox final : public eprosima::fastdds::dds::DataReaderListener {
       std::lock_guard<std::mutex> lock(mutex_);
       std::int32_t key = -1;
       if constexpr (MsgTraits<Msg>::keyed) {
-        // get_key_value() is unsupported in 2.9: remember handle -> id to name invalid samples.
-        // (One map node per instance ever seen; nothing allocated per sample.)
+        // get_key_value() is unsupported in 2.9: remember handle -> id to name invalid samples, and
+        // the writer last heard on each instance. (One map node per instance ever seen; nothing
+        // allocated per sample.)
         if (info.valid_data) {
           key = MsgTraits<Msg>::key(sample);
-          if (keys_.find(info.instance_handle) == keys_.end()) keys_.emplace(info.instance_handle, key);
-          auto& of_writer = writer_keys_[info.publication_handle];
-          if (std::find(of_writer.begin(), of_writer.end(), key) == of_writer.end()) of_writer.push_back(key);
+          auto it = instances_.find(info.instance_handle);
+          if (it == instances_.end()) it = instances_.emplace(info.instance_handle, Instance{key, {}}).first;
+          it->second.writer = info.publication_handle;
         } else {
-          const auto it = keys_.find(info.instance_handle);
-          if (it != keys_.end()) key = it->second;
+          const auto it = instances_.find(info.instance_handle);
+          if (it != instances_.end()) key = it->second.key;
         }
       }
       if (pending_.size() >= capacity_) {
@@ -128,25 +128,23 @@ class Mailbox final : public eprosima::fastdds::dds::DataReaderListener {
     }
   }
 
-  /// A writer that left (deleted, or its participant gone or lost): every instance it published is
-  /// handed out as NoWriters. Fast DDS 2.9 sends no such sample itself, so without this a peer whose
-  /// dispose was lost (best effort) would stay until the application's timeout.
+  /// A writer that left (deleted, or its participant gone or lost): every instance it was the last to
+  /// publish is handed out as NoWriters. Fast DDS 2.9 sends no such sample itself, so without this a
+  /// peer whose dispose was lost (best effort) would stay until the application's timeout.
   void on_subscription_matched(eprosima::fastdds::dds::DataReader*,
                                const eprosima::fastdds::dds::SubscriptionMatchedStatus& status) override {
     if constexpr (MsgTraits<Msg>::keyed) {
       if (status.current_count_change >= 0) return;
       const std::int64_t now = steady_now_ns();
       std::lock_guard<std::mutex> lock(mutex_);
-      const auto it = writer_keys_.find(status.last_publication_handle);
-      if (it == writer_keys_.end()) return;
-      for (const std::int32_t key : it->second) {
+      for (const auto& [handle, inst] : instances_) {
+        if (inst.writer != status.last_publication_handle) continue;
         if (pending_.size() >= capacity_) {
           ++overflowed_;
           continue;
         }
-        pending_.push_back(Received<Msg>{Msg{}, now, false, InstanceState::NoWriters, key});
+        pending_.push_back(Received<Msg>{Msg{}, now, false, InstanceState::NoWriters, inst.key});
       }
-      writer_keys_.erase(it);
     }
   }
 
@@ -168,9 +166,11 @@ class Mailbox final : public eprosima::fastdds::dds::DataReaderListener {
   mutable std::mutex mutex_;
   std::vector<Received<Msg>> pending_;
   std::uint64_t overflowed_ = 0;
-  std::map<eprosima::fastdds::dds::InstanceHandle_t, std::int32_t> keys_;
-  /// Keys each writer published (one entry per writer, one key per agent it hosts).
-  std::map<eprosima::fastdds::dds::InstanceHandle_t, std::vector<std::int32_t>> writer_keys_;
+  struct Instance {
+    std::int32_t key;                                  ///< the id the instance carries
+    eprosima::fastdds::dds::InstanceHandle_t writer;   ///< the writer of its newest sample
+  };
+  std::map<eprosima::fastdds::dds::InstanceHandle_t, Instance> instances_;
 };
 
 }  // namespace detail
