@@ -19,13 +19,15 @@
 #                   for convergence
 #   --timeout S     seconds to wait for convergence (default 60), or for the K iterations
 #   --set key=value config override passed to every process (repeatable)
-#   --json          the supervisor's summary as one JSON line on stdout (progress stays on stderr)
+#   --json          machine output on stdout (progress stays on stderr): first the line
+#                   {"event":"run","dir":RUN,"domain":D,"agents":N}, last the supervisor's JSON
+#                   summary (its "summary" event)
 #   --build DIR     build folder holding bin/ (default: build)
 #   --runs DIR      where run folders are made (default: runs)
 #
-# One run folder per launch: RUNS/<UTC timestamp>-<scenario>-n<N>/ with agent_<i>.log,
-# supervisor.log (stderr: progress), supervisor.out (stdout: answers and summary), script.txt and
-# record/. Progress goes to stderr. On exit, error or Ctrl-C only this launcher's own children are
+# One run folder per launch: RUNS/<UTC timestamp>-<scenario>-n<N>/ with agent_<i>.log (stderr),
+# agent_<i>.out (the agent's JSON event lines: status, command), supervisor.log (stderr: progress),
+# supervisor.out (stdout: answers and summary; JSON event lines with --json), script.txt and record/. Progress goes to stderr. On exit, error or Ctrl-C only this launcher's own children are
 # stopped (SIGTERM, then SIGKILL after 5 s). Exit status: the supervisor's (0 ok, 1 runtime failure,
 # 2 bad input, 3 a wait timed out); 2 for bad launcher arguments; 130/143 when interrupted.
 set -uo pipefail
@@ -277,9 +279,9 @@ cleanup() {
   stop_pids "${tail_pids[@]+"${tail_pids[@]}"}"
   wait 2>/dev/null
   if [ -n "$sup_pid" ]; then
-    [ $json -eq 1 ] && [ -s "$run/supervisor.out" ] && tail -n 1 "$run/supervisor.out"
+    [ $json -eq 1 ] && grep -E '"event": ?"summary"' "$run/supervisor.out" | tail -n 1
     [ -d "$record" ] && say "recording: $record (metrics.csv, positions.csv)"
-    say "logs: $run (supervisor.log, supervisor.out, agent_0..$((n - 1)).log, script.txt)"
+    say "logs: $run (supervisor.log, supervisor.out, agent_0..$((n - 1)).log and .out, script.txt)"
   fi
   new_shm=$(comm -13 <(printf '%s\n' "$shm_before") <(shm_list) | sed '/^$/d')
   if [ -n "$new_shm" ]; then
@@ -302,6 +304,10 @@ trap 'on_signal 143' TERM
 # Launch
 
 say "run folder $run"
+if [ $json -eq 1 ]; then
+  json_str() { local s=${1//\\/\\\\}; printf '"%s"' "${s//\"/\\\"}"; }
+  printf '{"event":"run","dir":%s,"domain":%d,"agents":%d}\n' "$(json_str "$run")" "$domain" "$n"
+fi
 say "scenario $name ($config), $n agents, domain $domain ($domain_note), rate ${rate_eff} Hz," \
   "$([ -n "$init" ] && echo "starts from $init" || echo "seed $seed")," \
   "$([ -n "$steps" ] && echo "$steps iterations" || echo "until converged")"
@@ -326,7 +332,7 @@ for ((i = 0; i < n; i++)); do
     startarg=(--seed "$seed")
   fi
   "$bin/shapeform_agent" --id "$i" --config "$config" --domain "$domain" "${startarg[@]}" "${setargs[@]}" \
-    </dev/null >"$run/agent_$i.log" 2>&1 &
+    --json </dev/null >"$run/agent_$i.out" 2>"$run/agent_$i.log" &
   agent_pids+=($!)
   sleep 0.02 # a slight stagger avoids a discovery storm
 done

@@ -6,28 +6,31 @@ runs in its own process group with its stdout and stderr in files of that folder
 only its own processes (SIGTERM, wait, SIGKILL). After each test the harness asserts that no
 process of the test is left (no child alive, no shapeform process on the test's domain) and that no
 new Fast DDS shared-memory file appeared; when a test fails it prints the last lines of every log.
+Agents and supervisors run with --json: a test learns facts (who hears whom, which command an agent
+follows, a wait's outcome, the status of every agent) from their JSON event lines on stdout, never from
+log text. Processes are started, stopped and read through scripts/lib/shapeform_procs.py.
 
 Run a test file directly:
     python3 tests/integration/test_x.py --bin build/bin --source . --domain 101 [unittest args]
 """
 
 import argparse
-import csv
 import json
 import os
-import re
 import shutil
 import signal
-import subprocess
 import sys
 import time
 import unittest
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts", "lib"))
+import shapeform_procs as procs  # noqa: E402
+from shapeform_procs import (Proc, events, last_json_line, poll, processes_in_group, read_csv,  # noqa: E402,F401
+                             read_text, shapeform_processes_on_domain, shm_files, summary)
+
 # Filled in by main() from the command line.
 CONFIG = {"bin": None, "source": None, "domain": None, "work": None}
 
-SHM_DIR = "/dev/shm"
-SHM_PATTERN = re.compile(r"^(sem\.)?(fastrtps|fast_datasharing|fastdds)")
 LOG_TAIL_LINES = 30
 
 
@@ -39,198 +42,8 @@ def scenario(name):
     return os.path.join(CONFIG["source"], "config", "scenarios", name + ".yaml")
 
 
-def shm_files():
-    try:
-        return {f for f in os.listdir(SHM_DIR) if SHM_PATTERN.match(f)}
-    except FileNotFoundError:
-        return set()
-
-
-def poll(predicate, timeout, what, interval=0.1):
-    """Calls predicate() until it returns a truthy value (returned) or timeout seconds pass."""
-    deadline = time.monotonic() + timeout
-    while True:
-        value = predicate()
-        if value:
-            return value
-        if time.monotonic() >= deadline:
-            raise AssertionError("timed out after %.0f s waiting for %s" % (timeout, what))
-        time.sleep(interval)
-
-
-def read_text(path):
-    try:
-        with open(path, "r", errors="replace") as f:
-            return f.read()
-    except FileNotFoundError:
-        return ""
-
-
 def tail(path, lines=LOG_TAIL_LINES):
     return read_text(path).splitlines()[-lines:]
-
-
-class Proc:
-    """One process of a test: its own process group, stdout in NAME.out and stderr in NAME.log."""
-
-    def __init__(self, name, argv, run_dir, stdin=None, env=None):
-        self.name = name
-        self.argv = argv
-        self.out_path = os.path.join(run_dir, name + ".out")
-        self.log_path = os.path.join(run_dir, name + ".log")
-        self._out = open(self.out_path, "wb")
-        self._log = open(self.log_path, "wb")
-        self.popen = subprocess.Popen(
-            argv,
-            stdin=subprocess.PIPE if stdin == "pipe" else subprocess.DEVNULL,
-            stdout=self._out,
-            stderr=self._log,
-            start_new_session=True,  # own session and process group: signals reach only it
-            env=env,
-        )
-        self.pid = self.popen.pid
-
-    # -- state
-    def running(self):
-        return self.popen.poll() is None
-
-    @property
-    def returncode(self):
-        return self.popen.poll()
-
-    def wait(self, timeout):
-        """Waits for the exit; returns the exit status (raises AssertionError on timeout)."""
-        try:
-            return self.popen.wait(timeout=timeout)
-        except subprocess.TimeoutExpired:
-            raise AssertionError("%s did not exit within %.0f s" % (self.name, timeout))
-
-    # -- output
-    def out(self):
-        return read_text(self.out_path)
-
-    def log(self):
-        return read_text(self.log_path)
-
-    # -- input (console)
-    def send(self, line):
-        assert self.popen.stdin is not None, self.name + " has no stdin pipe"
-        self.popen.stdin.write((line + "\n").encode())
-        self.popen.stdin.flush()
-
-    def close_stdin(self):
-        if self.popen.stdin is not None and not self.popen.stdin.closed:
-            try:
-                self.popen.stdin.close()
-            except BrokenPipeError:
-                pass
-
-    # -- stopping (only this process)
-    def signal(self, sig):
-        if self.running():
-            os.kill(self.pid, sig)
-
-    def stop(self, grace=5.0):
-        """SIGTERM, wait up to grace seconds, then SIGKILL; returns the exit status."""
-        if self.running():
-            try:
-                os.kill(self.pid, signal.SIGTERM)
-            except ProcessLookupError:
-                pass
-            try:
-                self.popen.wait(timeout=grace)
-            except subprocess.TimeoutExpired:
-                self.kill_group()
-        self.popen.wait()
-        self.close_stdin()
-        self._out.close()
-        self._log.close()
-        return self.popen.returncode
-
-    def kill_group(self):
-        """SIGKILL to the process group this process leads (its own session)."""
-        try:
-            os.killpg(self.pid, signal.SIGKILL)
-        except (ProcessLookupError, PermissionError):
-            pass
-        try:
-            self.popen.wait(timeout=5)
-        except subprocess.TimeoutExpired:
-            pass
-
-
-def processes_in_group(pgid):
-    """Pids of live processes (not zombies) whose process group is pgid."""
-    pids = []
-    for entry in os.listdir("/proc"):
-        if not entry.isdigit():
-            continue
-        try:
-            with open("/proc/%s/stat" % entry) as f:
-                stat = f.read()
-        except OSError:
-            continue
-        fields = stat[stat.rfind(")") + 2:].split()
-        state, pgrp = fields[0], int(fields[2])
-        if pgrp == pgid and state != "Z":
-            pids.append(int(entry))
-    return pids
-
-
-def shapeform_processes_on_domain(domain):
-    """(pid, cmdline) of live shapeform processes whose command line names this domain."""
-    found = []
-    for entry in os.listdir("/proc"):
-        if not entry.isdigit():
-            continue
-        try:
-            with open("/proc/%s/cmdline" % entry, "rb") as f:
-                argv = f.read().decode(errors="replace").split("\0")
-            with open("/proc/%s/stat" % entry) as f:
-                stat = f.read()
-        except OSError:
-            continue
-        if stat[stat.rfind(")") + 2] == "Z" or not argv or "shapeform_" not in os.path.basename(argv[0]):
-            continue
-        for i, a in enumerate(argv[:-1]):
-            if a == "--domain" and argv[i + 1] == str(domain):
-                found.append((int(entry), " ".join(argv)))
-    return found
-
-
-# ----------------------------------------------------------------------------------------------
-# Output parsing
-
-def parse_status_table(text):
-    """Rows of the supervisor's `status` table: {id: {alive, x1, x2, epoch, shape_error, heard}}."""
-    rows = {}
-    for line in text.splitlines():
-        parts = line.split()
-        if len(parts) != 8 or not parts[0].isdigit():
-            continue
-        rows[int(parts[0])] = {
-            "alive": parts[1],
-            "last_seen": parts[2],
-            "x1": float(parts[3]),
-            "x2": float(parts[4]),
-            "epoch": int(parts[5]),
-            "shape_error": None if parts[6] == "-" else float(parts[6]),
-            "heard": None if parts[7] == "-" else int(parts[7]),
-        }
-    return rows
-
-
-def last_json_line(text):
-    for line in reversed(text.splitlines()):
-        line = line.strip()
-        if line.startswith("{"):
-            return json.loads(line)
-    return None
-
-
-def read_csv(path):
-    with open(path, newline="") as f:
-        return list(csv.DictReader(f))
 
 
 def fnum(v):
@@ -243,72 +56,74 @@ def mean(values):
 
 
 # ----------------------------------------------------------------------------------------------
-# Swarm helpers
+# Processes that print JSON events (run with --json)
+
+class Agent(Proc):
+    """An agent process (or an agent group) run with --json: status and command events on stdout."""
+
+    def heard(self, since=0):
+        """{agent id: neighbours heard} from the newest status event of each hosted agent after `since`."""
+        latest = {}
+        for e in self.events("status", since):
+            latest[e["id"]] = e["neighbours_heard"]
+        return latest
+
+    def hears(self, n, since=0):
+        """True when every hosted agent's newest status (after `since`) reports n neighbours heard."""
+        latest = self.heard(since)
+        return bool(latest) and all(k == n for k in latest.values())
+
+    def epochs(self, since=0):
+        """Epochs of the commands this process adopted (its command events)."""
+        return [e["epoch"] for e in self.events("command", since)]
+
+
+def status_rows(status):
+    """The agents of a supervisor's status event as {id: {alive, last_seen, x1, x2, epoch, shape_error, heard}}."""
+    return {a["id"]: {"alive": a["alive"], "last_seen": a["last_seen_s"], "x1": a["x"], "x2": a["y"],
+                      "epoch": a["epoch"], "shape_error": a["shape_error"], "heard": a["neighbours_heard"]}
+            for a in status["agents"]}
+
 
 class Supervisor(Proc):
-    """A supervisor driven through its console (stdin pipe; answers on stdout, text mode)."""
+    """A supervisor run with --json and driven through its console (stdin pipe): every answer is a JSON
+    event line on stdout."""
 
-    def query(self, command, timeout=10.0):
-        """Sends `command` then `metrics`; returns (text printed for command, metrics JSON).
-        The metrics JSON line marks the end of the command's answer."""
-        start = len(self.out())
+    def ask(self, command, kind, timeout=10.0, what=None):
+        """Sends a console line; returns the first `kind` event printed after it."""
+        since = self.mark()
         self.send(command)
-        self.send("metrics")
-
-        def answered():
-            text = self.out()[start:]
-            for i, line in enumerate(text.splitlines()):
-                if line.startswith("{"):
-                    return ("\n".join(text.splitlines()[:i]), json.loads(line))
-            return None
-
-        return poll(answered, timeout, "the supervisor's answer to '%s'" % command, 0.05)
+        return self.wait_event(kind, timeout, since, what=what or "the supervisor's answer to '%s'" % command)
 
     def status(self):
-        text, metrics = self.query("status")
-        return parse_status_table(text), metrics
+        """(status rows as status_rows gives them, metrics event), asked one after the other."""
+        rows = status_rows(self.ask("status", "status"))
+        return rows, self.metrics()
 
     def metrics(self, timeout=10.0):
-        start = len(self.out())
-        self.send("metrics")
-        return poll(lambda: last_json_line(self.out()[start:]), timeout, "the supervisor's metrics", 0.05)
+        return self.ask("metrics", "metrics", timeout)
+
+    def wait_until(self, what, line, timeout):
+        """Runs a console `wait`; True when it was met, False on its timeout."""
+        since = self.mark()
+        self.send(line)
+        e = self.wait_event("wait", timeout + 30, since, where=lambda e: e["wait"] == what,
+                            what="the answer to '%s'" % line)
+        return e["ok"]
 
     def wait_converged(self, timeout):
-        """Runs `wait converged` at the console; True when converged, False on its timeout."""
-        start = len(self.out())
-        self.send("wait converged timeout=%g" % timeout)
-
-        def done():
-            text = self.out()[start:]
-            if "converged at t=" in text:
-                return "yes"
-            if "wait converged: timed out" in text:
-                return "no"
-            return None
-
-        return poll(done, timeout + 30, "the answer to 'wait converged'", 0.1) == "yes"
+        return self.wait_until("converged", "wait converged timeout=%g" % timeout, timeout)
 
     def wait_agents(self, n, timeout):
-        start = len(self.out())
-        self.send("wait agents %d timeout=%g" % (n, timeout))
-
-        def done():
-            text = self.out()[start:]
-            if re.search(r"^agents: \d+ alive", text, re.M):
-                return "yes"
-            if "wait agents: timed out" in text:
-                return "no"
-            return None
-
-        return poll(done, timeout + 30, "the answer to 'wait agents'", 0.1) == "yes"
+        return self.wait_until("agents", "wait agents %d timeout=%g" % (n, timeout), timeout)
 
     def command(self, line, timeout=10.0):
         """Sends a command that publishes an epoch; returns the epoch number announced."""
-        start = len(self.out())
-        self.send(line)
-        m = poll(lambda: re.search(r"^epoch (\d+):", self.out()[start:], re.M), timeout,
-                 "the supervisor to publish '%s'" % line, 0.05)
-        return int(m.group(1))
+        return self.ask(line, "epoch", timeout, "the supervisor to publish '%s'" % line)["epoch"]
+
+    def left(self, since=0):
+        """Ids of the agents the supervisor reported as left."""
+        return {e["id"] for e in self.events("agent", since) if e["change"] == "left"}
 
 
 class SwarmTestCase(unittest.TestCase):
@@ -329,7 +144,7 @@ class SwarmTestCase(unittest.TestCase):
     def tearDown(self):
         failed = self._failed()
         for p in reversed(self.procs):
-            p.stop()
+            p.stop(grace=5.0)
         problems = []
         for p in self.procs:
             left = processes_in_group(p.pid)
@@ -348,7 +163,7 @@ class SwarmTestCase(unittest.TestCase):
             problems.append("shapeform processes left on domain %d: %s" % (self.domain, on_domain))
         new_shm = sorted(shm_files() - self.shm_before)
         if new_shm:
-            problems.append("new Fast DDS shared-memory files in %s: %s" % (SHM_DIR, new_shm))
+            problems.append("new Fast DDS shared-memory files in %s: %s" % (procs.SHM_DIR, new_shm))
         if failed or problems:
             self.print_logs()
         sys.stderr.write("[%s] %.1f s, run folder %s\n" % (self.id(), time.monotonic() - self.t0, self.run_dir))
@@ -385,12 +200,18 @@ class SwarmTestCase(unittest.TestCase):
         return p
 
     def start_agent(self, i, config, domain=None, extra=(), seed=None, name=None):
-        argv = [bin_path("shapeform_agent"), "--id", str(i), "--config", config,
+        argv = [bin_path("shapeform_agent"), "--id", str(i), "--config", config, "--json",
                 "--domain", str(self.domain if domain is None else domain)]
         if seed is not None:
             argv += ["--seed", str(seed)]
         argv += list(extra)
-        return self.start(name or "agent_%d" % i, argv)
+        return self.start(name or "agent_%d" % i, argv, cls=Agent)
+
+    def start_group(self, ids, config, extra=(), seed=1, name="group"):
+        """An agent group process hosting `ids` ("A-B"), run with --json."""
+        argv = [bin_path("shapeform_agent_group"), "--ids", ids, "--config", config, "--json",
+                "--domain", str(self.domain), "--seed", str(seed)] + list(extra)
+        return self.start(name, argv, cls=Agent)
 
     def start_agents(self, n, config, domain=None, extra=(), seed=None, first=0, prefix="agent_"):
         agents = []
@@ -400,22 +221,20 @@ class SwarmTestCase(unittest.TestCase):
         return agents
 
     def start_meshed_agents(self, n, config, extra=(), timeout=60):
-        """Starts agents 0..n-1 (seed 1) and waits until each logs hearing the n-1 others."""
+        """Starts agents 0..n-1 (seed 1) and waits until each reports hearing the n-1 others."""
         agents = self.start_agents(n, config, seed=1, extra=extra)
-        poll(lambda: all("hearing %d neighbours" % (n - 1) in a.log() for a in agents), timeout,
-             "the %d agents to hear each other" % n)
+        poll(lambda: all(a.hears(n - 1) for a in agents), timeout, "the %d agents to hear each other" % n)
         return agents
 
-    def start_supervisor(self, config, domain=None, script=None, record=None, json_mode=False, extra=(),
-                         console=True, name="supervisor"):
-        argv = [bin_path("shapeform_supervisor"), "--config", config,
+    def start_supervisor(self, config, domain=None, script=None, record=None, extra=(), console=True,
+                         name="supervisor"):
+        """A supervisor run with --json (every answer, event and the summary are JSON lines on stdout)."""
+        argv = [bin_path("shapeform_supervisor"), "--config", config, "--json",
                 "--domain", str(self.domain if domain is None else domain)]
         if script is not None:
             argv += ["--script", script]
         if record is not None:
             argv += ["--record", record]
-        if json_mode:
-            argv += ["--json"]
         argv += list(extra)
         return self.start(name, argv, stdin="pipe" if console else None, cls=Supervisor)
 
@@ -428,9 +247,7 @@ class SwarmTestCase(unittest.TestCase):
     def run_sim(self, config, args=()):
         """Runs shapeform_sim; returns its JSON object."""
         argv = [bin_path("shapeform_sim"), "--config", config] + list(args)
-        r = subprocess.run(argv, capture_output=True, text=True, timeout=120)
-        self.assertEqual(r.returncode, 0, "shapeform_sim failed: %s" % r.stderr[-2000:])
-        return json.loads(r.stdout)
+        return json.loads(procs.run(argv, timeout=120).stdout)
 
     def assert_all_alive(self, procs):
         dead = ["%s (status %s)" % (p.name, p.returncode) for p in procs if not p.running()]

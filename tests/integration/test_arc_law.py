@@ -3,12 +3,14 @@
 the launcher reach the law's plateau criteria (on the curve, evenly spaced by arc length)."""
 import argparse
 import glob
-import json
 import os
 import subprocess
 import sys
 import tempfile
 import unittest
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts", "lib"))
+import shapeform_procs as procs  # noqa: E402
 
 ARGS = None
 
@@ -20,14 +22,13 @@ class ArcLawOnProcesses(unittest.TestCase):
         cmd = [os.path.join(ARGS.source, "scripts", "launch_swarm.sh"), "-n", "12", "--scenario", scenario,
                "--domain", str(domain), "--json", "--timeout", "90", "--build", ARGS.build, "--runs", runs]
         p = subprocess.run(cmd, stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=240)
-        lines = [l for l in p.stdout.splitlines() if l.startswith("{")]
-        if p.returncode != 0 or not lines:
+        s = procs.summary(p.stdout)
+        if p.returncode != 0 or s is None:
             for log in sorted(glob.glob(os.path.join(runs, "*", "*.log"))):
                 with open(log) as f:
                     tail = f.read().splitlines()[-15:]
                 print(f"--- {log}\n" + "\n".join(tail), file=sys.stderr)
             self.fail(f"{scenario}: launcher exit {p.returncode}\n{p.stderr[-3000:]}")
-        s = json.loads(lines[-1])
         self.assertEqual(s["agents"], 12)
         self.assertEqual(s["law"], "arc")
         self.assertTrue(s["converged"], s)

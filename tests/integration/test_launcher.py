@@ -28,14 +28,25 @@ def build_dir():
 class LauncherTest(harness.SwarmTestCase):
 
     def launch(self, args, name="launcher"):
-        argv = ["bash", launcher(), "--build", build_dir(), "--runs", os.path.join(self.run_dir, "runs"),
+        """Starts the launcher with its own --runs folder (RUN_DIR/runs_NAME)."""
+        argv = ["bash", launcher(), "--build", build_dir(), "--runs", os.path.join(self.run_dir, "runs_" + name),
                 "--domain", str(self.domain)] + list(args)
         return self.start(name, argv)
 
     def run_folder(self, proc):
-        m = re.search(r"run folder (\S+)", proc.log())
-        self.assertIsNotNone(m, "the launcher names its run folder")
-        return m.group(1)
+        """The launch's run folder: its "run" event with --json, else the one folder in its --runs."""
+        run = harness.events(proc.out(), "run")
+        if run:
+            return run[0]["dir"]
+        runs = os.path.join(self.run_dir, "runs_" + proc.name)
+        folders = glob.glob(os.path.join(runs, "*", ""))
+        self.assertEqual(len(folders), 1, "one run folder in %s" % runs)
+        return folders[0].rstrip("/")
+
+    def agent_epochs(self, run, i):
+        """Epochs of the commands agent i adopted (its JSON event lines in the run folder)."""
+        return [e["epoch"] for e in harness.events(harness.read_text(os.path.join(run, "agent_%d.out" % i)),
+                                                   "command")]
 
     def assert_nothing_left(self, proc):
         self.assertEqual(harness.processes_in_group(proc.pid), [], "processes left by the launcher")
@@ -55,8 +66,9 @@ class LauncherTest(harness.SwarmTestCase):
                 status = p.wait(120)
                 self.assertEqual(status, 0, "%s: launcher exit status" % name)
                 lines = p.out().splitlines()
-                self.assertEqual(len(lines), 1, "%s: stdout is the one JSON summary line" % name)
-                summary = json.loads(lines[0])
+                self.assertEqual([e.get("event") for e in map(json.loads, lines)], ["run", "summary"],
+                                 "%s: stdout is the run line and the JSON summary" % name)
+                summary = json.loads(lines[-1])
                 self.assertEqual(summary["name"], expected["name"])
                 self.assertEqual(summary["shape"], expected["shape"], name)
                 self.assertEqual(summary["tracking"], expected["tracking"], name)
@@ -66,9 +78,11 @@ class LauncherTest(harness.SwarmTestCase):
                 self.assertEqual(summary["exit_status"], 0)
                 self.assertGreaterEqual(summary["steps"], 60)
                 run = self.run_folder(p)
+                self.assertEqual(json.loads(lines[0]), {"event": "run", "dir": run, "domain": self.domain,
+                                                        "agents": expected["agents"]})
                 self.assertTrue(os.path.basename(run).endswith("-%s-n%d" % (name, expected["agents"])), run)
                 for i in range(expected["agents"]):
-                    self.assertIn("following command epoch 1", harness.read_text(os.path.join(run, "agent_%d.log" % i)))
+                    self.assertEqual(self.agent_epochs(run, i), [1], "%s: agent %d follows epoch 1" % (name, i))
                 self.assertIn("wait time 60", harness.read_text(os.path.join(run, "script.txt")))
                 rows = harness.read_csv(os.path.join(run, "record", "metrics.csv"))
                 self.assertTrue(any(r["epoch"] == "1" for r in rows), "%s: recorded metrics" % name)
@@ -83,13 +97,14 @@ class LauncherTest(harness.SwarmTestCase):
         sim = self.run_sim(harness.scenario("circle"), ["--steps", "500"])
         p = self.launch(["-n", "12", "--scenario", "circle", "--json"])
         self.assertEqual(p.wait(150), 0, "launcher exit status (0: converged)")
-        summary = json.loads(p.out().splitlines()[-1])
+        summary = harness.summary(p.out())
         self.assertTrue(summary["converged"])
         self.assertEqual(summary["agents"], 12)
         self.assertLessEqual(abs(summary["shape_error_mean"] - sim["shape_error_mean"]), 0.02,
                              "processes %.4f, simulator %.4f" % (summary["shape_error_mean"], sim["shape_error_mean"]))
         self.assertLessEqual(summary["gap_cv"], 0.10)
-        self.assertIn("converged at t=", p.log())
+        waits = harness.events(harness.read_text(os.path.join(self.run_folder(p), "supervisor.out")), "wait")
+        self.assertEqual([(w["wait"], w["ok"]) for w in waits if w["wait"] != "agents"], [("converged", True)])
         self.assert_nothing_left(p)
 
     def agent_starts(self, run, n):
@@ -118,7 +133,7 @@ class LauncherTest(harness.SwarmTestCase):
             self.assertRegex(log, r"\b40 Hz\b", "agent %d runs at --rate" % i)
             self.assertIn("lease 3 s", log, "agent %d got --set" % i)
         self.assertIn("lease 3 s", harness.read_text(os.path.join(run, "supervisor.log")), "the supervisor got --set")
-        self.assertEqual(json.loads(p.out())["recording"], record)
+        self.assertEqual(harness.summary(p.out())["recording"], record)
         self.assertTrue(harness.read_csv(os.path.join(record, "metrics.csv")), "recorded into --record")
         self.assertFalse(os.path.exists(os.path.join(run, "record")))
         self.assert_nothing_left(p)
@@ -127,7 +142,7 @@ class LauncherTest(harness.SwarmTestCase):
         csv_path = self.write("init.csv", "x1,x2\n" + "".join("%g,%g\n" % r for r in rows))
         p = self.launch(["--scenario", "square", "--init", csv_path, "--steps", "5", "--json"], "launcher_init")
         self.assertEqual(p.wait(90), 0)
-        self.assertEqual(json.loads(p.out().splitlines()[-1])["agents"], len(rows))
+        self.assertEqual(harness.summary(p.out())["agents"], len(rows))
         for i, (got, want) in enumerate(zip(self.agent_starts(self.run_folder(p), len(rows)), rows)):
             self.assertAlmostEqual(got[0], want[0], delta=1e-9, msg="agent %d x1" % i)
             self.assertAlmostEqual(got[1], want[1], delta=1e-9, msg="agent %d x2" % i)
@@ -139,7 +154,7 @@ class LauncherTest(harness.SwarmTestCase):
         p = self.launch(["-n", "4", "--scenario", harness.scenario("square"), "--timeout", "3", "--json",
                          "--set", "supervisor.converge.hold=1000000"], "launcher_timeout")
         self.assertEqual(p.wait(90), 3)
-        summary = json.loads(p.out())
+        summary = harness.summary(p.out())
         self.assertEqual((summary["converged"], summary["exit_status"], summary["agents"]), (False, 3, 4))
         self.assertEqual(summary["shape"], "square")
         self.assertIn("wait converged timeout=3", harness.read_text(os.path.join(self.run_folder(p), "script.txt")))
@@ -152,9 +167,11 @@ class LauncherTest(harness.SwarmTestCase):
                         "launcher_group" if to_group else "launcher")
         # Mid-run: every agent started and the command out and followed (the agents' discovery is
         # not what this test is about, so not all ten need to be heard).
-        harness.poll(lambda: "started 10 agents" in p.log() and re.search(r"following=[1-9]", p.log()), 60,
-                     "the launcher to show agents following the command")
-        run = self.run_folder(p)
+        run = harness.poll(lambda: glob.glob(os.path.join(self.run_dir, "runs_" + p.name, "*", "")), 30,
+                           "the launcher's run folder")[0]
+        harness.poll(lambda: all(os.path.exists(os.path.join(run, "agent_%d.out" % i)) for i in range(10))
+                     and any(self.agent_epochs(run, i) == [1] for i in range(10)), 60,
+                     "the 10 agents started, some following the command")
         if to_group:
             os.killpg(p.pid, signal.SIGINT)  # a terminal's Ctrl-C: every process of the group
         else:

@@ -25,7 +25,6 @@ and a supervisor on loopback; fixed seeds; each test's runs one after another on
 
 Run directly: test_paper_claims.py --bin build/bin --source . --domain 140 [unittest args]
 """
-import csv
 import os
 import statistics
 import sys
@@ -70,13 +69,10 @@ class PaperClaimsTest(harness.SwarmTestCase):
         p = self.start("launch_" + tag, argv)
         status = p.wait(steps / RATE_HZ * 4 + 120)
         self.assertEqual(status, 0, f"{tag}: launcher exit status")
-        summary = harness.last_json_line(p.out())
+        summary = harness.summary(p.out())
         self.assertEqual(summary["agents_seen"], n, f"{tag}: agents seen by the supervisor")
-        rows = []
-        with open(os.path.join(record, "metrics.csv"), newline="") as f:
-            for r in csv.DictReader(f):
-                if r["epoch"] and int(float(r["epoch"])) >= 1:
-                    rows.append({k: (float(v) if v != "" else None) for k, v in r.items()})
+        rows = [r for r in harness.read_csv(os.path.join(record, "metrics.csv"), numeric=True)
+                if r["epoch"] and r["epoch"] >= 1]
         return summary, rows
 
     def window(self, rows, key, t0, t1):

@@ -41,13 +41,13 @@ class ShapesTest(harness.SwarmTestCase):
         script = self.write("script.txt",
                             "wait agents %d timeout=60\nstart\nwait time %d timeout=%d\nstatus\nquit\n"
                             % (AGENTS, steps, 60 + 3 * steps / rate))
-        sup = self.start_supervisor(config, script=script, record=record, json_mode=True, extra=sets,
+        sup = self.start_supervisor(config, script=script, record=record, extra=sets,
                                     console=False)
         agents = self.start_agents(AGENTS, config, seed=SEED, extra=sets)
         status = sup.wait(timeout=120 + 3 * steps / rate)
         self.assertEqual(status, 0, "supervisor exit status")
         self.assert_all_alive(agents)
-        summary = harness.last_json_line(sup.out())
+        summary = harness.summary(sup.out())
         self.assertIsNotNone(summary, "no JSON summary")
         self.assertEqual(summary["shape"], name)
         self.assertEqual(summary["agents"], AGENTS)
@@ -146,10 +146,9 @@ class ShapesTest(harness.SwarmTestCase):
 
         reached = harness.poll(on_line, 3 * limit / rate + 30, "the swarm to lie on the line", 0.2)
         t_on = reached["model_time"]
-        start = len(sup.out())
-        sup.send("wait time %g timeout=60" % (t_on + more))
-        later = sup.metrics(timeout=90)  # answered once the wait is over
-        self.assertNotIn("wait time: timed out", sup.out()[start:])
+        self.assertTrue(sup.wait_until("time", "wait time %g timeout=60" % (t_on + more), 60),
+                        "%g more iterations on the line" % more)
+        later = sup.metrics()
         sup.send("quit")
         self.assertEqual(sup.wait(30), 0)
         sim = self.run_sim(config, ["--seed", str(SEED), "--steps", "1000"])
