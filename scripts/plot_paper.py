@@ -1,8 +1,10 @@
 #!/usr/bin/python3
-"""Draws the paper's figures from what scripts/paper_experiments.py recorded (the supervisor's and the
-simulator's CSV files), into docs/figures/paper_*.png. Debian's python3-matplotlib and numpy only.
+"""Draws the paper's figures from what scripts/paper/run.py recorded (the supervisor's and the
+simulator's CSV files) as paper_*.png. Debian's python3-matplotlib and numpy only.
 
-  /usr/bin/python3 scripts/plot_paper.py --data DIR [--out docs/figures]
+  scripts/plot_paper.py --data DIR [--out DIR | --write-docs]
+
+Default output: DATA/figures; --write-docs: the committed docs/figures.
 """
 import argparse
 import json
@@ -17,8 +19,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 sys.dont_write_bytecode = True  # no __pycache__ in scripts/
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import paper_experiments as P  # noqa: E402
+sys.path.insert(0, str(Path(__file__).resolve().parent / "paper"))
+import analyse as P  # noqa: E402
+import experiments as E  # noqa: E402
 
 DIST_C, SIM_C, ASYNC_C = "tab:blue", "tab:orange", "0.6"
 SNAP_COLOURS = ["#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e"]
@@ -117,7 +120,7 @@ def fig1(data, out, K):
         for i, (kind, lab) in enumerate((("dist", "agent processes"), ("sim", "simulator"))):
             ser = r[f"{kind}_series"]
             m = P.at_step(ser, K)
-            draw_formation(axs[i, j], r[f"{kind}_pos"], P.SHAPE[s], K,
+            draw_formation(axs[i, j], r[f"{kind}_pos"], E.SHAPE[s], K,
                            f"{s}, {lab}, step {K}\nshape error {P.fmt(m['shape_error_mean'])}, gap CV "
                            f"{P.fmt(m['gap_cv'])}", start=r["start"])
     fig.suptitle("Fig. 1 analogue: 12 agents, final formation (dots), trajectories (lines), start (x), target "
@@ -164,7 +167,7 @@ def fig3(data, out, Kr):
             ax = axs[i, j]
             if not r:
                 continue
-            cx, cy = shape_curve(P.SHAPE[s])
+            cx, cy = shape_curve(E.SHAPE[s])
             ax.plot(cx, cy, "k--", lw=1.0)
             sp, dp = P.at_step(r["sim_pos"], k), P.at_step(r["dist_pos"], k)
             ax.plot([p[0] for p in dp.values()], [p[1] for p in dp.values()], "o", ms=7, color=DIST_C, alpha=0.8,
@@ -201,7 +204,7 @@ def track_panel(ax, r, kind, track, title, agent=0):
     ts = np.linspace(0, 200, 201)
     cs = [centre(track, t) for t in ts]
     ax.plot([c[0] for c in cs], [c[1] for c in cs], ":", color="k", lw=0.8)
-    for t, col in zip(P.SNAPSHOTS, SNAP_COLOURS):
+    for t, col in zip(E.SNAPSHOTS, SNAP_COLOURS):
         p = P.at_step(pos, t)
         c = centre(track, t)
         ax.plot([q[0] for q in p.values()], [q[1] for q in p.values()], "o", ms=4.5, color=col, label=f"t={t}")
@@ -233,7 +236,7 @@ def fig_track(data, out, path, variants, fname, title):
         if not r:
             continue
         for i, (kind, klab) in enumerate((("dist", "agent processes"), ("sim", "simulator"))):
-            track_panel(axs[i, j], r, kind, P.TRACK_PATH[path], f"{lab}: {klab}")
+            track_panel(axs[i, j], r, kind, E.TRACK_PATH[path], f"{lab}: {klab}")
     axs[0, 0].legend(fontsize=7, loc="best")
     fig.suptitle(title, fontsize=11)
     fig.tight_layout()
@@ -297,7 +300,7 @@ def fig_tracking_errors(data, out):
                         label=f"{vlab}, processes")
                 ax.plot(*series_xy(r["sim_series"], key, 200), "--", color=colours[v], lw=1.0,
                         label=f"{vlab}, simulator")
-            for t in P.SNAPSHOTS:
+            for t in E.SNAPSHOTS:
                 ax.axvline(t, color="0.85", lw=0.6, zorder=0)
             ax.set_yscale("log")
             ax.set_title(f"{path} path, {lab}: {klab}", fontsize=10)
@@ -320,7 +323,7 @@ def fig_limits(data, out):
     for ax, n in ((axs[0, 0], 20), (axs[0, 1], 50)):
         pos = P.load_positions_csv(ld / f"circle_n{n}_positions.csv")
         j = json.loads((ld / f"circle_n{n}_summary.json").read_text())
-        draw_formation(ax, pos, P.SHAPE["circle"], 500,
+        draw_formation(ax, pos, E.SHAPE["circle"], 500,
                        f"circle r0=4, {n} agents, step 500: shape error {P.fmt(j['shape_error_mean'])},\n"
                        f"extent {P.fmt(j['extent'], '{:.2f}')}, min separation {P.fmt(j['min_separation'])}")
     ax = axs[0, 2]
@@ -378,12 +381,14 @@ def fig_limits(data, out):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--data", required=True)
-    ap.add_argument("--out", default=str(P.REPO / "docs" / "figures"))
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0],
+                                 usage="scripts/plot_paper.py --data DIR [--out DIR | --write-docs]")
+    ap.add_argument("--data", required=True, help="a run folder of scripts/paper/run.py")
+    ap.add_argument("--out", help="where the figures go (default DATA/figures)")
+    ap.add_argument("--write-docs", action="store_true", help="rewrite the committed figures in docs/figures")
     a = ap.parse_args()
     data = Path(a.data).resolve()
-    out = Path(a.out)
+    out = Path(a.out) if a.out else (E.REPO / "docs" / "figures" if a.write_docs else data / "figures")
     out.mkdir(parents=True, exist_ok=True)
     man = json.loads((data / "manifest.json").read_text())
     K = 200 if man["quick"] else 500

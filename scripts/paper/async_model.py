@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """A numpy model of the paper's law under the two schedules that matter for the comparison between
-the simulator and the agent processes (used by paper_experiments.py to explain the differences).
+the simulator and the agent processes (used by scripts/paper/run.py and report.py to explain the differences).
 
 - sync:  every agent steps from the positions of step k (Jacobi). This is shapeform_sim; the model is
          checked against the simulator's recorded series before it is trusted.
