@@ -4,9 +4,12 @@
 Starts real processes on loopback, reads the figures the processes publish about themselves
 (AgentStatus through shapeform_bench_probe, SwarmMetrics for convergence, the supervisor's JSON
 summary) plus kernel counters (/proc), takes the median over runs, stores the results in
-docs/figures/bench_results.json and renders docs/BENCHMARKS.md from that file.
+OUT/figures/bench_results.json and renders OUT/BENCHMARKS.md from that file. OUT is runs/<UTC time>-bench
+unless given (--out; --write-docs: the committed docs/). Rows not run keep the results they have in the
+committed docs/figures/bench_results.json.
 
-Every run gets its own DDS domain (--domain-base upwards) and stops only the processes it started.
+Every run gets its own DDS domain (--domain-base upwards) and stops only the processes it started
+(scripts/lib/shapeform_procs.py).
 """
 from __future__ import annotations
 
@@ -26,7 +29,10 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+sys.dont_write_bytecode = True  # no __pycache__ beside the sources
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "scripts" / "lib"))
+import shapeform_procs as procs  # noqa: E402
 CLK_TCK = os.sysconf("SC_CLK_TCK")
 
 # --------------------------------------------------------------------------------------------
@@ -117,8 +123,6 @@ LEVERS: list[dict] = [
                  "`ss -uam` shows rb = 2 x min(request, net.core.rmem_max) on the input sockets (4 MiB requested, "
                  "rmem_max here 4 MiB, so 8 MiB). With the OS default (208 KiB) the kernel drops datagrams whenever a "
                  "process is descheduled for a few tens of ms.",
-     "rows": [_lv(B, 50, "default"), _lv(B, 50, "buf"), _lv(B, 100, "mcann"), _lv(B, 100, "mcbuf1ann"),
-              _lv(B, 100, "mcbufann")],
      "pairs": [(_lv(B, 50, "default"), _lv(B, 50, "buf")), (_lv(B, 100, "mcann"), _lv(B, 100, "mcbuf1ann")),
                (_lv(B, 100, "mcann"), _lv(B, 100, "mcbufann"))],
      "note": "Larger buffers turn drops into queueing: when the host is past its capacity the queue (and the data "
@@ -129,8 +133,6 @@ LEVERS: list[dict] = [
                  "datagram instead of N-1 and the kernel does the fan-out. Other topics and discovery stay unicast "
                  "(an earlier variant that also put discovery and the reliable topics on the group made every "
                  "heartbeat and acknowledgement reach every process and was slower).",
-     "rows": [_lv(B, 100, "bufann"), _lv(B, 100, "mcbufann"), _lv(A, 50, "bufann"), _lv(A, 50, "mcbufann"),
-              _lv(A, 25, "default"), _lv(A, 25, "mcbufann")],
      "pairs": [(_lv(B, 100, "bufann"), _lv(B, 100, "mcbufann")), (_lv(A, 50, "bufann"), _lv(A, 50, "mcbufann")),
                (_lv(A, 25, "default"), _lv(A, 25, "mcbufann"))],
      "extra": True},
@@ -139,7 +141,6 @@ LEVERS: list[dict] = [
                  "processes) against 3 s / 10 s. Each announcement goes to every participant id probed "
                  "(`max_participants` = 120) and is processed by every participant: about N x 120 / announce_s "
                  "datagrams per second for as long as the swarm runs.",
-     "rows": [_lv(B, 100, "buf"), _lv(B, 100, "bufann"), _lv(B, 100, "mcbuf"), _lv(B, 100, "mcbufann")],
      "pairs": [(_lv(B, 100, "buf"), _lv(B, 100, "bufann")), (_lv(B, 100, "mcbuf"), _lv(B, 100, "mcbufann"))],
      "note": "Agents still notice a killed neighbour after `agent.neighbour_timeout_periods` (3 periods), whatever "
              "the lease; the lease only decides when Fast DDS forgets the dead participant's endpoints.",
@@ -148,8 +149,6 @@ LEVERS: list[dict] = [
      "question": "`transport.profile: discovery-server` with `fast-discovery-server -i 0 -l 127.0.0.1` started from an "
                  "XML profile without builtin transports (one server per run, port 12000 + domain): participant and "
                  "endpoint discovery go through the server (O(N)) instead of the N x N mesh. Data stays peer to peer.",
-     "rows": [_lv(A, 50, "default"), _lv(A, 50, "ds"), _lv(B, 100, "mcbufann"), _lv(B, 100, "dsmcbufann"),
-              _lv(A, 100, "mcbufann"), _lv(A, 100, "dsmcbufann")],
      "pairs": [(_lv(A, 50, "default"), _lv(A, 50, "ds")), (_lv(B, 100, "mcbufann"), _lv(B, 100, "dsmcbufann")),
                (_lv(A, 100, "mcbufann"), _lv(A, 100, "dsmcbufann"))],
      "note": "Reading of the runs of 2026-11-22: runs measured before commit f23146a (see the row's commit in the "
@@ -165,8 +164,6 @@ LEVERS: list[dict] = [
     {"name": "5. Staggered launch",
      "question": "Starting 100 processes at once (the launcher itself needs about 4 s) makes a discovery storm on 2 "
                  "cores; 50 ms between launches spreads the start over about 8 s.",
-     "rows": [_lv(B, 100, "mcbufann"), _lv(B, 100, "mcbufann", 0.05), _lv(A, 100, "mcbufann"),
-              _lv(A, 100, "mcbufann", 0.05)],
      "pairs": [(_lv(B, 100, "mcbufann"), _lv(B, 100, "mcbufann", 0.05)),
                (_lv(A, 100, "mcbufann"), _lv(A, 100, "mcbufann", 0.05))],
      "note": "Reading of the runs of 2026-11-22 (the agent rows measured after the port-slot fix, see 'What "
@@ -187,8 +184,11 @@ LEVERS: list[dict] = [
                  "bare baseline at the same N) is the measure of everything the agent adds. An agent process has "
                  "5 threads (main loop, Fast DDS event thread, receive threads); 2.9 has no setting that removes "
                  "any of them.",
-     "rows": []},
+     "pairs": []},
 ]
+# The rows of a lever, unless listed: the members of its pairs, in order.
+for _lever in LEVERS:
+    _lever.setdefault("rows", list({r.id: r for pair in _lever["pairs"] for r in pair}.values()))
 
 # --------------------------------------------------------------------------------------------
 # Small helpers.
@@ -292,20 +292,8 @@ class Sampler(threading.Thread):
 
 
 def read_csv(path: Path) -> list[dict]:
-    if not path.exists():
-        return []
-    with open(path) as f:
-        header = f.readline().strip().split(",")
-        rows = []
-        for line in f:
-            parts = line.strip().split(",")
-            if len(parts) != len(header):
-                continue  # a line cut by a kill
-            try:
-                rows.append({k: float(v) for k, v in zip(header, parts)})
-            except ValueError:
-                continue
-    return rows
+    """A probe CSV as rows of floats; rows cut by a kill are skipped."""
+    return [r for r in procs.read_csv(path, numeric=True) if None not in r.values()]
 
 
 # --------------------------------------------------------------------------------------------
@@ -373,38 +361,6 @@ def udp_port_bound(port: int) -> bool:
     return False
 
 
-def wait_for(cond, timeout_s: float, step_s: float = 0.05) -> bool:
-    end = time.monotonic() + timeout_s
-    while time.monotonic() < end:
-        if cond():
-            return True
-        time.sleep(step_s)
-    return cond()
-
-
-def stop_processes(procs: list[subprocess.Popen], spacing_s: float, grace_s: float) -> list[int | None]:
-    """SIGTERM each (spaced, so dozens of participants do not leave at the same instant), then wait,
-    then SIGKILL whatever is left. Returns the exit codes (None = had to be killed)."""
-    for p in procs:
-        if p.poll() is None:
-            try:
-                p.send_signal(signal.SIGTERM)
-            except ProcessLookupError:
-                pass
-            if spacing_s > 0:
-                time.sleep(spacing_s)
-    end = time.monotonic() + grace_s
-    codes: list[int | None] = []
-    for p in procs:
-        try:
-            codes.append(p.wait(timeout=max(0.1, end - time.monotonic())))
-        except subprocess.TimeoutExpired:
-            p.kill()
-            p.wait()
-            codes.append(None)
-    return codes
-
-
 def host_busy_over(seconds: float) -> float:
     """Host CPU busy fraction (0..1) over the next `seconds`."""
     t1, i1 = read_host_cpu()
@@ -440,19 +396,15 @@ def run_once(ctx: Ctx, row: Row, run_idx: int) -> dict:
     if preset["ds"]:
         port = 12000 + domain
         tsets += ["transport.profile=discovery-server", f"transport.discovery_server=127.0.0.1:{port}"]
-    common = ["--domain", str(domain)] + [a for s in tsets for a in ("--set", s)]
+    common = ["--domain", str(domain)] + procs.sets_args(tsets)
     rate_sets = [f"agent.rate_hz={row.rate:g}", f"agent.status_rate_hz={ctx.status_rate_hz:g}",
                  f"swarm.agents={row.n}"]
 
     sampler = Sampler()
-    files = []
-    started: list[subprocess.Popen] = []
+    started: list[procs.Proc] = []
 
-    def spawn(name: str, argv: list[str], **kw) -> subprocess.Popen:
-        out = open(rdir / f"{name}.out", "w")
-        err = open(rdir / f"{name}.err", "w")
-        files.extend([out, err])
-        p = subprocess.Popen(argv, stdout=kw.get("stdout", out), stderr=err, stdin=subprocess.DEVNULL, cwd=rdir)
+    def spawn(name: str, argv: list[str]) -> procs.Proc:
+        p = procs.Proc(name, argv, rdir, cwd=rdir, err_suffix=".err")
         sampler.ours.append(p.pid)
         started.append(p)
         return p
@@ -466,12 +418,11 @@ def run_once(ctx: Ctx, row: Row, run_idx: int) -> dict:
             ds_xml(xml, port)
             ds_proc = spawn("ds", ["fast-discovery-server", "-i", "0", "-l", "127.0.0.1", "-p", str(port),
                                    "-x", str(xml)])
-            if not wait_for(lambda: udp_port_bound(port), 10):
+            if not procs.wait_for(lambda: udp_port_bound(port), 10):
                 raise RuntimeError(f"discovery server did not bind 127.0.0.1:{port}")
             sampler.pids["ds"] = ds_proc.pid
-        probe = spawn("probe", [str(ctx.bin / "shapeform_bench_probe"), "--out", str(rdir)] + common,
-                      stdout=subprocess.PIPE)
-        line = probe.stdout.readline().decode()
+        probe = spawn("probe", [str(ctx.bin / "shapeform_bench_probe"), "--out", str(rdir)] + common)
+        line = procs.wait_for(lambda: probe.out() if "\n" in probe.out() or not probe.running() else "", 30)
         if not line.startswith("ready"):
             raise RuntimeError(f"probe did not start: {line!r}")
         sampler.start()
@@ -484,26 +435,26 @@ def run_once(ctx: Ctx, row: Row, run_idx: int) -> dict:
                               f"wait converged timeout={ctx.conv_timeout_s:g}\nsleep {ctx.window_s:g}\nquit\n")
             sup = spawn("supervisor", [str(ctx.bin / "shapeform_supervisor"), "--config", str(ctx.scenario),
                                        "--script", str(script), "--json"] + common +
-                        [a for s in rate_sets + ctx.scenario_sets for a in ("--set", s)])
+                        procs.sets_args(rate_sets + ctx.scenario_sets))
             sampler.pids["sup"] = sup.pid
-        workers: list[subprocess.Popen] = []
+        workers: list[procs.Proc] = []
         if row.kind == "group":
             for first in range(0, row.n, row.group):
                 last = min(row.n, first + row.group) - 1
                 workers.append(spawn(f"group{first}", [
                     str(ctx.bin / "shapeform_agent_group"), "--ids", f"{first}-{last}", "--config",
                     str(ctx.scenario), "--seed", "1"] + common +
-                    [a for s in rate_sets + ctx.scenario_sets for a in ("--set", s)]))
+                    procs.sets_args(rate_sets + ctx.scenario_sets)))
                 if row.stagger_s > 0:
                     time.sleep(row.stagger_s)
         else:
             for i in range(row.n):
                 if row.kind == "agents":
                     argv = [str(ctx.bin / "shapeform_agent"), "--id", str(i), "--config", str(ctx.scenario),
-                            "--seed", "1"] + common + [a for s in rate_sets + ctx.scenario_sets for a in ("--set", s)]
+                            "--seed", "1"] + common + procs.sets_args(rate_sets + ctx.scenario_sets)
                 else:
                     argv = [str(ctx.bin / "shapeform_bench_baseline"), "--id", str(i)] + common + \
-                        [a for s in rate_sets for a in ("--set", s)]
+                        procs.sets_args(rate_sets)
                 workers.append(spawn(f"p{i}", argv))
                 if row.stagger_s > 0:
                     time.sleep(row.stagger_s)
@@ -513,7 +464,7 @@ def run_once(ctx: Ctx, row: Row, run_idx: int) -> dict:
             limit = ctx.disc_timeout_s + ctx.conv_timeout_s + ctx.window_s + 60
             try:
                 sup.wait(timeout=limit)
-            except subprocess.TimeoutExpired:
+            except AssertionError:
                 log(f"{row.id}: supervisor still running after {limit:.0f} s; stopping it")
             t_end = now_ns()
         else:
@@ -522,27 +473,24 @@ def run_once(ctx: Ctx, row: Row, run_idx: int) -> dict:
                 rows = read_csv(rdir / "status.csv")
                 full = {int(r["id"]) for r in rows if r["neighbours_heard"] >= row.n - 1}
                 return len(full) >= row.n
-            wait_for(all_heard, ctx.disc_timeout_s, 0.5)
+            procs.wait_for(all_heard, ctx.disc_timeout_s, 0.5)
             time.sleep(ctx.window_s)
             t_end = now_ns()
         result["t_end"] = t_end
-        early = [i for i, p in enumerate(workers) if p.poll() is not None]
-        codes = stop_processes(workers, 0.01, 20)
+        early = [i for i, p in enumerate(workers) if not p.running()]
+        codes = procs.stop_all(workers, grace=20, spacing=0.01)
         result["exit_codes"] = codes
         result["died_early"] = early
         if sup is not None:
-            sc = stop_processes([sup], 0, 10)[0]
-            result["supervisor_exit"] = sc
-        stop_processes([probe], 0, 10)
+            result["supervisor_exit"] = procs.stop_all([sup], grace=10)[0]
+        procs.stop_all([probe], grace=10)
     finally:
         if sampler.is_alive():
             sampler.stop()
         # After an error part-way: stop whatever this run started and is still alive (ours only).
-        stop_processes([p for p in started if p is not ds_proc and p.poll() is None], 0, 10)
+        procs.stop_all([p for p in started if p is not ds_proc and p.running()], grace=10)
         if ds_proc is not None:
-            stop_processes([ds_proc], 0, 5)
-        for f in files:
-            f.close()
+            procs.stop_all([ds_proc], grace=5)
     analyse(ctx, row, rdir, result, sampler)
     return result
 
@@ -687,18 +635,10 @@ def analyse(ctx: Ctx, row: Row, rdir: Path, res: dict, sampler: Sampler) -> None
     conv = next((m["recv_ns"] for m in metrics if m["epoch"] >= 1 and m["converged"] >= 1), None)
     res["start_s"] = (started - t0) / 1e9 if started else None
     res["converge_s"] = (conv - t0) / 1e9 if conv else None
-    sup_out = rdir / "supervisor.out"
-    if sup_out.exists():
-        lines = [l for l in sup_out.read_text().splitlines() if l.startswith("{")]
-        if lines:
-            try:
-                j = json.loads(lines[-1])
-                res["sup_converged"] = j.get("converged")
-                res["shape_error_mean"] = j.get("shape_error_mean")
-                res["gap_cv"] = j.get("gap_cv")
-                res["agents_seen"] = j.get("agents_seen")
-            except json.JSONDecodeError:
-                pass
+    j = procs.summary(procs.read_text(rdir / "supervisor.out"))
+    if j:
+        for key in ("converged", "shape_error_mean", "gap_cv", "agents_seen"):
+            res["sup_converged" if key == "converged" else key] = j.get(key)
 
     codes = res.get("exit_codes", [])
     res["aborts"] = sum(1 for c in codes if c is not None and c < 0 and c != -signal.SIGTERM)
@@ -833,7 +773,9 @@ def fmt(v, kind: str) -> str:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter,
+                                 usage="bench/bench.py [--quick] [--runs K] [--levers] [--only ROW]... [--row SPEC]... "
+                                       "[--list] [--out DIR | --write-docs] [options]")
     ap.add_argument("--quick", action="store_true", help="1 run per row and short windows")
     ap.add_argument("--runs", type=int, help="runs per row (default 3; 1 with --quick)")
     ap.add_argument("--window", type=float, help="measurement window, s (default: max(30, 1100 ticks); 12 with --quick)")
@@ -845,9 +787,12 @@ def main(argv=None) -> int:
     ap.add_argument("--no-main", action="store_true", help="skip the main rows")
     ap.add_argument("--no-sim", action="store_true", help="skip the simulator rows")
     ap.add_argument("--build", default=str(ROOT / "build"), help="build directory (default build/)")
-    ap.add_argument("--runs-dir", default=str(ROOT / "runs" / "bench"), help="where process logs and CSVs go")
-    ap.add_argument("--results", default=str(ROOT / "docs" / "figures" / "bench_results.json"))
-    ap.add_argument("--report", default=str(ROOT / "docs" / "BENCHMARKS.md"))
+    ap.add_argument("--out", help="output folder (default runs/<UTC time>-bench)")
+    ap.add_argument("--write-docs", action="store_true",
+                    help="write into the committed docs/ (docs/BENCHMARKS.md, docs/figures/bench_results.json)")
+    ap.add_argument("--runs-dir", help="where process logs and CSVs go (default OUT/runs; runs/bench with --write-docs)")
+    ap.add_argument("--results", help="results file (default OUT/figures/bench_results.json)")
+    ap.add_argument("--report", help="report file (default OUT/BENCHMARKS.md)")
     ap.add_argument("--domain-base", type=int, default=200, help="first DDS domain id (30 are used in turn)")
     ap.add_argument("--quiet-busy", type=float, default=15.0,
                     help="before each run wait until the host is at most this %% busy (default 15)")
@@ -861,6 +806,12 @@ def main(argv=None) -> int:
     ap.add_argument("--render-only", action="store_true", help="only re-render the report from the results file")
     ap.add_argument("--list", action="store_true", help="list the row ids and exit")
     args = ap.parse_args(argv)
+    docs = ROOT / "docs"
+    out = docs if args.write_docs else Path(args.out or ROOT / "runs" / (
+        time.strftime("%Y%m%dT%H%M%SZ", time.gmtime()) + "-bench")).resolve()
+    args.results = args.results or str(out / "figures" / "bench_results.json")
+    args.report = args.report or str(out / "BENCHMARKS.md")
+    args.runs_dir = args.runs_dir or str(ROOT / "runs" / "bench" if out == docs else out / "runs")
 
     # Ctrl-C or SIGTERM: unwind so that run_once stops the processes it started (ours only).
     def interrupted(signum, frame):
@@ -880,7 +831,10 @@ def main(argv=None) -> int:
         return 0
 
     results_path = Path(args.results)
-    store = json.loads(results_path.read_text()) if results_path.exists() else {}
+    committed = docs / "figures" / "bench_results.json"
+    seed = results_path if results_path.exists() else committed  # rows not run keep their committed results
+    store = json.loads(seed.read_text()) if seed.exists() else {}
+    results_path.parent.mkdir(parents=True, exist_ok=True)
     store.setdefault("rows", {})
     store.setdefault("sim", {})
     if args.render_only:

@@ -1,7 +1,12 @@
 """Simulator rows and the Markdown report of the benchmark (see bench.py).
 
-render() turns docs/figures/bench_results.json into docs/BENCHMARKS.md; every number in the report
-comes from that file, which bench.py fills from the processes' own reports.
+render() turns a results file (bench_results.json) into BENCHMARKS.md; every number in the report comes
+from that file, which bench.py fills from the processes' own reports. Run on its own it renders a report:
+
+usage: bench/bench_report.py [RESULTS_JSON] [--out MD | --write-docs]
+
+RESULTS_JSON defaults to the committed docs/figures/bench_results.json; the report goes to MD (default
+runs/<UTC time>-bench/BENCHMARKS.md), or with --write-docs to the committed docs/BENCHMARKS.md.
 """
 from __future__ import annotations
 
@@ -388,3 +393,31 @@ def render(store: dict, path: Path, plan: dict) -> None:
     o.append("\n")
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text("".join(o))
+
+
+def main(argv=None) -> int:
+    import argparse
+    import sys
+    import time
+    root = Path(__file__).resolve().parent.parent
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0],
+                                 usage="bench/bench_report.py [RESULTS_JSON] [--out MD | --write-docs]")
+    ap.add_argument("results", nargs="?", default=str(root / "docs" / "figures" / "bench_results.json"))
+    ap.add_argument("--out", help="the report to write (default runs/<UTC time>-bench/BENCHMARKS.md)")
+    ap.add_argument("--write-docs", action="store_true", help="rewrite the committed docs/BENCHMARKS.md")
+    a = ap.parse_args(argv)
+    out = Path(a.out) if a.out else (root / "docs" / "BENCHMARKS.md" if a.write_docs else
+                                     root / "runs" / (time.strftime("%Y%m%dT%H%M%SZ", time.gmtime()) + "-bench")
+                                     / "BENCHMARKS.md")
+    sys.dont_write_bytecode = True
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from bench import report_plan  # noqa: E402 (same folder)
+    store = json.loads(Path(a.results).read_text())
+    out.parent.mkdir(parents=True, exist_ok=True)
+    render(store, out, report_plan(store))
+    print(f"bench_report: wrote {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,27 +1,45 @@
 #!/usr/bin/env bash
-# Benchmarks shapeform on this host and regenerates docs/BENCHMARKS.md and docs/figures/bench_*.png:
+# Benchmarks shapeform on this host and writes BENCHMARKS.md, figures/bench_results.json and
+# figures/bench_scaling.png into an output folder (default runs/<UTC time>-bench; with --write-docs the
+# committed docs/BENCHMARKS.md and docs/figures/bench_*):
 #  - agents (one process each, or grouped) against a bare Fast DDS pub/sub baseline with the same payload,
 #    transport and rate, N = 10, 25, 50, 100 (20 Hz; 50 Hz for N <= 25);
 #  - the transport levers, measured one at a time (--levers);
 #  - simulator throughput (build/bin/shapeform_bench_sim), N = 100, 1000, 10000.
-# Run ./scripts/build.sh first. All DDS traffic stays on loopback (domains 200..229 by default).
-# The kernel's socket limits (net.core.rmem_max) are read and reported, never changed.
+# Rows not run keep their committed results (docs/figures/bench_results.json), so a partial run renders
+# a whole report. Run ./scripts/build.sh first. All DDS traffic stays on loopback (domains 200..229 by
+# default). The kernel's socket limits (net.core.rmem_max) are read and reported, never changed.
 #
-# Usage: scripts/bench.sh [--quick] [--runs K] [--levers] [--only ROW_ID]... [--row SPEC]... [--list] [--help]
+# Usage: scripts/bench.sh [--quick] [--runs K] [--levers] [--only ROW_ID]... [--row SPEC]... [--list]
+#                         [--out DIR | --write-docs] [--help]
 #   --quick       1 run per row, 12 s windows (minutes instead of about an hour; lateness then includes start-up)
 #   --levers      also run the lever rows (socket buffers, multicast, announcement period, stagger, grouping)
 #   --only ROW    run only this row (or id prefix), keep the stored others, re-render the report
 #   --list        list the row ids
-# Environment: BUILD_DIR (default build).
+#   --out DIR     the output folder
+#   --write-docs  rewrite the committed docs/BENCHMARKS.md and docs/figures/bench_*
+# Every other option is bench/bench.py's (bench/bench.py --help). Environment: BUILD_DIR (default build).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build="${BUILD_DIR:-build}"
+case " $* " in
+  *" -h "*|*" --help "*) sed -n '2,/^set -euo/{/^set -euo/d;s/^# \{0,1\}//;p}' "$0"; exit 0 ;;
+esac
 for a in "$@"; do
-  case "$a" in -h|--help|--list|--render-only) exec /usr/bin/python3 bench/bench.py --build "$build" "$@" ;; esac
+  case "$a" in --list|--render-only) exec /usr/bin/python3 bench/bench.py --build "$build" "$@" ;; esac
 done
 if [ ! -x "$build/bin/shapeform_agent" ] || [ ! -x "$build/bin/shapeform_bench_probe" ]; then
   echo "bench.sh: $build/bin has no shapeform_agent/shapeform_bench_probe: run ./scripts/build.sh first" >&2
   exit 2
 fi
-/usr/bin/python3 bench/bench.py --build "$build" "$@"
-/usr/bin/python3 scripts/plot_bench.py docs/figures/bench_results.json docs/figures/bench_scaling.png
+out="" args=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --out) [ $# -ge 2 ] || { echo "bench.sh: --out: missing value" >&2; exit 2; }; out=$2; shift 2 ;;
+    --write-docs) out=docs; shift ;;
+    *) args+=("$1"); shift ;;
+  esac
+done
+[ -n "$out" ] || out="runs/$(date -u +%Y%m%dT%H%M%SZ)-bench"
+/usr/bin/python3 bench/bench.py --build "$build" --out "$out" "${args[@]+"${args[@]}"}"
+/usr/bin/python3 scripts/plot_bench.py "$out/figures/bench_results.json" --out "$out/figures/bench_scaling.png"

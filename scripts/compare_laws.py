@@ -1,17 +1,22 @@
 #!/usr/bin/python3
-"""Compares the paper's law and the arc law on the same starts; writes docs/LAW_COMPARISON.md and
-docs/figures/law_comparison.png. Simulator runs for every shape and N = 2, 3, 12, 50, 200; agent-process
-runs (through scripts/launch_swarm.sh) for a few shapes unless --no-distributed.
+"""Compares the paper's law and the arc law on the same starts; writes LAW_COMPARISON.md and
+figures/law_comparison.png into an output folder (default runs/<UTC time>-laws; --write-docs: the
+committed docs/). Simulator runs for every shape and N = 2, 3, 12, 50, 200; agent-process runs (through
+scripts/launch_swarm.sh) for a few shapes unless --no-distributed.
 
-  scripts/compare_laws.py [--build build] [--quick] [--no-distributed]
+  scripts/compare_laws.py [--build build] [--quick] [--no-distributed] [--out DIR | --write-docs]
 """
 import argparse
 import datetime
 import json
 import math
 import os
-import subprocess
 import sys
+import time
+
+sys.dont_write_bytecode = True  # no __pycache__ in scripts/
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "lib"))
+import shapeform_procs as procs  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SHAPES = [  # name, scenario file, overrides giving the shape
@@ -35,20 +40,19 @@ def sim(build, scenario, law, n, steps, seed, extra=()):
     cmd = [os.path.join(build, "bin", "shapeform_sim"), "--config", os.path.join(ROOT, "config", "scenarios", scenario + ".yaml"),
            "--agents", str(n), "--seed", str(seed), "--steps", str(steps), "--set", "dynamics.law=" + law,
            "--outline", "400", *extra]
-    p = subprocess.run(cmd, capture_output=True, text=True, check=True)
-    return json.loads(p.stdout)
+    return json.loads(procs.run(cmd).stdout)
 
 
-def launch(build, scenario, law, n, steps, seed, domain, rate):
+def launch(build, scenario, law, n, steps, seed, domain, rate, runs):
     cmd = [os.path.join(ROOT, "scripts", "launch_swarm.sh"), "-n", str(n), "--scenario", scenario, "--seed", str(seed),
            "--steps", str(steps), "--json", "--domain", str(domain), "--build", build, "--timeout", "300",
            "--rate", str(rate),
-           "--set", "dynamics.law=" + law, "--runs", os.path.join(build, "compare-runs")]
-    p = subprocess.run(cmd, capture_output=True, text=True)
-    lines = [l for l in p.stdout.splitlines() if l.startswith("{")]
-    if not lines:
+           "--set", "dynamics.law=" + law, "--runs", runs]
+    p = procs.run(cmd, check=False)
+    summary = procs.summary(p.stdout)
+    if summary is None:
         raise RuntimeError(f"launch {scenario} {law} n={n} failed (exit {p.returncode}): {p.stderr[-2000:]}")
-    return json.loads(lines[-1])
+    return summary
 
 
 def process_rate(n):
@@ -82,12 +86,20 @@ def verdicts(r, name, law):
 
 
 def main():
-    ap = argparse.ArgumentParser()
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0],
+                                 usage="scripts/compare_laws.py [--build build] [--quick] [--no-distributed] "
+                                       "[--out DIR | --write-docs]")
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
     ap.add_argument("--quick", action="store_true", help="fewer sizes and steps")
     ap.add_argument("--no-distributed", action="store_true", help="simulator only")
+    ap.add_argument("--out", help="output folder (default runs/<UTC time>-laws)")
+    ap.add_argument("--write-docs", action="store_true", help="write into the committed docs/ instead")
     args = ap.parse_args()
     build = os.path.abspath(args.build)
+    out_dir = (os.path.join(ROOT, "docs") if args.write_docs else
+               os.path.abspath(args.out or os.path.join(ROOT, "runs", time.strftime("%Y%m%dT%H%M%SZ", time.gmtime())
+                                                        + "-laws")))
+    os.makedirs(os.path.join(out_dir, "figures"), exist_ok=True)
     sizes = [2, 3, 12, 50] if args.quick else SIZES
     steps = 300 if args.quick else 1000
     seed = 1
@@ -114,7 +126,8 @@ def main():
                               ("circle", "circle", 50)):
             for law in ("paper", "arc"):
                 print(f"compare_laws: agents {name} N={n} {law}", file=sys.stderr, flush=True)
-                d = launch(build, scen, law, n, 300, seed, domain, process_rate(n))
+                d = launch(build, scen, law, n, 300, seed, domain, process_rate(n), os.path.join(out_dir, "swarm-runs")
+                           if not args.write_docs else os.path.join(build, "compare-runs"))
                 domain += 1
                 s = sim(build, scen, law, n, 300, seed)
                 dist_rows.append((name, n, law, d, s))
@@ -154,7 +167,7 @@ def main():
                        f"{fmt(d.get('arc_gap_cv'))} | {fmt(s['arc_gap_cv'])} | {dash(d.get('settle_step'))} | "
                        f"{dash(s['settle_step'])} |")
     out.append("\n![final formations of both laws](figures/law_comparison.png)\n")
-    with open(os.path.join(ROOT, "docs", "LAW_COMPARISON.md"), "w") as f:
+    with open(os.path.join(out_dir, "LAW_COMPARISON.md"), "w") as f:
         f.write("\n".join(out) + "\n")
 
     import matplotlib
@@ -183,8 +196,8 @@ def main():
     fig.suptitle("Final formations from the same starts: the paper's law (top) and the arc law (bottom); "
                  "the commanded shape dashed")
     fig.tight_layout()
-    fig.savefig(os.path.join(ROOT, "docs", "figures", "law_comparison.png"), dpi=110)
-    print("compare_laws: wrote docs/LAW_COMPARISON.md and docs/figures/law_comparison.png", file=sys.stderr)
+    fig.savefig(os.path.join(out_dir, "figures", "law_comparison.png"), dpi=110)
+    print(f"compare_laws: wrote {out_dir}/LAW_COMPARISON.md and {out_dir}/figures/law_comparison.png", file=sys.stderr)
 
 
 if __name__ == "__main__":

@@ -1,19 +1,18 @@
 #!/usr/bin/python3
-"""Plots delivery ratio and p99 data age against N from docs/figures/bench_results.json.
+"""Plots delivery ratio and p99 data age against N from a benchmark results file.
 
-Usage: scripts/plot_bench.py [RESULTS_JSON] [OUT_PNG]
-Defaults: docs/figures/bench_results.json -> docs/figures/bench_scaling.png. Called by scripts/bench.sh.
-Needs Debian's python3-matplotlib (/usr/bin/python3).
+usage: scripts/plot_bench.py [RESULTS_JSON] [--out PNG | --write-docs]
+
+RESULTS_JSON defaults to the committed docs/figures/bench_results.json; the figure goes to PNG (default
+runs/<UTC time>-bench/figures/bench_scaling.png), or with --write-docs to the committed
+docs/figures/bench_scaling.png. Called by scripts/bench.sh. Needs Debian's python3-matplotlib.
 """
+import argparse
 import json
 import math
 import sys
+import time
 from pathlib import Path
-
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -33,9 +32,22 @@ def series(rows, kind, rate, preset, group=None):
 
 
 def main() -> int:
-    src = Path(sys.argv[1]) if len(sys.argv) > 1 else ROOT / "docs" / "figures" / "bench_results.json"
-    out = Path(sys.argv[2]) if len(sys.argv) > 2 else ROOT / "docs" / "figures" / "bench_scaling.png"
-    store = json.loads(src.read_text())
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0],
+                                 usage="scripts/plot_bench.py [RESULTS_JSON] [--out PNG | --write-docs]")
+    ap.add_argument("results", nargs="?", default=str(ROOT / "docs" / "figures" / "bench_results.json"))
+    ap.add_argument("--out", help="the figure to write (default runs/<UTC time>-bench/figures/bench_scaling.png)")
+    ap.add_argument("--write-docs", action="store_true", help="rewrite the committed docs/figures/bench_scaling.png")
+    a = ap.parse_args()
+    if a.out:
+        out = Path(a.out)
+    elif a.write_docs:
+        out = ROOT / "docs" / "figures" / "bench_scaling.png"
+    else:
+        out = ROOT / "runs" / (time.strftime("%Y%m%dT%H%M%SZ", time.gmtime()) + "-bench") / "figures" / "bench_scaling.png"
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    store = json.loads(Path(a.results).read_text())
     rows = store.get("rows", {})
     main_presets = sorted({e["row"]["preset"] for e in rows.values() if e["row"].get("section") == "main"})
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))

@@ -58,7 +58,7 @@ status=0
 "$py" "$root/scripts/plot_paper.py" --data "$data"
 "$py" "$root/scripts/paper/report.py" --data "$data"
 if [ ${#docs[@]} -gt 0 ]; then
-  "$py" "$root/scripts/plot_paper.py" --data "$data" --write-docs
+  cp "$data"/figures/paper_*.png "$root/docs/figures/"
   "$py" "$root/scripts/paper/report.py" --data "$data" --write-docs
   echo "reproduce_paper: rewrote docs/RESULTS.md and docs/figures/paper_*.png" >&2
 fi
