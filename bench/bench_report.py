@@ -1,3 +1,4 @@
+#!/usr/bin/python3
 """Simulator rows and the Markdown report of the benchmark (see bench.py).
 
 render() turns a results file (bench_results.json) into BENCHMARKS.md; every number in the report comes

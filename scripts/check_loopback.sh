@@ -1,10 +1,14 @@
 #!/usr/bin/env bash
 # Runs a command while capturing every non-loopback interface for RTPS (DDS) packets, and fails if any
-# packet of the project left loopback. Usage: scripts/check_loopback.sh COMMAND [ARGS...]
+# packet of the project left loopback.
+#
+#   scripts/check_loopback.sh COMMAND [ARGS...]
+#
 # Exit status: the command's, or 1 if it passed but RTPS packets were seen off loopback.
 # Needs root and tcpdump (scripts/install_deps.sh); without them it runs the command unchecked and says so.
+case "${1-}" in -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0 ;; esac
 set -uo pipefail
-[ $# -gt 0 ] || { echo "usage: $0 COMMAND [ARGS...]" >&2; exit 2; }
+[ $# -gt 0 ] || { echo "usage: scripts/check_loopback.sh COMMAND [ARGS...]" >&2; exit 2; }
 
 capdir=$(mktemp -d)
 caps=()

@@ -1,6 +1,10 @@
 #!/usr/bin/env bash
 # Installs every Debian 12 package shapeform needs to build, test, benchmark and plot.
+#
+#   scripts/install_deps.sh
+#
 # Idempotent: packages already present are skipped by apt-get. Run as root.
+case "${1-}" in -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0 ;; esac
 set -euo pipefail
 
 packages=(

@@ -87,6 +87,14 @@ def read_start(path):
     return [tuple(map(float, line.split(","))) for line in open(path) if line.strip()]
 
 
+def shape_runs(data):
+    """(column, shape, loaded run) of each shape experiment that ran."""
+    for j, s in enumerate(("line", "circle", "ellipse", "square")):
+        r = load(data, f"shape_{s}")
+        if r:
+            yield j, s, r
+
+
 def load(data, name):
     d = data / name
     if not (d / "dist" / "summary.json").exists():
@@ -113,10 +121,7 @@ def save(fig, out, name):
 
 def fig1(data, out, K):
     fig, axs = plt.subplots(2, 4, figsize=(15, 7.6))
-    for j, s in enumerate(("line", "circle", "ellipse", "square")):
-        r = load(data, f"shape_{s}")
-        if not r:
-            continue
+    for j, s, r in shape_runs(data):
         for i, (kind, lab) in enumerate((("dist", "agent processes"), ("sim", "simulator"))):
             ser = r[f"{kind}_series"]
             m = P.at_step(ser, K)
@@ -260,10 +265,7 @@ def series_xy(ser, key, K):
 
 def fig_convergence(data, out, K):
     fig, axs = plt.subplots(2, 4, figsize=(16, 7))
-    for j, s in enumerate(("line", "circle", "ellipse", "square")):
-        r = load(data, f"shape_{s}")
-        if not r:
-            continue
+    for j, s, r in shape_runs(data):
         for i, (key, lab) in enumerate((("shape_error_mean", "shape error (mean)"), ("gap_cv", "gap CV"))):
             ax = axs[i, j]
             band(ax, r["async"], key, K, label="model, asynchronous ticks (10 phasings)")

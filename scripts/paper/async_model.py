@@ -1,4 +1,3 @@
-#!/usr/bin/python3
 """A numpy model of the paper's law under the two schedules that matter for the comparison between
 the simulator and the agent processes (used by scripts/paper/run.py and report.py to explain the differences).
 

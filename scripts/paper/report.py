@@ -49,6 +49,16 @@ def write_report(data_dir, res_path, figures, command):
     fig_rel = os.path.relpath(Path(figures).resolve(), res_path.resolve().parent)
     draws = man.get("async_draws", 0)
 
+    def section(title):
+        """A heading and the blank line under it."""
+        w(title)
+        w("")
+
+    def head(line):
+        """A table's header line and the separator under it."""
+        w(line)
+        w("|" + "---|" * (line.count("|") - 1))
+
     def fig(name, alt):
         w(f"![{alt}]({fig_rel}/{name})")
         w("")
@@ -108,10 +118,8 @@ def write_report(data_dir, res_path, figures, command):
     bad = [x for x in acc if not x[4]]
     bad_cons = [x for x in acc if x[5] is False]
 
-    w("## Summary")
-    w("")
-    w("| experiment | the paper's claim | processes | simulator | holds? |")
-    w("|---|---|---|---|---|")
+    section("## Summary")
+    head("| experiment | the paper's claim | processes | simulator | holds? |")
     c = loaded("shape_circle")
     if c:
         K = c["K"]
@@ -195,12 +203,10 @@ def write_report(data_dir, res_path, figures, command):
     w("")
 
     # ------------------------------------------------------------------ shapes, details
-    w("## 1. Shapes (paper Figs. 1, 2)")
-    w("")
+    section("## 1. Shapes (paper Figs. 1, 2)")
     for s, rt in shape_tables:
         if rt is None:
-            w(f"### {s}: the run is missing or failed")
-            w("")
+            section(f"### {s}: the run is missing or failed")
             continue
         r, t = rt
         e = r["exp"]
@@ -209,8 +215,7 @@ def write_report(data_dir, res_path, figures, command):
             extra = f" Other programs used {e['other_cores']:.1f} cores during the distributed run."
         if e.get("problem"):
             extra += f" **The distributed run is flagged: {e['problem']}.**"
-        w(f"### {e['label']} ({e['agents']} agents, {r['K']} iterations)")
-        w("")
+        section(f"### {e['label']} ({e['agents']} agents, {r['K']} iterations)")
         if extra:
             w(extra.strip())
             w("")
@@ -226,13 +231,11 @@ def write_report(data_dir, res_path, figures, command):
 
     # ------------------------------------------------------------------ repulsion
     Kr = 200 if quick else 1000
-    w("## 2. Repulsion (paper Fig. 3)")
-    w("")
+    section("## 2. Repulsion (paper Fig. 3)")
     w(f"Ellipse and square, 12 agents, r = 0 against r = 0.1, at iterations 200 and {Kr}: processes / simulator "
       f"/ async model median.")
     w("")
-    w("| run | step | gap CV | clusters | min separation | shape error |")
-    w("|---|---|---|---|---|---|")
+    head("| run | step | gap CV | clusters | min separation | shape error |")
     for s in ("ellipse", "square"):
         for rr in ("r0", "r01"):
             r = loaded(f"rep_{s}_{rr}")
@@ -251,8 +254,7 @@ def write_report(data_dir, res_path, figures, command):
     fig("paper_fig3_repulsion.png", "Without and with repulsion")
 
     # ------------------------------------------------------------------ tracking
-    w("## 3. Tracking (paper Figs. 4, 5)")
-    w("")
+    section("## 3. Tracking (paper Figs. 4, 5)")
     w("10 agents, r0 = 2. Centroid error |mean(x) - C(t)| and ring error mean| |x_i - C(t)| - r0 | at the "
       "snapshot times: processes / simulator / async model median. *paper law*: no feed-forward, as published; "
       "*feed-forward*: each agent adds dC/dt (`tracking.feedforward=true`, console `track ... ff=on`); *fixed "
@@ -263,8 +265,7 @@ def write_report(data_dir, res_path, figures, command):
               ("line", "start around C(0)", ["track_line_ff_near", "track_line_fixed_near"]),
               ("circle", "paper start", ["track_circle_paper", "track_circle_ff", "track_circle_fixed"])]
     for pth, lab, names in groups:
-        w(f"### Centre on the {pth} path, {lab}")
-        w("")
+        section(f"### Centre on the {pth} path, {lab}")
         for key, klab in (("centroid_error", "centroid error"), ("ring_error", "ring error")):
             w(f"| {klab} | " + " | ".join(f"t={t}" for t in SNAPSHOTS) + " |")
             w("|---|" + "---|" * len(SNAPSHOTS))
@@ -282,8 +283,7 @@ def write_report(data_dir, res_path, figures, command):
     w("Feed-forward against the fixed centre (issue 4: within 0.1 after the transient), largest difference over "
       "t = 160 and 200:")
     w("")
-    w("| case | run | centroid error | ring error | within 0.1? |")
-    w("|---|---|---|---|---|")
+    head("| case | run | centroid error | ring error | within 0.1? |")
     for pth, lab, ffn, fxn in (("line", "paper start", "track_line_ff", "track_line_fixed"),
                                ("line", "start around C(0)", "track_line_ff_near", "track_line_fixed_near"),
                                ("circle", "paper start", "track_circle_ff", "track_circle_fixed")):
@@ -325,10 +325,8 @@ def write_report(data_dir, res_path, figures, command):
     if (ld / "seeds.json").exists():
         lim = {m["name"]: json.loads((ld / f"{m['name']}_summary.json").read_text()) for m in man["limits"]
                if (ld / f"{m['name']}_summary.json").exists()}
-        w("## 4. Limits of the published law (simulator)")
-        w("")
-        w("| study | result |")
-        w("|---|---|")
+        section("## 4. Limits of the published law (simulator)")
+        head("| study | result |")
         cs = loaded("shape_circle")
         if cs:
             K = cs["K"]
@@ -365,8 +363,7 @@ def write_report(data_dir, res_path, figures, command):
         seeds = json.loads((ld / "seeds.json").read_text())
         w("Simulator, seeds 1-20, median [min, max]: the seed used above is typical.")
         w("")
-        w("| scenario | step | shape error mean | gap CV | clusters | extent | centroid error | ring error |")
-        w("|---|---|---|---|---|---|---|---|")
+        head("| scenario | step | shape error mean | gap CV | clusters | extent | centroid error | ring error |")
         for scen, d in seeds.items():
             runs = d["runs"]
             w(f"| {scen} | {d['steps']} | {rng([r['shape_error_mean'] for r in runs])} | "
@@ -377,8 +374,7 @@ def write_report(data_dir, res_path, figures, command):
         fig("paper_limits.png", "Limits of the published law")
 
     # ------------------------------------------------------------------ runs
-    w("## 5. The runs")
-    w("")
+    section("## 5. The runs")
     w("| experiment | agents | iterations | distributed run (s) | other programs' CPU during it (cores) | attempts "
       "| status |")
     w("|---|---|---|---|---|---|---|")
