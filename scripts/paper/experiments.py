@@ -21,7 +21,7 @@ class Experiment:
     steps: int
     sets: list = field(default_factory=list)  # --set overrides, for both runs
     label: str = ""
-    model: dict = field(default_factory=dict)  # the same experiment for paper_async_model.run
+    model: dict = field(default_factory=dict)  # the same experiment for async_model.run
     start_offset: tuple = (0.0, 0.0)  # added to the simulator's seeded start
 
 

@@ -83,7 +83,7 @@ def write_report(data_dir, res_path, figures, command):
       "in section 5 if it never ran clean.")
     w("- **simulator**: `shapeform_sim --init` from the same start (the simulator's seeded uniform start in "
       "[-5,5]^2, written to `start.csv` and given to both).")
-    w(f"- **async model**: `scripts/paper_async_model.py`, the same law in numpy with the processes' schedule: "
+    w(f"- **async model**: `scripts/paper/async_model.py`, the same law in numpy with the processes' schedule: "
       f"every agent ticks once per period at its own phase and uses the newest state of each neighbour, so it "
       f"sees some neighbours at step k+1 and others at step k. Median [min, max] over {draws} random phasings "
       f"from the same start. With all agents stepping together it reproduces the simulator's series to 1e-9 "

@@ -168,7 +168,7 @@ def wait_idle(max_wait_s, busy_cores_max=0.5):
 
 
 def async_reference(exp, start, draws, out_path):
-    """The experiment in paper_async_model: the simulator's schedule (sync) and `draws` random tick
+    """The experiment in async_model: the simulator's schedule (sync) and `draws` random tick
     phasings of the processes (async), per-step metrics at the steps the report uses."""
     import async_model as M
     import random
