@@ -3,17 +3,18 @@
 import argparse
 import json
 import os
-import subprocess
 import sys
 import tempfile
 import unittest
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts", "lib"))
+import shapeform_procs as procs  # noqa: E402
 
 ARGS = None
 
 
 def sim(*args, timeout=120):
-    return subprocess.run([os.path.join(ARGS.bin, "shapeform_sim"), *args],
-                          capture_output=True, text=True, timeout=timeout)
+    return procs.run([os.path.join(ARGS.bin, "shapeform_sim"), *args], timeout=timeout, check=False)
 
 
 def read(path):
