@@ -11,7 +11,8 @@ One library for everything that runs the project's programs from Python: the int
   stderr in files, stdin a pipe on request; stopped by its pid (SIGTERM, a grace period, then SIGKILL
   of its process group). `stop_all` stops many, spaced, with one grace period for all.
 - `poll`: calls a condition until it holds or a timeout passes.
-- Readers of machine output: `read_csv`, `json_lines`, `events`, `last_json_line`, `summary`.
+- Readers of machine output: `read_csv`, `json_lines`, `events`, `neighbours_heard`, `last_json_line`,
+  `summary`.
 - Leftover checks: `processes_in_group`, `shapeform_processes_on_domain`, `shm_files`.
 """
 import csv
@@ -226,6 +227,12 @@ def json_lines(text):
 def events(text, kind=None):
     """The JSON event lines of a program run with --json, optionally only those with "event": kind."""
     return [e for e in json_lines(text) if kind is None or e.get("event") == kind]
+
+
+def neighbours_heard(text):
+    """{agent id: neighbours heard} from the newest status event of each agent in the JSON event lines of an
+    agent (or agent group) run with --json."""
+    return {e["id"]: e["neighbours_heard"] for e in events(text, "status")}
 
 
 def last_json_line(text):

@@ -86,7 +86,7 @@ def run_dist_direct(bins, exp, start_pts, out_dir, domain, extra_sets):
             dead = [a.name for a in agents if not a.running()]
             if dead:
                 raise RuntimeError(f"{', '.join(dead)} exited early; see {logs}")
-            return all(a.events("status") and a.events("status")[-1]["neighbours_heard"] == n - 1 for a in agents)
+            return all(procs.neighbours_heard(a.out()) == {i: n - 1} for i, a in enumerate(agents))
 
         if not procs.wait_for(meshed, 60, 0.2):
             log(f"    warning: not every agent heard {n - 1} neighbours within 60 s; starting anyway")

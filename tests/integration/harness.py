@@ -63,10 +63,7 @@ class Agent(Proc):
 
     def heard(self, since=0):
         """{agent id: neighbours heard} from the newest status event of each hosted agent after `since`."""
-        latest = {}
-        for e in self.events("status", since):
-            latest[e["id"]] = e["neighbours_heard"]
-        return latest
+        return procs.neighbours_heard(self.out()[since:])
 
     def hears(self, n, since=0):
         """True when every hosted agent's newest status (after `since`) reports n neighbours heard."""
@@ -249,8 +246,8 @@ class SwarmTestCase(unittest.TestCase):
         argv = [bin_path("shapeform_sim"), "--config", config] + list(args)
         return json.loads(procs.run(argv, timeout=120).stdout)
 
-    def assert_all_alive(self, procs):
-        dead = ["%s (status %s)" % (p.name, p.returncode) for p in procs if not p.running()]
+    def assert_all_alive(self, processes):
+        dead = ["%s (status %s)" % (p.name, p.returncode) for p in processes if not p.running()]
         self.assertEqual(dead, [], "processes that stopped")
 
 
