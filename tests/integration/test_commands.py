@@ -15,6 +15,12 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness  # noqa: E402
 
 AGENTS = 10
+
+
+def messages(stderr):
+    """The supervisor's messages in a piece of its stderr: without its log lines ("[supervisor] ...") and
+    the human copy of its answers (the metrics object, printed on stderr beside the JSON event)."""
+    return [l for l in stderr.splitlines() if not l.startswith(("[supervisor]", "{"))]
 SETS = ["--set", "swarm.agents=%d" % AGENTS]
 
 
@@ -85,7 +91,7 @@ class CommandsTest(harness.SwarmTestCase):
             out_start = sup.mark()
             sup.send(line)
             metrics = sup.metrics()  # the answer to the next line: the bad one has been handled
-            new_err = [l for l in sup.log()[log_start:].splitlines() if not l.startswith("[supervisor]")]
+            new_err = messages(sup.log()[log_start:])
             self.assertEqual(len(new_err), 1, "one line for %r, got %r" % (line, new_err))
             self.assertRegex(new_err[0], message, "the message for %r" % line)
             self.assertEqual(sup.events("epoch", out_start), [], "nothing published for %r" % line)
@@ -125,7 +131,7 @@ class CommandsTest(harness.SwarmTestCase):
         log_start, out_start = len(sup.log()), sup.mark()
         sup.send('shape polar r="4+cos(5*phi"')  # malformed: unbalanced parenthesis
         after = sup.metrics()
-        new_err = [l for l in sup.log()[log_start:].splitlines() if not l.startswith("[supervisor]")]
+        new_err = messages(sup.log()[log_start:])
         self.assertEqual(len(new_err), 1, new_err)
         self.assertRegex(new_err[0], r"^shape polar: r\(phi\) = '4\+cos\(5\*phi'")
         self.assertEqual(sup.events("epoch", out_start), [])
