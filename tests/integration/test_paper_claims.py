@@ -114,8 +114,7 @@ class PaperClaimsTest(harness.SwarmTestCase):
         """shapeform_sim's per-step metrics, as rows with model_time like the supervisor's."""
         path = os.path.join(self.run_dir, f"sim_{tag}.csv")
         self.run_sim(cfg, list(args) + ["--csv", path])
-        with open(path, newline="") as f:
-            return [{k: (float(v) if v != "" else None) for k, v in r.items()} for r in csv.DictReader(f)]
+        return harness.read_csv(path, numeric=True)
 
     def test_feedforward_in_the_simulator_is_the_static_problem(self):
         for path in ("line", "circle"):
