@@ -7,16 +7,12 @@
 #include <vector>
 
 #include "core/command.hpp"
+#include "dds/samples.hpp"
 
 namespace shapeform::agent {
 
 /// The latest tracking target heard: the centre C and its velocity at the supervisor's model time.
-struct TargetSample {
-  std::uint32_t epoch = 0;
-  double model_time = 0.0;
-  core::Vec2 centre = core::Vec2::Zero();
-  core::Vec2 velocity = core::Vec2::Zero();
-};
+using TargetSample = dds::TargetSample;
 
 struct AgentCounters {
   std::uint64_t samples_received = 0;  ///< neighbour states accepted
