@@ -33,8 +33,7 @@ namespace config = shapeform::config;
 namespace core = shapeform::core;
 
 /// The metrics of metrics.csv (core::kMetricTable names), after recv_ns,epoch,model_time,agents_alive.
-constexpr const core::MetricInfo* kProbeMetrics[] = {core::find_metric("shape_error_mean"), core::find_metric("gap_cv")};
-static_assert(kProbeMetrics[0] && kProbeMetrics[1], "the probe's metrics are in the metric table");
+constexpr const core::MetricInfo* kProbeMetrics[] = {&core::metric("shape_error_mean"), &core::metric("gap_cv")};
 
 int run(const config::Config& cfg, const std::filesystem::path& dir) {
   util::log_init("probe");

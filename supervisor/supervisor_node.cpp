@@ -21,6 +21,7 @@
 #include "recorder.hpp"
 #include "swarm_monitor.hpp"
 #include "util/log.hpp"
+#include "util/proc_stats.hpp"
 #include "util/rate_loop.hpp"
 #include "util/signals.hpp"
 

@@ -6,6 +6,7 @@
 /// the same name), nowhere else.
 #include <array>
 #include <optional>
+#include <stdexcept>
 #include <string_view>
 #include <type_traits>
 
@@ -58,11 +59,12 @@ struct is_count<std::optional<int>> : std::true_type {};
 inline constexpr MetricInfo kMetricTable[] = {SHAPEFORM_METRICS(SHAPEFORM_METRIC_INFO)};
 #undef SHAPEFORM_METRIC_INFO
 
-/// The entry named `name`, or nullptr.
-constexpr const MetricInfo* find_metric(std::string_view name) {
+/// The entry named `name`; throws std::invalid_argument for an unknown name (so a constant
+/// expression naming an unknown metric does not compile).
+constexpr const MetricInfo& metric(std::string_view name) {
   for (const MetricInfo& m : kMetricTable)
-    if (m.name == name) return &m;
-  return nullptr;
+    if (m.name == name) return m;
+  throw std::invalid_argument("unknown metric");
 }
 
 }  // namespace shapeform::core
