@@ -8,7 +8,7 @@ App::App(std::string prog, const std::string& description) : prog_(std::move(pro
 
 void App::add_config_options(const std::string& config_help, bool with_domain) {
   cli_.add_option("--config", config_path_, config_help);
-  if (with_domain) cli_.add_option("--domain", domain_, "DDS domain id 0..232 (overrides transport.domain)");
+  if (with_domain) domain_option_ = cli_.add_option("--domain", domain_, "DDS domain id 0..232 (overrides transport.domain)");
   cli_.add_option("--set", sets_, "override any config key: dotted.key=value (repeatable)");
 }
 
@@ -25,7 +25,7 @@ std::optional<int> App::parse(int argc, char** argv) {
 std::optional<config::Config> App::load_config(const std::vector<std::string>& extra) const {
   std::vector<std::string> sets = sets_;
   // The loader checks the domain's range like any other key's.
-  if (given("--domain")) sets.push_back("transport.domain=" + std::to_string(domain_));
+  if (domain_option_ && domain_option_->count() > 0) sets.push_back("transport.domain=" + std::to_string(domain_));
   sets.insert(sets.end(), extra.begin(), extra.end());
   try {
     return config::load(config_path_, sets);

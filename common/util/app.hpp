@@ -43,7 +43,7 @@ class App {
   /// Prints "prog: message" on stderr and returns kExitUsage.
   int usage_error(const std::string& message) const;
 
-  /// Whether the flag was given on the command line.
+  /// Whether the flag (an option of this program) was given on the command line.
   bool given(const std::string& flag) const { return cli_.count(flag) > 0; }
 
  private:
@@ -52,6 +52,7 @@ class App {
   std::string config_path_;
   std::vector<std::string> sets_;
   int domain_ = -1;
+  CLI::Option* domain_option_ = nullptr;  ///< --domain, when the program takes it
 };
 
 }  // namespace shapeform::util
