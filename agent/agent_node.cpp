@@ -141,7 +141,7 @@ void AgentNode::drain_commands() {
   command_reader_.drain(commands_);
   for (const auto& c : commands_) {
     if (!c.valid_data) continue;
-    core::Command cmd;
+    core::CompiledCommand cmd;
     std::string error;
     if (!dds::from_msg(c.msg, cmd, error)) {
       reject("command", "command epoch " + std::to_string(c.msg.epoch()) + " rejected: " + error, error, true);

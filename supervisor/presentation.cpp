@@ -31,7 +31,7 @@ std::optional<long long> settle_step(const Summary& s) {
 
 }  // namespace
 
-std::string describe_command(const core::Command& c) {
+std::string describe_command(const core::CompiledCommand& c) {
   std::ostringstream o;
   const auto& s = c.shape;
   o << core::to_string(s.kind);
@@ -52,7 +52,7 @@ std::string describe_command(const core::Command& c) {
   if (c.tracking.enabled)
     o << ", tracking on a " << core::to_string(c.tracking.path.kind) << " path"
       << (c.tracking.feedforward ? " with feed-forward" : "");
-  else if (core::is_closed(s))
+  else if (c.curve().closed())
     o << " centre (" << s.centre.x() << ", " << s.centre.y() << ")";
   if (c.law == core::Law::Arc) {
     o << "; law arc k_normal=" << c.arc.k_normal << " k_tangent=" << c.arc.k_tangent;
@@ -78,7 +78,7 @@ std::vector<AgentRow> agent_rows(const SwarmMonitor& monitor, std::int64_t now_n
     r.last_seen_s = static_cast<double>(now_ns - a.last_seen_ns) * 1e-9;
     r.x = a.x;
     r.epoch = a.epoch;
-    if (shape && a.epoch == monitor.epoch()) r.shape_error = (a.x - core::target_point(*shape, a.x)).norm();
+    if (shape && a.epoch == monitor.epoch()) r.shape_error = (a.x - core::target_point(*shape, cmd->curve(), a.x)).norm();
     r.neighbours_heard = a.neighbours_heard;
     rows.push_back(r);
   }

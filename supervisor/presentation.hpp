@@ -10,14 +10,14 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/command.hpp"
+#include "core/compiled_command.hpp"
 #include "swarm_monitor.hpp"
 
 namespace shapeform::supervisor {
 
 /// One line: the shape and its parameters, tracking, law, gains and integration,
 /// e.g. "circle r=4 centre (0, 0); k1=1 k2=1 sigma=1 beta=1 r=0, euler dt=1".
-std::string describe_command(const core::Command& c);
+std::string describe_command(const core::CompiledCommand& c);
 
 /// One agent as `status` shows it.
 struct AgentRow {

@@ -105,7 +105,7 @@ class Supervisor {
   void report_membership(std::int64_t now);
   void publish_target(std::int64_t now);
   void metrics_tick(std::int64_t now);
-  void publish_command(const core::Command& cmd, std::int64_t now);
+  void publish_command(const core::CompiledCommand& cmd, std::int64_t now);
   /// Runs input lines until one blocks (wait, sleep) or none is available.
   void run_input(std::int64_t now);
   /// Executes one parsed action; a blocking one becomes pending_.
@@ -120,7 +120,7 @@ class Supervisor {
   Output out_;
   SwarmMonitor monitor_;
   Recorder recorder_;
-  core::Command current_;  ///< the command in force (or the config's, before any)
+  core::CompiledCommand current_;  ///< the command in force (or the config's, before any)
   std::uint32_t epoch_ = 0;
   std::int64_t epoch_start_ns_ = 0;
   std::int64_t start_ns_ = util::steady_ns();
@@ -196,7 +196,7 @@ void Supervisor::publish_target(std::int64_t now) {
                                                      core::centre_velocity(current_.tracking.path, t), now}));
 }
 
-void Supervisor::publish_command(const core::Command& cmd, std::int64_t now) {
+void Supervisor::publish_command(const core::CompiledCommand& cmd, std::int64_t now) {
   // A restarted supervisor continues after the newest epoch the agents follow.
   epoch_ = std::max(epoch_, monitor_.max_epoch_seen()) + 1;
   current_ = cmd;
@@ -295,7 +295,7 @@ void Supervisor::execute(const Action& a, std::int64_t now) {
         } else if constexpr (std::is_same_v<T, StartScenario>) {
           publish_command(cfg_.command, now);
         } else if constexpr (std::is_same_v<T, TrackStop>) {
-          core::Command c = current_;
+          core::CompiledCommand c = current_;
           if (c.tracking.enabled) c.shape.centre = core::centre_at(c.tracking.path, model_time(now));
           c.tracking.enabled = false;
           publish_command(c, now);
@@ -383,7 +383,7 @@ bool Supervisor::load_script() {
   try {
     ScriptSource check(opt_.script);
     bool bad = false;
-    core::Command c = cfg_.command;
+    core::CompiledCommand c = cfg_.command;
     while (auto line = check.poll()) {
       const ParseResult r = parse_command(*line, c);
       if (!r.ok()) {

@@ -33,7 +33,7 @@ void SwarmMonitor::on_departed(std::int32_t id) {
   if (it != agents_.end()) it->second.departed = true;
 }
 
-void SwarmMonitor::set_command(const core::Command& cmd, std::uint32_t epoch, std::int64_t) {
+void SwarmMonitor::set_command(const core::CompiledCommand& cmd, std::uint32_t epoch, std::int64_t) {
   command_ = cmd;
   epoch_ = epoch;
   detector_.reset();

@@ -31,7 +31,7 @@ int main(int argc, char** argv) {
   app.cli().add_option("--impl", impl, "fast (batched, vectorised) | reference (scalar, per agent)")
       ->check(CLI::IsMember({"fast", "reference"}));
   if (const auto rc = app.parse(argc, argv)) return *rc;
-  core::Command cmd;  // the paper's circle
+  core::CompiledCommand cmd;  // the paper's circle
   core::Swarm swarm(cmd, core::uniform_start(agents, 1, 5.0));
   swarm.set_kernel(impl == "fast" ? core::Kernel::Batch : core::Kernel::Agent);
   swarm.step();  // warm-up (allocations)

@@ -31,7 +31,7 @@ std::string metric_csv_values(const core::Metrics& m) {
 
 core::Kernel auto_kernel(int agents) { return agents >= 64 ? core::Kernel::Batch : core::Kernel::Agent; }
 
-SimResult run_simulation(const core::Command& cmd, std::vector<core::Vec2> start, long steps,
+SimResult run_simulation(const core::CompiledCommand& cmd, std::vector<core::Vec2> start, long steps,
                          const SimOptions& opt) {
   core::Swarm swarm(cmd, std::move(start));
   swarm.set_kernel(opt.kernel);

@@ -13,11 +13,11 @@ using supervisor::SwarmMonitor;
 namespace {
 constexpr std::int64_t kS = 1'000'000'000;
 
-core::Command circle() {
+core::CompiledCommand circle() {
   core::Command c;
   c.shape.kind = core::ShapeKind::Circle;
   c.shape.r0 = 4;
-  return c;
+  return core::compile(c);
 }
 
 /// Agent 0 on the circle following epoch 1 (with a status), agent 1 off it on epoch 1, agent 2 on an
