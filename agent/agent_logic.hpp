@@ -1,6 +1,6 @@
 #pragma once
 /// The agent's behaviour without DDS or clocks: a latest-per-agent neighbour table, the command and
-/// tracking target in force, and one core::agent_step per tick. agent/main.cpp only wires DDS to it.
+/// tracking target in force, and one core::agent_step per tick. agent_node.cpp only wires DDS to it.
 #include <cstdint>
 #include <optional>
 #include <unordered_map>
