@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "params.hpp"
+
 namespace shapeform::core {
 
 namespace {
@@ -15,14 +17,9 @@ ShapeSpec shape_at(const Command& cmd, double t) {
   return s;
 }
 
-std::string_view to_string(Law l) { return l == Law::Paper ? "paper" : "arc"; }
+std::string_view to_string(Law l) { return params::name_of(params::kLawNames, l); }
 
-bool parse_law(std::string_view name, Law& out) {
-  if (name == "paper") out = Law::Paper;
-  else if (name == "arc") out = Law::Arc;
-  else return false;
-  return true;
-}
+bool parse_law(std::string_view name, Law& out) { return params::parse_name(params::kLawNames, name, out); }
 
 Vec2 arc_velocity(const ShapeSpec& s, const Curve& curve, const ArcParams& p, std::int32_t self_id,
                   const Vec2& x, const std::vector<Neighbour>& nbrs) {
