@@ -16,6 +16,7 @@
 #include <fastrtps/utils/IPLocator.h>
 #include <fastrtps/xmlparser/XMLProfileManager.h>
 
+#include "core/params.hpp"
 #include "dds/convert.hpp"
 #include "dds/node.hpp"
 #include "dds/participant.hpp"
@@ -391,6 +392,28 @@ TEST_CASE("ShapeCommand rejections name the field", "[dds][convert]") {
     CHECK(e.find("command.sigma: must be > 0, got -1") != std::string::npos);
     CHECK(e.find("command.dt: must be finite, got nan") != std::string::npos);
   }
+}
+
+TEST_CASE("every bounded command field is refused on the wire by the command table's range", "[dds][convert]") {
+  namespace params = core::params;
+  int checked = 0;
+  for (const auto& p : params::command_table()) {
+    if (p.type != params::Type::Real || !p.range.bounded()) continue;
+    INFO(p.key);
+    REQUIRE(p.wire.size() == 1);
+    const params::Range& r = p.range;
+    for (const double outside : {r.lo_open ? r.lo : r.lo - 1, r.hi_open ? r.hi : r.hi + 1}) {
+      if (!std::isfinite(outside)) continue;
+      core::Command c = sample_command();
+      p.set(c, params::Value(outside));
+      core::Command out;
+      std::string error;
+      CHECK_FALSE(dds::from_msg(dds::to_msg(c, 1), out, error));
+      CHECK(error == "command." + p.wire[0] + ": " + r.text() + ", got " + params::format_number(outside));
+      ++checked;
+    }
+  }
+  CHECK(checked >= 15);
 }
 
 TEST_CASE("a shape that does not compile is rejected whole", "[dds][convert]") {
