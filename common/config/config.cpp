@@ -11,12 +11,12 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
-#include <tuple>
 #include <limits>
 #include <map>
-#include <set>
 #include <optional>
+#include <set>
 #include <sstream>
+#include <stdexcept>
 #include <string_view>
 #include <system_error>
 
@@ -55,8 +55,8 @@ const std::map<std::string, std::vector<std::string>>& schema_sections() {
     for (const Param& p : config_table()) {
       // Every ancestor section is a key of its parent: "supervisor.converge.hold" gives
       // "" -> supervisor, supervisor -> converge, supervisor.converge -> hold.
-      std::string path = p.key;
-      for (auto [parent, leaf] = split_key(path);; std::tie(parent, leaf) = split_key(path)) {
+      for (std::string path = p.key;;) {
+        const auto [parent, leaf] = split_key(path);
         add(parent, leaf);
         if (parent.empty()) break;
         path = parent;
@@ -72,9 +72,7 @@ std::string join_path(const std::string& section, std::string_view key) {
 }
 
 bool schema_has(const std::string& dotted) {
-  const auto dot = dotted.rfind('.');
-  const std::string parent = dot == std::string::npos ? "" : dotted.substr(0, dot);
-  const std::string leaf = dot == std::string::npos ? dotted : dotted.substr(dot + 1);
+  const auto [parent, leaf] = split_key(dotted);
   const auto it = schema_sections().find(parent);
   if (it == schema_sections().end()) return false;
   return std::find(it->second.begin(), it->second.end(), leaf) != it->second.end();

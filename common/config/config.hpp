@@ -1,5 +1,7 @@
 #pragma once
 /// shapeform configuration: YAML -> these plain structs. The one config loader of the project.
+/// Each field's default is its initialiser here (or in core / dds); its key, type, unit, range and
+/// description are declared once in the config table (config_table(), common/config/table.cpp).
 #include <cstdint>
 #include <stdexcept>
 #include <string>
@@ -17,7 +19,7 @@ inline constexpr int kSchemaVersion = 1;
 
 /// How agents start when no explicit start is given.
 struct SwarmConfig {
-  int agents = 12;              ///< swarm size (1..1000)
+  int agents = 12;              ///< swarm size
   std::uint64_t seed = 1;       ///< seed of the uniform start
   double init_half_width = 5.0; ///< start uniform in [-w, w]^2
 };
