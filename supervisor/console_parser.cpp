@@ -227,7 +227,7 @@ class Args {
     return out;
   }
 
-  /// Optional rotation rot (degrees, default 0) and scale (> 0, default 1) of every shape.
+  /// Optional rotation rot (degrees, default 0) and scale (default 1) of every shape.
   void placement(core::ShapeSpec& s) const {
     s.rotation = params::radians(number_or("rot", field("shape.rotation_deg"), 0.0));
     s.scale = number_or("scale", field("shape.scale"), 1.0);
@@ -531,11 +531,15 @@ Action parse_tokens(const Tokens& t, const core::Command& current) {
 struct HelpEntry {
   const char* word;
   const char* overview;  ///< one line per syntax variant
-  const char* details;
+  std::string details;
 };
 
+/// "(> 0)": the bounds of a command field as the command table declares them.
+std::string in(std::string_view key) { return "(" + field(key).bounds() + ")"; }
+
 // clang-format off
-const HelpEntry kHelp[] = {
+const std::vector<HelpEntry>& help_entries() {
+  static const std::vector<HelpEntry> entries = {
   {"shape",
    "shape line m=M c=C                                          line x2 = m x1 + c\n"
    "shape circle r=R [cx=X cy=Y]                                circle of radius R\n"
@@ -559,15 +563,16 @@ const HelpEntry kHelp[] = {
    "  closed, rot and scale. The shape is checked (expressions parsed, curve built) before\n"
    "  anything is sent: a bad one is refused and the swarm keeps its shape.\n"
    "  m, c    line slope and intercept (any finite value)\n"
-   "  r       circle radius (> 0); polar: the expression r(phi), phi in [0, 2 pi), r > 0\n"
-   "  a, b    ellipse semi-axes along x1 and x2 (> 0); for the square, a is the half side (> 0)\n"
+   "  r       circle radius " + in("shape.r0") + "; polar: the expression r(phi), phi in [0, 2 pi), r > 0\n"
+   "  a, b    ellipse semi-axes along x1 and x2 " + in("shape.a") + "; for the square, a is the half side " +
+   in("shape.a") + "\n"
    "  x, y    parametric: the expressions x(s), y(s), s in [0, 1]\n"
    "  f       implicit: the expression f(x, y); the curve is f = 0 (traced in [-20, 20]^2)\n"
    "  points  polygon vertices x,y separated by ';' (closed: >= 3, open: >= 2)\n"
    "  closed  parametric, polygon: join the last point to the first (default on)\n"
    "  cx, cy  centre: where the shape's origin is placed (default 0, 0)\n"
    "  rot     counter-clockwise rotation about the centre, degrees (default 0)\n"
-   "  scale   uniform scale about the centre (> 0, default 1)\n"
+   "  scale   uniform scale about the centre (" + field("shape.scale").bounds() + ", default 1)\n"
    "  Expressions use muparser syntax (+ - * / ^, sin cos exp sqrt abs min max ..., pi);\n"
    "  quote them when they contain spaces: r=\"4 + cos(5*phi)\".\n"},
   {"track",
@@ -579,9 +584,9 @@ const HelpEntry kHelp[] = {
    "track circle radius=RP period=T r=R [cx=X cy=Y] [phase=P] [ff=on|off]\n"
    "track point at=X,Y r=R [ff=on|off]\n"
    "track stop\n"
-   "  The swarm forms a circle of radius r (> 0) around a moving centre C(t).\n"
+   "  The swarm forms a circle of radius r " + in("shape.r0") + " around a moving centre C(t).\n"
    "  from     C(0) of the line path; vel: velocity in units per model time\n"
-   "  radius   radius of the circular path (> 0); period: model time per revolution (> 0)\n"
+   "  radius   radius of the circular path (> 0); period: model time per revolution " + in("tracking.period") + "\n"
    "  cx, cy   centre of the circular path (default 0, 0); phase: angle at t = 0, rad (default 0)\n"
    "  at       the fixed centre\n"
    "  ff       feed-forward: add dC/dt to every agent's velocity (default off)\n"
@@ -590,19 +595,19 @@ const HelpEntry kHelp[] = {
    "gains [k1=] [k2=] [sigma=] [beta=] [r=]                     change control gains\n",
    "gains [k1=K1] [k2=K2] [sigma=S] [beta=B] [r=R]\n"
    "  At least one; the others keep their current values.\n"
-   "  k1     cohesion gain (>= 0)\n"
-   "  k2     attraction-to-shape gain (>= 0)\n"
-   "  sigma  softening length (> 0)\n"
-   "  beta   decay exponent (>= 0)\n"
-   "  r      nearest-neighbour repulsion magnitude (>= 0)\n"},
+   "  k1     cohesion gain " + in("dynamics.k1") + "\n"
+   "  k2     attraction-to-shape gain " + in("dynamics.k2") + "\n"
+   "  sigma  softening length " + in("dynamics.sigma") + "\n"
+   "  beta   decay exponent " + in("dynamics.beta") + "\n"
+   "  r      nearest-neighbour repulsion magnitude " + in("dynamics.r") + "\n"},
   {"integrator",
    "integrator euler|rk4 [dt=DT]                                integration method and step\n",
    "integrator euler|rk4 [dt=DT]\n"
-   "  dt  model time per step, 0 < dt <= 10 (default: keep the current step)\n"},
+   "  dt  model time per step, in " + field("integration.dt").bounds() + " (default: keep the current step)\n"},
   {"max_speed",
    "max_speed V                                                 speed limit (0 = off)\n",
    "max_speed V\n"
-   "  V  speed limit in units per model time (>= 0; 0 = no limit), both laws\n"},
+   "  V  speed limit in units per model time (" + field("dynamics.max_speed").bounds() + "; 0 = no limit), both laws\n"},
   {"law",
    "law paper | law arc [k_normal=] [k_tangent=] [spacing=]     control law\n",
    "law paper\n"
@@ -610,9 +615,11 @@ const HelpEntry kHelp[] = {
    "  Selects the control law; the shape is kept. paper: eq. 2 with the gains (see 'gains').\n"
    "  arc: arc-length slots, exact and evenly spaced (docs/LAW.md). Parameters not given keep\n"
    "  their current values.\n"
-   "  k_normal   rate toward the curve, 1/model time (> 0, <= 10; keep k_normal * dt <= 1)\n"
-   "  k_tangent  fraction of the slot error taken per step along the curve (> 0, <= 1)\n"
-   "  spacing    gap between agents on an unbounded curve such as the line (> 0)\n"},
+   "  k_normal   rate toward the curve, 1/model time (in " + field("dynamics.k_normal").bounds() +
+   "; keep k_normal * dt <= 1)\n"
+   "  k_tangent  fraction of the slot error taken per step along the curve (in " +
+   field("dynamics.k_tangent").bounds() + ")\n"
+   "  spacing    gap between agents on an unbounded curve such as the line " + in("dynamics.spacing") + "\n"},
   {"start",
    "start                                                       publish the scenario of --config\n",
    "start\n"
@@ -657,12 +664,14 @@ const HelpEntry kHelp[] = {
    "quit\n"
    "exit\n"
    "  Stops the supervisor.\n"},
-};
+  };
+  return entries;
+}
 // clang-format on
 
 const HelpEntry* find_help(std::string_view word) {
   if (word == "exit") word = "quit";
-  for (const HelpEntry& e : kHelp) {
+  for (const HelpEntry& e : help_entries()) {
     if (word == e.word) return &e;
   }
   return nullptr;
@@ -690,7 +699,7 @@ std::string help_text(std::string_view command) {
   if (command.empty()) {
     std::string text =
         "Commands (key=value parameters in any order; `help COMMAND` for details):\n";
-    for (const HelpEntry& e : kHelp) text += e.overview;
+    for (const HelpEntry& e : help_entries()) text += e.overview;
     text += "Lines starting with # are comments. Quote values containing spaces: dir=\"a b\".\n";
     return text;
   }

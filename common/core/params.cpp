@@ -50,6 +50,8 @@ std::string Range::text_for(double v) const {
   return text();
 }
 
+std::string Range::bounds() const { return bare(*this); }
+
 std::string Range::doc() const {
   const std::string b = bare(*this);
   return b.empty() ? "finite" : "`" + b + "`";

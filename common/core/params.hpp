@@ -53,6 +53,8 @@ struct Range {
   /// The bound v breaks, alone: "must be > 0" or "must be <= 10" for (0, 10] (the console's
   /// messages name the side); text() when v is inside or the range has one end.
   std::string text_for(double v) const;
+  /// The bounds alone: "> 0", "(0, 10]", "1..1000", "1"; "" when unbounded.
+  std::string bounds() const;
   /// For the docs: "`> 0`", "`(0, 10]`", "`1..1000`", "`1`"; "finite" when unbounded.
   std::string doc() const;
 };
