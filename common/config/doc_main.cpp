@@ -50,7 +50,8 @@ int main(int argc, char** argv) {
   }
   if (generated == text.str()) return 0;
   if (check) {
-    std::cerr << path << " is stale: its key tables differ from the config table; run scripts/gen_config_doc.sh\n";
+    std::cerr << path
+              << " is stale: its key tables differ from the config table; run scripts/gen_config_doc.sh\n";
     return 1;
   }
   std::ofstream out(path, std::ios::binary | std::ios::trunc);

@@ -81,13 +81,14 @@ struct Name {
 
 /// Spellings used in config files, console commands, JSON and on the wire.
 inline constexpr Name<ShapeKind> kShapeKindNames[] = {
-    {ShapeKind::Line, "line"},           {ShapeKind::Circle, "circle"},
-    {ShapeKind::Ellipse, "ellipse"},     {ShapeKind::Square, "square"},
-    {ShapeKind::Polar, "polar"},         {ShapeKind::Parametric, "parametric"},
-    {ShapeKind::Implicit, "implicit"},   {ShapeKind::Polygon, "polygon"}};
-inline constexpr Name<CentrePath::Kind> kPathKindNames[] = {
-    {CentrePath::Kind::Fixed, "fixed"}, {CentrePath::Kind::Line, "line"}, {CentrePath::Kind::Circle, "circle"}};
-inline constexpr Name<Integrator> kIntegratorNames[] = {{Integrator::Euler, "euler"}, {Integrator::RK4, "rk4"}};
+    {ShapeKind::Line, "line"},         {ShapeKind::Circle, "circle"},  {ShapeKind::Ellipse, "ellipse"},
+    {ShapeKind::Square, "square"},     {ShapeKind::Polar, "polar"},    {ShapeKind::Parametric, "parametric"},
+    {ShapeKind::Implicit, "implicit"}, {ShapeKind::Polygon, "polygon"}};
+inline constexpr Name<CentrePath::Kind> kPathKindNames[] = {{CentrePath::Kind::Fixed, "fixed"},
+                                                            {CentrePath::Kind::Line, "line"},
+                                                            {CentrePath::Kind::Circle, "circle"}};
+inline constexpr Name<Integrator> kIntegratorNames[] = {{Integrator::Euler, "euler"},
+                                                        {Integrator::RK4, "rk4"}};
 inline constexpr Name<Law> kLawNames[] = {{Law::Paper, "paper"}, {Law::Arc, "arc"}};
 
 /// The name of v in table, "?" when absent.
@@ -147,7 +148,7 @@ using Value = std::variant<double, long long, std::uint64_t, bool, std::string, 
 /// One declared parameter of the struct T.
 template <class T>
 struct Param {
-  std::string key;                   ///< dotted config key, e.g. "dynamics.k1"
+  std::string key;  ///< dotted config key, e.g. "dynamics.k1"
   Type type = Type::Real;
   std::string unit;                  ///< "" when it has none
   Range range;                       ///< Real / Integer: the accepted values

@@ -34,36 +34,41 @@ std::vector<P> build_table() {
   const std::string ipv4_list = "list of IPv4 addresses (dotted quads)";
   std::vector<P> t;
   {
-    P profile = param<std::string>(Type::Choice, "transport.profile", "", {}, "transport profile", "",
-                                   [](auto& c) -> auto& { return c.profile; });
+    P profile = param<std::string>(
+        Type::Choice, "transport.profile", "", {}, "transport profile", "",
+        [](auto& c) -> auto& { return c.profile; });
     for (const char* name : kProfiles) profile.choices.emplace_back(name);
     t.push_back(std::move(profile));
   }
-  t.push_back(param<long long>(Type::Integer, "transport.domain", "", params::integers(0, kMaxDomainId),
-                               "DDS domain id", "", [](auto& c) -> auto& { return c.domain; }));
+  t.push_back(param<long long>(
+      Type::Integer, "transport.domain", "", params::integers(0, kMaxDomainId), "DDS domain id", "",
+      [](auto& c) -> auto& { return c.domain; }));
   t.push_back(param<long long>(
       Type::Integer, "transport.max_participants", "participants", params::integers(1, kMaxParticipantsLimit),
       "participant port slots of the domain on one host: a participant takes the first free one of slots "
       "0..max-1 (another process's participant holds each taken one), and with loopback or lan peers the "
-      "initial peers probe exactly these; a participant that finds all taken is refused with an error (Fast DDS "
-      "alone would create it deaf). At most this many processes (agents, supervisor, tools) per domain and host. "
+      "initial peers probe exactly these; a participant that finds all taken is refused with an error (Fast "
+      "DDS "
+      "alone would create it deaf). At most this many processes (agents, supervisor, tools) per domain and "
+      "host. "
       "Slots from 120 up use ports of the next domain's block",
       "", [](auto& c) -> auto& { return c.max_participants; }));
-  t.push_back(param<std::vector<std::string>>(Type::TextList, "transport.interfaces", "", {},
-                                              "lan: IPv4 addresses to bind (empty = all)", ipv4_list,
-                                              [](auto& c) -> auto& { return c.interfaces; }));
-  t.push_back(param<std::vector<std::string>>(Type::TextList, "transport.peers", "", {},
-                                              "lan: unicast peer addresses (empty = multicast discovery)", ipv4_list,
-                                              [](auto& c) -> auto& { return c.peers; }));
-  t.push_back(param<std::string>(Type::Text, "transport.discovery_server", "", {},
-                                 "discovery-server: address of the server",
-                                 "`host:port`, host an IPv4 address or `localhost`, port `1..65535`",
-                                 [](auto& c) -> auto& { return c.discovery_server; }));
-  t.push_back(param<double>(Type::Real, "transport.lease_s", "s", params::above(0), "participant lease duration", "",
-                            [](auto& c) -> auto& { return c.lease_s; }));
-  t.push_back(param<double>(Type::Real, "transport.announce_s", "s", params::above(0),
-                            "participant announcement period", " and `< lease_s`",
-                            [](auto& c) -> auto& { return c.announce_s; }));
+  t.push_back(param<std::vector<std::string>>(
+      Type::TextList, "transport.interfaces", "", {}, "lan: IPv4 addresses to bind (empty = all)", ipv4_list,
+      [](auto& c) -> auto& { return c.interfaces; }));
+  t.push_back(param<std::vector<std::string>>(
+      Type::TextList, "transport.peers", "", {}, "lan: unicast peer addresses (empty = multicast discovery)",
+      ipv4_list, [](auto& c) -> auto& { return c.peers; }));
+  t.push_back(param<std::string>(
+      Type::Text, "transport.discovery_server", "", {}, "discovery-server: address of the server",
+      "`host:port`, host an IPv4 address or `localhost`, port `1..65535`",
+      [](auto& c) -> auto& { return c.discovery_server; }));
+  t.push_back(param<double>(
+      Type::Real, "transport.lease_s", "s", params::above(0), "participant lease duration", "",
+      [](auto& c) -> auto& { return c.lease_s; }));
+  t.push_back(param<double>(
+      Type::Real, "transport.announce_s", "s", params::above(0), "participant announcement period",
+      " and `< lease_s`", [](auto& c) -> auto& { return c.announce_s; }));
   t.push_back(param<long long>(
       Type::Integer, "transport.socket_buffer_bytes", "bytes", params::integers(0, 2147483647),
       "UDP send/receive buffer size (0 = OS default); the kernel silently caps it at `net.core.rmem_max` / "
@@ -71,8 +76,10 @@ std::vector<P> build_table() {
       "", [](auto& c) -> auto& { return c.socket_buffer_bytes; }));
   t.push_back(param<bool>(
       Type::Bool, "transport.multicast_data", "", {},
-      "readers of the state topic listen on the multicast group 239.255.0.1, port 7400 + 250 domain + 1, instead "
-      "of a unicast port, so a writer sends one datagram per sample instead of one per reader (the kernel fans it "
+      "readers of the state topic listen on the multicast group 239.255.0.1, port 7400 + 250 domain + 1, "
+      "instead "
+      "of a unicast port, so a writer sends one datagram per sample instead of one per reader (the kernel "
+      "fans it "
       "out); with the 127.0.0.1 whitelist the group is joined and sent on `lo` only. Every other topic and "
       "discovery stay unicast",
       "; needs `profile: loopback`, or `discovery-server` with a server on `127.x`/`localhost`",
@@ -136,13 +143,15 @@ std::vector<TransportProblem> transport_problems(const TransportConfig& cfg) {
   bool known_profile = false;
   for (const char* name : kProfiles) known_profile = known_profile || cfg.profile == name;
   if (!known_profile) {
-    out.push_back({"transport.profile", "must be one of loopback, lan, discovery-server", quoted(cfg.profile), ""});
+    out.push_back(
+        {"transport.profile", "must be one of loopback, lan, discovery-server", quoted(cfg.profile), ""});
   }
-  for (const auto& [key, list] : {std::pair{"transport.interfaces", &cfg.interfaces},
-                                  std::pair{"transport.peers", &cfg.peers}}) {
+  for (const auto& [key, list] :
+       {std::pair{"transport.interfaces", &cfg.interfaces}, std::pair{"transport.peers", &cfg.peers}}) {
     for (const std::string& a : *list) {
       if (!util::is_ipv4(a)) {
-        out.push_back({key, "must be a list of IPv4 addresses (" + quoted(a) + " is not one)", list_text(*list), ""});
+        out.push_back(
+            {key, "must be a list of IPv4 addresses (" + quoted(a) + " is not one)", list_text(*list), ""});
         break;
       }
     }
@@ -156,14 +165,16 @@ std::vector<TransportProblem> transport_problems(const TransportConfig& cfg) {
   }
   if (std::isfinite(cfg.lease_s) && std::isfinite(cfg.announce_s) && cfg.lease_s > 0 && cfg.announce_s > 0 &&
       !(cfg.announce_s < cfg.lease_s)) {
-    out.push_back({"transport.announce_s", "must be < transport.lease_s (" + params::format_number(cfg.lease_s) + ")",
+    out.push_back({"transport.announce_s",
+                   "must be < transport.lease_s (" + params::format_number(cfg.lease_s) + ")",
                    params::format_number(cfg.announce_s), "transport.lease_s"});
   }
   if (cfg.multicast_data && !cfg.on_loopback()) {
-    out.push_back({"transport.multicast_data",
-                   "needs transport.profile loopback, or discovery-server with a server on 127.x (profile is " +
-                       cfg.profile + ")",
-                   "true", "transport.profile"});
+    out.push_back(
+        {"transport.multicast_data",
+         "needs transport.profile loopback, or discovery-server with a server on 127.x (profile is " +
+             cfg.profile + ")",
+         "true", "transport.profile"});
   }
   return out;
 }

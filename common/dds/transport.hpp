@@ -19,15 +19,15 @@ inline constexpr const char* kProfiles[] = {"loopback", "lan", "discovery-server
 
 /// DDS transport profile; every participant is built from this by the one participant factory.
 struct TransportConfig {
-  std::string profile = "loopback";  ///< loopback | lan | discovery-server
-  int domain = 0;                    ///< DDS domain id, 0..kMaxDomainId
-  int max_participants = 120;        ///< participant ids probed by loopback initial peers
+  std::string profile = "loopback";     ///< loopback | lan | discovery-server
+  int domain = 0;                       ///< DDS domain id, 0..kMaxDomainId
+  int max_participants = 120;           ///< participant ids probed by loopback initial peers
   std::vector<std::string> interfaces;  ///< lan: IPv4 addresses to bind (empty = all)
   std::vector<std::string> peers;       ///< lan: unicast peer addresses (empty = multicast discovery)
   std::string discovery_server = "127.0.0.1:11811";  ///< discovery-server: host:port
-  double lease_s = 2.0;     ///< participant lease duration
-  double announce_s = 0.5;  ///< participant announcement period
-  int socket_buffer_bytes = 0;  ///< UDP send/receive buffer size; 0 = OS default
+  double lease_s = 2.0;                              ///< participant lease duration
+  double announce_s = 0.5;                           ///< participant announcement period
+  int socket_buffer_bytes = 0;                       ///< UDP send/receive buffer size; 0 = OS default
   /// State-topic readers listen on the multicast group 239.255.0.1 (the domain's user multicast port)
   /// instead of a unicast port: a writer sends one datagram per sample instead of one per reader.
   /// Loopback profile, or discovery-server with a server on 127.x / localhost (whitelist 127.0.0.1,
@@ -37,8 +37,9 @@ struct TransportConfig {
   /// Whether every participant's traffic stays on lo: the loopback profile, or a discovery server on
   /// 127.x / localhost. multicast_data needs it (the validator checks).
   bool on_loopback() const {
-    return profile == "loopback" || (profile == "discovery-server" && (discovery_server.rfind("127.", 0) == 0 ||
-                                                                       discovery_server.rfind("localhost:", 0) == 0));
+    return profile == "loopback" ||
+           (profile == "discovery-server" &&
+            (discovery_server.rfind("127.", 0) == 0 || discovery_server.rfind("localhost:", 0) == 0));
   }
 };
 

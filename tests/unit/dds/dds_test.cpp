@@ -777,6 +777,42 @@ TEST_CASE("bad transport configs are refused with the field named", "[dds][qos]"
   CHECK_THROWS_AS(dds::create_participant(c, "x"), std::runtime_error);
 }
 
+TEST_CASE("the transport's one validator reports every problem by key", "[dds][qos]") {
+  CHECK(dds::transport_problems(dds::TransportConfig{}).empty());
+  dds::TransportConfig c;
+  c.domain = 300;
+  c.peers = {"10.0.0.1", "01.2.3.4"};  // leading zeros: refused (octal ambiguity)
+  c.lease_s = 1;
+  c.announce_s = 1;
+  c.profile = "lan";
+  c.multicast_data = true;
+  std::vector<std::string> keys;
+  for (const auto& p : dds::transport_problems(c)) keys.push_back(p.key + ": " + p.what + ", got " + p.got);
+  CHECK(keys == std::vector<std::string>{
+                    "transport.domain: must be in 0..232, got 300",
+                    "transport.peers: must be a list of IPv4 addresses (\"01.2.3.4\" is not one), got [\"10.0.0.1\", "
+                    "\"01.2.3.4\"]",
+                    "transport.announce_s: must be < transport.lease_s (1), got 1",
+                    "transport.multicast_data: needs transport.profile loopback, or discovery-server with a server on "
+                    "127.x (profile is lan), got true"});
+  std::string thrown;
+  try {
+    dds::validate(c);
+  } catch (const std::runtime_error& e) {
+    thrown = e.what();
+  }
+  CHECK(thrown == "transport.domain: must be in 0..232, got 300");  // the first problem
+  std::array<std::uint8_t, 4> ip{};
+  std::uint16_t port = 0;
+  REQUIRE(dds::parse_host_port("localhost:11811", ip, port));
+  CHECK(ip == std::array<std::uint8_t, 4>{127, 0, 0, 1});
+  CHECK(port == 11811);
+  for (const char* bad : {"localhost", ":1", "1.2.3.4:0", "1.2.3.4:65536", "1.2.3.4:+1", "host:1", "1.2.3.4:"}) {
+    INFO(bad);
+    CHECK_FALSE(dds::parse_host_port(bad, ip, port));
+  }
+}
+
 TEST_CASE("parse_ipv4 is strict", "[dds][qos][util]") {
   std::array<std::uint8_t, 4> ip{};
   CHECK(util::parse_ipv4("127.0.0.1", ip));
