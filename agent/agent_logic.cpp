@@ -10,10 +10,9 @@ AgentLogic::AgentLogic(std::int32_t id, core::Vec2 start, std::int64_t timeout_n
                        int max_wait_ticks)
     : id_(id), x_(start), x_prev_(start), timeout_ns_(timeout_ns), lockstep_(lockstep), max_wait_ticks_(max_wait_ticks) {}
 
-bool AgentLogic::on_command(const core::Command& cmd, std::uint32_t epoch) {
+bool AgentLogic::on_command(const core::CompiledCommand& cmd, std::uint32_t epoch) {
   if (epoch <= epoch_) return false;
   cmd_ = cmd;
-  core::ensure_curve(cmd_.shape);  // analytic shapes; expression shapes arrive compiled
   epoch_ = epoch;
   t_ = 0.0;
   waited_ = 0;
@@ -84,8 +83,8 @@ std::optional<core::Vec2> AgentLogic::tracked_centre() const {
   return core::centre_at(cmd_.tracking.path, t_);
 }
 
-core::Command AgentLogic::effective_command() const {
-  core::Command local = cmd_;
+core::CompiledCommand AgentLogic::effective_command() const {
+  core::CompiledCommand local = cmd_;
   if (cmd_.tracking.enabled && target_) {
     // Follow the supervisor's target: the centre moves on from where it was last heard, linearly,
     // with its published velocity (which feed-forward then uses). Time runs from 0 at "now".
@@ -99,10 +98,10 @@ core::Command AgentLogic::effective_command() const {
 std::optional<double> AgentLogic::arc() const {
   if (!has_command()) return std::nullopt;
   const bool follow_target = following_target();
-  const core::Command local = follow_target ? effective_command() : cmd_;
+  const core::CompiledCommand local = follow_target ? effective_command() : cmd_;
   const double t = follow_target ? 0.0 : t_;
   const core::ShapeSpec s = core::shape_at(local, t);
-  return core::closest_point(s, *core::curve_of(s), x_).s;
+  return core::closest_point(s, cmd_.curve(), x_).s;
 }
 
 bool AgentLogic::step() {

@@ -6,7 +6,7 @@
 #include <unordered_map>
 #include <vector>
 
-#include "core/command.hpp"
+#include "core/compiled_command.hpp"
 
 namespace shapeform::agent {
 
@@ -35,7 +35,7 @@ class AgentLogic {
              int max_wait_ticks = 50);
 
   /// Adopts cmd if epoch is newer than the one followed; returns whether it did. Model time restarts.
-  bool on_command(const core::Command& cmd, std::uint32_t epoch);
+  bool on_command(const core::CompiledCommand& cmd, std::uint32_t epoch);
   /// Keeps the newest target of the followed epoch, received at now_ns.
   void on_target(const TargetSample& t, std::int64_t now_ns);
   /// A valid neighbour state received at now_ns. Own samples are ignored. epoch and arc: the command
@@ -72,7 +72,7 @@ class AgentLogic {
   std::uint32_t epoch() const { return epoch_; }
   double model_time() const { return t_; }
   bool has_command() const { return epoch_ != 0; }
-  const core::Command& command() const { return cmd_; }
+  const core::CompiledCommand& command() const { return cmd_; }
   int neighbours() const { return static_cast<int>(table_.size()); }
   const AgentCounters& counters() const { return counters_; }
   /// The tracked centre this agent uses now (extrapolated from the last target), if tracking.
@@ -98,7 +98,7 @@ class AgentLogic {
   };
   long step_of(double model_time) const { return std::lround(model_time / cmd_.dt); }
   /// The command actually integrated now: tracking follows the latest target from its last position.
-  core::Command effective_command() const;
+  core::CompiledCommand effective_command() const;
   std::int32_t id_;
   core::Vec2 x_;
   core::Vec2 v_ = core::Vec2::Zero();
@@ -108,7 +108,7 @@ class AgentLogic {
   bool lockstep_;
   int max_wait_ticks_;
   int waited_ = 0;
-  core::Command cmd_;
+  core::CompiledCommand cmd_;
   std::uint32_t epoch_ = 0;
   double t_ = 0.0;  ///< model time since the command was adopted
   std::optional<TargetSample> target_;

@@ -110,7 +110,7 @@ int run_agents(const std::vector<std::int32_t>& ids, const std::vector<core::Vec
       command_reader.drain(commands);
       for (const auto& c : commands) {
         if (!c.valid_data) continue;
-        core::Command cmd;
+        core::CompiledCommand cmd;
         std::string error;
         if (!dds::from_msg(c.msg, cmd, error)) {
           for (auto& l : logics) l->count_rejected();

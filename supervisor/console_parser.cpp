@@ -254,9 +254,9 @@ const std::string kShapeList = params::join(params::names(params::kShapeKindName
 
 /// shapes::compile on a parsed shape: a ShapeError becomes the command's one-line error, named
 /// after the command ("shape polar: r(phi) = '4+foo': Unexpected token ...").
-void compile_or_fail(const std::string& name, core::Command& cmd) {
+void compile_or_fail(const std::string& name, core::CompiledCommand& cmd) {
   try {
-    shapes::compile(cmd);
+    cmd = shapes::compile(cmd);
   } catch (const core::ShapeError& e) {
     std::string what = e.what();
     // "polar: r(phi) ..." under "shape polar" reads "shape polar: r(phi) ...".
@@ -266,12 +266,12 @@ void compile_or_fail(const std::string& name, core::Command& cmd) {
   }
 }
 
-Action parse_shape(const Tokens& t, const core::Command& current) {
+Action parse_shape(const Tokens& t, const core::CompiledCommand& current) {
   const std::string& kind = sub_word(t, "shape", std::string("a shape (") + kShapeList + ")");
   const std::string name = "shape " + kind;
-  core::Command cmd = current;
+  core::CompiledCommand cmd = current;
   cmd.tracking = core::Tracking{};  // a fixed shape: tracking off, no stale path
-  cmd.shape = core::ShapeSpec{};    // nothing of the previous shape (expressions, curve) lingers
+  cmd.shape = core::ShapeSpec{};    // nothing of the previous shape (expressions) lingers
   core::ShapeSpec& s = cmd.shape;
   if (!params::parse_name(params::kShapeKindNames, kind, s.kind))
     fail("shape: unknown shape '" + kind + "' (expected " + kShapeList + ")");
@@ -342,7 +342,7 @@ Action parse_shape(const Tokens& t, const core::Command& current) {
   return SetCommand{SetCommand::What::Shape, cmd};
 }
 
-Action parse_track(const Tokens& t, const core::Command& current) {
+Action parse_track(const Tokens& t, const core::CompiledCommand& current) {
   const std::string& kind = sub_word(t, "track", "line, circle, point or stop");
   const std::string name = "track " + kind;
   if (kind == "stop") {
@@ -380,8 +380,8 @@ Action parse_track(const Tokens& t, const core::Command& current) {
   } else {
     fail("track: unknown path '" + kind + "' (expected line, circle, point, stop)");
   }
-  core::Command cmd = current;
-  cmd.shape = core::ShapeSpec{};  // a plain circle: no rotation, scale 1, no previous curve
+  core::CompiledCommand cmd = current;
+  cmd.shape = core::ShapeSpec{};  // a plain circle: no rotation, scale 1
   cmd.shape.kind = core::ShapeKind::Circle;
   cmd.shape.r0 = r0;
   // The centre at t = 0 (shape_at() moves it along the path; this keeps the spec consistent).
@@ -398,10 +398,10 @@ Action parse_track(const Tokens& t, const core::Command& current) {
   return SetCommand{SetCommand::What::Track, cmd};
 }
 
-Action parse_gains(const Tokens& t, const core::Command& current) {
+Action parse_gains(const Tokens& t, const core::CompiledCommand& current) {
   const Args a("gains", t, 1, {"k1", "k2", "sigma", "beta", "r"}, 0);
   if (a.empty()) fail("gains: expected at least one of k1, k2, sigma, beta, r");
-  core::Command cmd = current;
+  core::CompiledCommand cmd = current;
   core::Gains& g = cmd.gains;
   g.k1 = a.number_or("k1", field("dynamics.k1"), g.k1);
   g.k2 = a.number_or("k2", field("dynamics.k2"), g.k2);
@@ -411,10 +411,10 @@ Action parse_gains(const Tokens& t, const core::Command& current) {
   return SetCommand{SetCommand::What::Gains, cmd};
 }
 
-Action parse_integrator(const Tokens& t, const core::Command& current) {
+Action parse_integrator(const Tokens& t, const core::CompiledCommand& current) {
   const Args a("integrator", t, 1, {"dt"}, 1);
   if (a.positionals() == 0) fail("integrator: missing method (euler or rk4)");
-  core::Command cmd = current;
+  core::CompiledCommand cmd = current;
   const std::string& method = a.positional(0);
   if (!params::parse_name(params::kIntegratorNames, method, cmd.integrator))
     fail("integrator: unknown method '" + method + "' (expected " +
@@ -423,18 +423,18 @@ Action parse_integrator(const Tokens& t, const core::Command& current) {
   return SetCommand{SetCommand::What::Integrator, cmd};
 }
 
-Action parse_max_speed(const Tokens& t, const core::Command& current) {
+Action parse_max_speed(const Tokens& t, const core::CompiledCommand& current) {
   const Args a("max_speed", t, 1, {}, 1);
   if (a.positionals() == 0) fail("max_speed: missing value (units per model time, 0 = off)");
-  core::Command cmd = current;
+  core::CompiledCommand cmd = current;
   cmd.max_speed = a.check_number("", a.positional(0), field("dynamics.max_speed"));
   return SetCommand{SetCommand::What::MaxSpeed, cmd};
 }
 
-Action parse_law(const Tokens& t, const core::Command& current) {
+Action parse_law(const Tokens& t, const core::CompiledCommand& current) {
   const Args a("law", t, 1, {"k_normal", "k_tangent", "spacing"}, 1);
   if (a.positionals() == 0) fail("law: missing law (paper or arc)");
-  core::Command cmd = current;  // the shape (and its curve) is kept
+  core::CompiledCommand cmd = current;  // the shape (and its curve) is kept
   const std::string& law = a.positional(0);
   if (!params::parse_name(params::kLawNames, law, cmd.law))
     fail("law: unknown law '" + law + "' (expected " + params::join(params::names(params::kLawNames), " or ") + ")");
@@ -492,7 +492,7 @@ Action parse_record(const Tokens& t) {
   fail("record: unknown action '" + what + "' (expected start, stop)");
 }
 
-Action parse_tokens(const Tokens& t, const core::Command& current) {
+Action parse_tokens(const Tokens& t, const core::CompiledCommand& current) {
   const std::string& word = t.front().text;
   if (word == "shape") return parse_shape(t, current);
   if (word == "track") return parse_track(t, current);
@@ -679,7 +679,7 @@ const HelpEntry* find_help(std::string_view word) {
 
 }  // namespace
 
-ParseResult parse_command(std::string_view line, const core::Command& current) {
+ParseResult parse_command(std::string_view line, const core::CompiledCommand& current) {
   ParseResult result{NoOp{}, {}};
   std::vector<Token> tokens;
   result.error = tokenize(line, tokens);

@@ -10,7 +10,7 @@
 #include <string_view>
 #include <variant>
 
-#include "core/command.hpp"
+#include "core/compiled_command.hpp"
 
 namespace shapeform::supervisor {
 
@@ -19,12 +19,12 @@ struct NoOp {};
 
 /// A new command to publish. Produced by shape, track (line/circle/point), gains, integrator,
 /// max_speed and law; `command` is the caller's current command with the change applied. Shape and
-/// track results carry their compiled curve (shapes::compile): a shape that cannot be built is a
+/// track results are compiled anew (shapes::compile): a shape that cannot be built is a
 /// parse error, so nothing is published.
 struct SetCommand {
   enum class What { Shape, Track, Gains, Integrator, MaxSpeed, Law };
   What what = What::Shape;
-  core::Command command;
+  core::CompiledCommand command;
 };
 
 /// `track stop`: the caller disables tracking and keeps the shape where the tracked centre was.
@@ -79,7 +79,7 @@ struct ParseResult {
 
 /// Parses one console or script line. `current` is the command in force; commands that change it
 /// return a copy of it with the change applied. Never throws for bad input.
-ParseResult parse_command(std::string_view line, const core::Command& current);
+ParseResult parse_command(std::string_view line, const core::CompiledCommand& current);
 
 /// Help text: with an empty `command`, one line per command with its syntax; with a command word
 /// (`shape`, `track`, `gains`, ...), the details of that command. Unknown words give a line saying

@@ -40,7 +40,7 @@ std::string fmt_opt(const std::optional<double>& v, const char* f = "%.4f") {
   return b;
 }
 
-std::string describe_command(const core::Command& c) {
+std::string describe_command(const core::CompiledCommand& c) {
   std::ostringstream o;
   const auto& s = c.shape;
   o << core::to_string(s.kind);
@@ -61,7 +61,7 @@ std::string describe_command(const core::Command& c) {
   if (c.tracking.enabled)
     o << ", tracking on a " << core::to_string(c.tracking.path.kind) << " path"
       << (c.tracking.feedforward ? " with feed-forward" : "");
-  else if (core::is_closed(s))
+  else if (c.curve().closed())
     o << " centre (" << s.centre.x() << ", " << s.centre.y() << ")";
   if (c.law == core::Law::Arc) {
     o << "; law arc k_normal=" << c.arc.k_normal << " k_tangent=" << c.arc.k_tangent;
@@ -103,7 +103,7 @@ class Supervisor {
   void drain(std::int64_t now);
   void publish_target(std::int64_t now);
   void metrics_tick(std::int64_t now);
-  void publish_command(const core::Command& cmd, std::int64_t now);
+  void publish_command(const core::CompiledCommand& cmd, std::int64_t now);
   /// Runs input lines until one blocks (wait, sleep) or none is available.
   void run_input(std::int64_t now);
   /// Executes one parsed action; returns false when it blocks.
@@ -117,7 +117,7 @@ class Supervisor {
   std::ostream& out_;
   SwarmMonitor monitor_;
   Recorder recorder_;
-  core::Command current_;  ///< the command in force (or the config's, before any)
+  core::CompiledCommand current_;  ///< the command in force (or the config's, before any)
   std::uint32_t epoch_ = 0;
   std::int64_t epoch_start_ns_ = 0;
   std::int64_t start_ns_ = util::steady_ns();
@@ -188,7 +188,7 @@ void Supervisor::publish_target(std::int64_t now) {
   target_writer_.write(m);
 }
 
-void Supervisor::publish_command(const core::Command& cmd, std::int64_t now) {
+void Supervisor::publish_command(const core::CompiledCommand& cmd, std::int64_t now) {
   // A restarted supervisor continues after the newest epoch the agents follow.
   epoch_ = std::max(epoch_, monitor_.max_epoch_seen()) + 1;
   current_ = cmd;
@@ -297,7 +297,7 @@ void Supervisor::execute(const Action& a, std::int64_t now) {
         } else if constexpr (std::is_same_v<T, StartScenario>) {
           publish_command(cfg_.command, now);
         } else if constexpr (std::is_same_v<T, TrackStop>) {
-          core::Command c = current_;
+          core::CompiledCommand c = current_;
           if (c.tracking.enabled) c.shape.centre = core::centre_at(c.tracking.path, model_time(now));
           c.tracking.enabled = false;
           publish_command(c, now);
@@ -416,7 +416,7 @@ int Supervisor::run() {
     try {
       ScriptSource check(opt_.script);
       bool bad = false;
-      core::Command c = cfg_.command;
+      core::CompiledCommand c = cfg_.command;
       while (auto line = check.poll()) {
         const ParseResult r = parse_command(*line, c);
         if (!r.ok()) {

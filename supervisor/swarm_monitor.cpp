@@ -33,7 +33,7 @@ void SwarmMonitor::on_departed(std::int32_t id) {
   if (it != agents_.end()) it->second.departed = true;
 }
 
-void SwarmMonitor::set_command(const core::Command& cmd, std::uint32_t epoch, std::int64_t) {
+void SwarmMonitor::set_command(const core::CompiledCommand& cmd, std::uint32_t epoch, std::int64_t) {
   command_ = cmd;
   epoch_ = epoch;
   detector_.reset();
@@ -137,7 +137,7 @@ std::string SwarmMonitor::status_table(std::int64_t now_ns, double model_time) c
     const double ago = static_cast<double>(now_ns - a.last_seen_ns) * 1e-9;
     const bool up = alive(a, now_ns);
     char err[32] = "-";
-    if (shape && a.epoch == epoch_) std::snprintf(err, sizeof err, "%.4f", (a.x - core::target_point(*shape, a.x)).norm());
+    if (shape && a.epoch == epoch_) std::snprintf(err, sizeof err, "%.4f", (a.x - core::target_point(*shape, command_->curve(), a.x)).norm());
     char heard[16] = "-";
     if (a.neighbours_heard) std::snprintf(heard, sizeof heard, "%d", *a.neighbours_heard);
     std::snprintf(line, sizeof line, "%6d %-6s %9.2fs %10.4f %10.4f %6u %11s %6s\n", id,

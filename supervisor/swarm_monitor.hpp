@@ -36,8 +36,8 @@ class SwarmMonitor {
   void on_departed(std::int32_t id);
 
   /// A new command is in force from now (its epoch's model clock starts at 0).
-  void set_command(const core::Command& cmd, std::uint32_t epoch, std::int64_t now_ns);
-  const std::optional<core::Command>& command() const { return command_; }
+  void set_command(const core::CompiledCommand& cmd, std::uint32_t epoch, std::int64_t now_ns);
+  const std::optional<core::CompiledCommand>& command() const { return command_; }
   std::uint32_t epoch() const { return epoch_; }
   /// The highest epoch any agent was seen following (a restarted supervisor continues after it).
   std::uint32_t max_epoch_seen() const { return max_epoch_seen_; }
@@ -85,7 +85,7 @@ class SwarmMonitor {
   core::ConvergenceDetector detector_;
   bool lockstep_;
   std::map<std::int32_t, AgentView> agents_;
-  std::optional<core::Command> command_;
+  std::optional<core::CompiledCommand> command_;
   std::uint32_t epoch_ = 0;
   std::uint32_t max_epoch_seen_ = 0;
   std::optional<Sample> last_;

@@ -559,9 +559,9 @@ struct ShapeKeys {
 /// shapes::compile on the converted command; a ShapeError becomes one problem naming the key that
 /// holds the faulty expression (shape.r_expr, shape.x_expr / shape.y_expr, shape.f_expr) or
 /// shape.vertices for polygons.
-void compile_shape(core::Command& cmd, const ShapeKeys& keys, Reader& rd) {
+void compile_shape(core::CompiledCommand& cmd, const ShapeKeys& keys, Reader& rd) {
   try {
-    shapes::compile(cmd);
+    cmd = shapes::compile(cmd);
   } catch (const core::ShapeError& ex) {
     const std::string what = ex.what();
     const Entry* e = nullptr;

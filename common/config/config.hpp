@@ -8,7 +8,7 @@
 #include <utility>
 #include <vector>
 
-#include "core/command.hpp"
+#include "core/compiled_command.hpp"
 #include "core/metrics.hpp"
 #include "core/params.hpp"
 #include "dds/transport.hpp"
@@ -52,7 +52,7 @@ struct Config {
   int schema_version = kSchemaVersion;
   std::string name = "circle";  ///< scenario name (free text)
   SwarmConfig swarm;
-  core::Command command;        ///< shape, tracking, dynamics, integration
+  core::CompiledCommand command;  ///< shape, tracking, dynamics, integration; compiled by load
   SimConfig sim;
   AgentConfig agent;
   SupervisorConfig supervisor;

@@ -1,9 +1,11 @@
 #pragma once
-/// What an agent is told to do, and the single step every agent (process or simulated) takes.
-#include <vector>
+/// What an agent is told to do: the plain command description that travels in config files, on the
+/// console and on the wire. The curve of its shape is compiled once per command (CompiledCommand).
+#include <string_view>
 
 #include "integrator.hpp"
-#include "law.hpp"
+#include "law_arc.hpp"
+#include "law_paper.hpp"
 #include "shape.hpp"
 
 namespace shapeform::core {
@@ -15,13 +17,6 @@ enum class Law {
 };
 std::string_view to_string(Law l);
 bool parse_law(std::string_view name, Law& out);
-
-/// Parameters of the arc law.
-struct ArcParams {
-  double k_normal = 0.5;   ///< rate toward the curve point ahead (1/model time; k_normal dt <= 1)
-  double k_tangent = 1.0;  ///< fraction of the slot error taken per step along the curve
-  double spacing = 1.0;    ///< gap between agents on an infinite line (shape units)
-};
 
 /// Tracking: the shape's centre follows a path; the shape is drawn around C(t).
 struct Tracking {
@@ -42,26 +37,7 @@ struct Command {
   ArcParams arc;
 };
 
-/// The arc law's velocity for agent self_id at x on shape s (placed at its current centre).
-/// Neighbours' arc lengths are used when given (finite), else computed from their positions.
-Vec2 arc_velocity(const ShapeSpec& s, const Curve& curve, const ArcParams& p, std::int32_t self_id,
-                  const Vec2& x, const std::vector<Neighbour>& nbrs);
-
 /// The shape in force at model time t (tracked shapes are centred on C(t)).
 ShapeSpec shape_at(const Command& cmd, double t);
-
-/// dx/dt of agent self_id at x and model time t, given its neighbours' positions.
-Vec2 agent_velocity(const Command& cmd, std::int32_t self_id, const Vec2& x,
-                    const std::vector<Neighbour>& nbrs, double t);
-
-struct StepResult {
-  Vec2 x;  ///< new position
-  Vec2 v;  ///< velocity used over the step ((x_new - x) / dt)
-};
-
-/// One integration step of agent self_id from model time t to t + cmd.dt, neighbours held fixed.
-/// This is the one function the simulator and the agent process both call.
-StepResult agent_step(const Command& cmd, std::int32_t self_id, const Vec2& x,
-                      const std::vector<Neighbour>& nbrs, double t);
 
 }  // namespace shapeform::core

@@ -34,7 +34,7 @@ std::vector<std::pair<double, std::size_t>> arc_order(const ShapeSpec& shape, co
 }
 }  // namespace
 
-std::vector<double> consecutive_gaps(const ShapeSpec& shape, const std::vector<Vec2>& x) {
+std::vector<double> consecutive_gaps(const ShapeSpec& shape, const Curve& curve, const std::vector<Vec2>& x) {
   const std::size_t n = x.size();
   std::vector<double> gaps;
   if (n < 2) return gaps;
@@ -46,21 +46,20 @@ std::vector<double> consecutive_gaps(const ShapeSpec& shape, const std::vector<V
     }
     std::sort(order.begin(), order.end());
   } else {
-    order = arc_order(shape, *curve_of(shape), x);
+    order = arc_order(shape, curve, x);
   }
   gaps.reserve(n);
   for (std::size_t k = 0; k + 1 < n; ++k) gaps.push_back((x[order[k + 1].second] - x[order[k].second]).norm());
-  if (is_closed(shape)) gaps.push_back((x[order.front().second] - x[order.back().second]).norm());
+  if (curve.closed()) gaps.push_back((x[order.front().second] - x[order.back().second]).norm());
   return gaps;
 }
 
-std::vector<double> arc_gaps(const ShapeSpec& shape, const std::vector<Vec2>& x) {
+std::vector<double> arc_gaps(const ShapeSpec& shape, const Curve& curve, const std::vector<Vec2>& x) {
   std::vector<double> gaps;
   if (x.size() < 2) return gaps;
-  const auto curve = curve_of(shape);
-  const auto order = arc_order(shape, *curve, x);
+  const auto order = arc_order(shape, curve, x);
   for (std::size_t k = 0; k + 1 < order.size(); ++k) gaps.push_back(order[k + 1].first - order[k].first);
-  if (curve->closed()) gaps.push_back(shape.scale * curve->length() - (order.back().first - order.front().first));
+  if (curve.closed()) gaps.push_back(shape.scale * curve.length() - (order.back().first - order.front().first));
   return gaps;
 }
 
@@ -86,20 +85,19 @@ int count_clusters(const std::vector<Vec2>& x, double link) {
   return clusters;
 }
 
-Metrics compute_metrics(const Command& cmd, const std::vector<Vec2>& x, double t, bool pairwise) {
+Metrics compute_metrics(const CompiledCommand& cmd, const std::vector<Vec2>& x, double t, bool pairwise) {
   Metrics m;
   const std::size_t n = x.size();
   m.agents = static_cast<int>(n);
   if (n == 0) return m;
   const ShapeSpec s = shape_at(cmd, t);
-
-  const auto curve = curve_of(s);
+  const Curve& curve = cmd.curve();
   double err_sum = 0.0, err_max = 0.0, cerr_sum = 0.0, cerr_max = 0.0;
   for (const Vec2& xi : x) {
-    const double e = (xi - target_point(s, xi)).norm();
+    const double e = (xi - target_point(s, curve, xi)).norm();
     err_sum += e;
     err_max = std::max(err_max, e);
-    const double ce = closest_point(s, *curve, xi).distance;
+    const double ce = closest_point(s, curve, xi).distance;
     cerr_sum += ce;
     cerr_max = std::max(cerr_max, ce);
   }
@@ -123,8 +121,8 @@ Metrics compute_metrics(const Command& cmd, const std::vector<Vec2>& x, double t
     if (s.kind == ShapeKind::Circle) m.ring_error = ring / static_cast<double>(n);
   }
   if (n < 2) return m;
-  m.gap_cv = coefficient_of_variation(consecutive_gaps(s, x));
-  m.arc_gap_cv = coefficient_of_variation(arc_gaps(s, x));
+  m.gap_cv = coefficient_of_variation(consecutive_gaps(s, curve, x));
+  m.arc_gap_cv = coefficient_of_variation(arc_gaps(s, curve, x));
   if (!pairwise) return m;
 
   m.clusters = count_clusters(x);

@@ -4,7 +4,7 @@
 #include <optional>
 #include <vector>
 
-#include "command.hpp"
+#include "compiled_command.hpp"
 
 namespace shapeform::core {
 
@@ -34,18 +34,18 @@ std::optional<double> coefficient_of_variation(const std::vector<double>& v);
 /// Euclidean gaps between consecutive agents along the shape: the paper's star-shaped closed shapes
 /// (circle, ellipse, square, polar) ordered by angle about their centre (with wrap-around, N gaps);
 /// every other shape ordered by the arc length of the agents' closest points (wrap-around when closed).
-std::vector<double> consecutive_gaps(const ShapeSpec& shape, const std::vector<Vec2>& x);
+std::vector<double> consecutive_gaps(const ShapeSpec& shape, const Curve& curve, const std::vector<Vec2>& x);
 
 /// Arc-length gaps between consecutive agents' closest points along the curve (N gaps when closed,
 /// N - 1 when open).
-std::vector<double> arc_gaps(const ShapeSpec& shape, const std::vector<Vec2>& x);
+std::vector<double> arc_gaps(const ShapeSpec& shape, const Curve& curve, const std::vector<Vec2>& x);
 
 /// Number of single-linkage clusters at distance `link`.
 int count_clusters(const std::vector<Vec2>& x, double link = kClusterLink);
 
 /// All metrics of positions x under the command at model time t. With pairwise = false only the
 /// O(N log N) ones (shape error, gap CV, tracking errors) are computed; the O(N^2) ones stay null.
-Metrics compute_metrics(const Command& cmd, const std::vector<Vec2>& x, double t, bool pairwise = true);
+Metrics compute_metrics(const CompiledCommand& cmd, const std::vector<Vec2>& x, double t, bool pairwise = true);
 
 /// The uniformity measure convergence is judged by: the Euclidean gap CV for the paper's law (as the
 /// paper measures it), the arc-length gap CV for the arc law (whose spacing is by arc length).

@@ -9,13 +9,6 @@ namespace shapeform::core {
 
 namespace {
 constexpr double kTwoPi = 6.283185307179586476925286766559;
-
-/// Unit vector along y, or (1, 0) when y is the zero vector (an agent exactly at a centre).
-Vec2 direction_or_x(const Vec2& y) {
-  const double n = std::hypot(y.x(), y.y());  // no underflow of the square near the centre
-  if (n > 0.0 && std::isfinite(n)) return y / n;
-  return Vec2(1.0, 0.0);
-}
 }  // namespace
 
 std::string_view to_string(ShapeKind kind) { return params::name_of(params::kShapeKindNames, kind); }
@@ -24,40 +17,18 @@ bool parse_shape_kind(std::string_view name, ShapeKind& out) {
   return params::parse_name(params::kShapeKindNames, name, out);
 }
 
-bool is_closed(const ShapeSpec& s) {
+std::shared_ptr<const Curve> make_curve(const ShapeSpec& s) {
   switch (s.kind) {
-    case ShapeKind::Line: return false;
-    case ShapeKind::Circle:
-    case ShapeKind::Ellipse:
-    case ShapeKind::Square:
-    case ShapeKind::Polar: return true;
-    case ShapeKind::Parametric:
-    case ShapeKind::Polygon: return s.closed;
-    case ShapeKind::Implicit: return s.curve ? s.curve->closed() : true;
-  }
-  return true;
-}
-
-void ensure_curve(ShapeSpec& s) {
-  if (s.curve) return;
-  switch (s.kind) {
-    case ShapeKind::Line: s.curve = make_line(s.m, s.c); return;
-    case ShapeKind::Circle: s.curve = make_circle(s.r0); return;
-    case ShapeKind::Ellipse: s.curve = make_ellipse(s.a, s.b); return;
-    case ShapeKind::Square: s.curve = make_square(s.a); return;
-    case ShapeKind::Polygon: s.curve = make_polygon(s.vertices, s.closed); return;
+    case ShapeKind::Line: return make_line(s.m, s.c);
+    case ShapeKind::Circle: return make_circle(s.r0);
+    case ShapeKind::Ellipse: return make_ellipse(s.a, s.b);
+    case ShapeKind::Square: return make_square(s.a);
+    case ShapeKind::Polygon: return make_polygon(s.vertices, s.closed);
     case ShapeKind::Polar:
     case ShapeKind::Parametric:
-    case ShapeKind::Implicit:
-      throw ShapeError(std::string(to_string(s.kind)) + ": expression shapes must be compiled (shapes::compile)");
+    case ShapeKind::Implicit: break;
   }
-}
-
-std::shared_ptr<const Curve> curve_of(const ShapeSpec& s) {
-  if (s.curve) return s.curve;
-  ShapeSpec copy = s;
-  ensure_curve(copy);
-  return copy.curve;
+  throw ShapeError(std::string(to_string(s.kind)) + ": expression shapes must be compiled (shapes::compile)");
 }
 
 Vec2 to_local(const ShapeSpec& s, const Vec2& x) {
@@ -85,40 +56,18 @@ Projection closest_point(const ShapeSpec& s, const Curve& curve, const Vec2& x) 
   return p;
 }
 
-double shape_size(const ShapeSpec& s) {
+double shape_size(const ShapeSpec& s, const Curve& curve) {
   switch (s.kind) {
     case ShapeKind::Line: return 1.0;
     case ShapeKind::Circle: return s.scale * s.r0;
     case ShapeKind::Ellipse: return s.scale * std::max(s.a, s.b);
     case ShapeKind::Square: return s.scale * s.a;
-    default: return s.curve ? s.scale * s.curve->size() : s.scale;
+    default: return s.scale * curve.size();
   }
 }
 
-Vec2 target_point(const ShapeSpec& s, const Vec2& x) {
-  const Vec2 y = to_local(s, x);
-  if (s.curve) return to_world(s, s.curve->target(y));
-  switch (s.kind) {
-    case ShapeKind::Line: {
-      // Orthogonal projection onto x2 = m x1 + c (the paper prints "+mc" where "+c" is right).
-      const double t1 = (y.x() + s.m * y.y() - s.m * s.c) / (1.0 + s.m * s.m);
-      return to_world(s, Vec2(t1, s.m * t1 + s.c));
-    }
-    case ShapeKind::Circle:
-      return to_world(s, s.r0 * direction_or_x(y));
-    case ShapeKind::Ellipse: {
-      // atan2(0, 0) = 0 gives (a, 0) at the centre: the same (1, 0) convention as the circle.
-      const double th = std::atan2(s.a * y.y(), s.b * y.x());
-      return to_world(s, Vec2(s.a * std::cos(th), s.b * std::sin(th)));
-    }
-    case ShapeKind::Square: {
-      const double m = std::max(std::abs(y.x()), std::abs(y.y()));
-      if (!(m > 0.0) || !std::isfinite(m)) return to_world(s, Vec2(s.a, 0.0));
-      return to_world(s, (s.a / m) * y);
-    }
-    default:
-      return to_world(s, curve_of(s)->target(y));
-  }
+Vec2 target_point(const ShapeSpec& s, const Curve& curve, const Vec2& x) {
+  return to_world(s, curve.target(to_local(s, x)));
 }
 
 std::string_view to_string(CentrePath::Kind kind) { return params::name_of(params::kPathKindNames, kind); }

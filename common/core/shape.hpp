@@ -1,5 +1,6 @@
 #pragma once
-/// Shapes and their target vectors x_T(x): the point of the shape an agent at x is attracted to.
+/// Shapes as plain data (ShapeSpec: what travels in config and on the wire), and the geometry of a
+/// shape placed in the world given the curve compiled from it (target vector x_T(x), closest point).
 #include <memory>
 #include <string>
 #include <string_view>
@@ -34,32 +35,27 @@ struct ShapeSpec {
   std::string f_expr;          ///< implicit: f(x, y) = 0
   std::vector<Vec2> vertices;  ///< polygon vertices (local frame)
   bool closed = true;          ///< parametric and polygon: closed or open curve
-  /// The compiled curve in the shape's local frame. Analytic kinds are built by ensure_curve();
-  /// expression kinds by shapes::compile() (common/shapes, muparser). Shared, immutable.
-  std::shared_ptr<const Curve> curve;
 };
 
-/// Builds spec.curve for the analytic kinds and polygons when missing. Expression kinds must already
-/// be compiled (throws ShapeError naming the kind otherwise). Throws ShapeError on bad parameters.
-void ensure_curve(ShapeSpec& s);
-/// The curve of a shape (ensure_curve() on a copy when spec.curve is missing).
-std::shared_ptr<const Curve> curve_of(const ShapeSpec& s);
+/// The curve of an analytic shape (line, circle, ellipse, square) or a polygon, in the shape's local
+/// frame. Expression kinds are compiled by shapes::compile_curve() (common/shapes, muparser): for
+/// them this throws ShapeError naming the kind. Throws ShapeError on bad parameters.
+std::shared_ptr<const Curve> make_curve(const ShapeSpec& s);
 
 /// World <-> shape-local coordinates (translation, rotation, scale).
 Vec2 to_local(const ShapeSpec& s, const Vec2& x);
 Vec2 to_world(const ShapeSpec& s, const Vec2& y);
 
-/// The true closest point of the shape in world coordinates (arc length scaled, tangent rotated).
-Projection closest_point(const ShapeSpec& s, const Curve& c, const Vec2& x);
+/// In the functions below, `curve` is the curve compiled from s (its local frame): s places it in the
+/// world. Whether a shape is closed is curve.closed() (implicit: when its traced contour closes).
 
-/// True for closed curves (circle, ellipse, square, polar, closed parametric or polygon, implicit
-/// when its traced contour closes); false for the line and open curves.
-bool is_closed(const ShapeSpec& s);
+/// The true closest point of the shape in world coordinates (arc length scaled, tangent rotated).
+Projection closest_point(const ShapeSpec& s, const Curve& curve, const Vec2& x);
 
 /// Characteristic size of the shape (radius, larger semi-axis, half side; 1 for the line), scaled.
-double shape_size(const ShapeSpec& s);
+double shape_size(const ShapeSpec& s, const Curve& curve);
 
-/// Target vector x_T(x), as the paper defines it (y = x in the shape's local frame):
+/// Target vector x_T(x), as the paper defines it (y = x in the shape's local frame; Curve::target):
 ///  - line: orthogonal projection onto x2 = m x1 + c;
 ///  - circle: radial projection r0 y/|y|;
 ///  - ellipse: radial projection (a cos th, b sin th), th = atan2(a y2, b y1);
@@ -67,7 +63,7 @@ double shape_size(const ShapeSpec& s);
 ///  - polar: radial projection r(phi) y/|y|;
 ///  - parametric, polygon: the closest point; implicit: Newton steps along grad f.
 /// At the centre of a closed shape (singular) the direction (1, 0) is used. Always finite.
-Vec2 target_point(const ShapeSpec& s, const Vec2& x);
+Vec2 target_point(const ShapeSpec& s, const Curve& curve, const Vec2& x);
 
 /// Where the centre of a tracked shape is at model time t.
 struct CentrePath {

@@ -19,18 +19,12 @@ std::vector<Vec2> uniform_start(int n, std::uint64_t seed, double half_width) {
   return x;
 }
 
-Swarm::Swarm(Command cmd, std::vector<Vec2> start)
-    : x_(std::move(start)), next_(x_.size()), arc_(x_.size()) {
-  set_command(cmd);
+Swarm::Swarm(CompiledCommand cmd, std::vector<Vec2> start)
+    : cmd_(std::move(cmd)), x_(std::move(start)), next_(x_.size()), arc_(x_.size()) {
   nbrs_.reserve(x_.size());
 }
 
-void Swarm::set_command(const Command& cmd) {
-  cmd_ = cmd;
-  ensure_curve(cmd_.shape);
-}
-
-void paper_velocities_batch(const Command& cmd, const std::vector<Vec2>& x, double t, std::vector<Vec2>& v) {
+void paper_velocities_batch(const CompiledCommand& cmd, const std::vector<Vec2>& x, double t, std::vector<Vec2>& v) {
   const auto n = static_cast<Eigen::Index>(x.size());
   const Gains& g = cmd.gains;
   const ShapeSpec s = shape_at(cmd, t);
@@ -75,7 +69,7 @@ void paper_velocities_batch(const Command& cmd, const std::vector<Vec2>& x, doub
   const Vec2 cv = ff ? centre_velocity(cmd.tracking.path, t) : Vec2::Zero();
   for (Eigen::Index i = 0; i < n; ++i) {
     const Vec2& xi = x[static_cast<std::size_t>(i)];
-    Vec2 vi = Vec2(VX[i], VY[i]) + attraction_term(xi, target_point(s, xi), g);
+    Vec2 vi = Vec2(VX[i], VY[i]) + attraction_term(xi, target_point(s, cmd.curve(), xi), g);
     if (NI[i] >= 0 && g.r != 0.0) {
       const Vec2 d = xi - x[static_cast<std::size_t>(NI[i])];
       const double len = std::hypot(d.x(), d.y());
@@ -99,7 +93,7 @@ void Swarm::step() {
   if (cmd_.law == Law::Arc) {
     // Each agent publishes its own arc length; the others use it (as agent processes do).
     const ShapeSpec s = shape_at(cmd_, t_);
-    for (int j = 0; j < n; ++j) arc_[j] = closest_point(s, *s.curve, x_[j]).s;
+    for (int j = 0; j < n; ++j) arc_[j] = closest_point(s, cmd_.curve(), x_[j]).s;
   }
   for (int i = 0; i < n; ++i) {
     nbrs_.clear();

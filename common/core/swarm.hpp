@@ -3,7 +3,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "command.hpp"
+#include "law.hpp"
 
 namespace shapeform::core {
 
@@ -19,25 +19,24 @@ enum class Kernel {
 
 /// dx_i/dt of the paper's law for all agents at once (each pair once). v must have x's size.
 /// Equal to agent_velocity for every agent to ~1e-6 relative (single-precision weights; tested).
-void paper_velocities_batch(const Command& cmd, const std::vector<Vec2>& x, double t, std::vector<Vec2>& v);
+void paper_velocities_batch(const CompiledCommand& cmd, const std::vector<Vec2>& x, double t, std::vector<Vec2>& v);
 
 class Swarm {
  public:
-  Swarm(Command cmd, std::vector<Vec2> start);
+  Swarm(CompiledCommand cmd, std::vector<Vec2> start);
   /// Advances every agent by one step from the same snapshot (synchronous update).
   void step();
   /// Batch is used only where it applies (paper law, Euler); elsewhere Agent.
   void set_kernel(Kernel k) { kernel_ = k; }
   Kernel kernel() const { return kernel_; }
-  /// Throws ShapeError when the command's shape cannot be built (expression shapes must be compiled).
-  void set_command(const Command& cmd);
-  const Command& command() const { return cmd_; }
+  void set_command(const CompiledCommand& cmd) { cmd_ = cmd; }
+  const CompiledCommand& command() const { return cmd_; }
   const std::vector<Vec2>& positions() const { return x_; }
   double time() const { return t_; }
   long steps() const { return steps_; }
 
  private:
-  Command cmd_;
+  CompiledCommand cmd_;
   std::vector<Vec2> x_;
   std::vector<Vec2> next_;
   std::vector<Neighbour> nbrs_;

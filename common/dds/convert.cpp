@@ -122,7 +122,7 @@ msg::ShapeCommand to_msg(const core::Command& cmd, std::uint32_t epoch) {
   return m;
 }
 
-bool from_msg(const msg::ShapeCommand& m, core::Command& out, std::string& error) {
+bool from_msg(const msg::ShapeCommand& m, core::CompiledCommand& out, std::string& error) {
   Problems p("command");
   core::Command c;
 
@@ -216,12 +216,11 @@ bool from_msg(const msg::ShapeCommand& m, core::Command& out, std::string& error
   }
   // Only a well-formed command is compiled: a shape that cannot be built is refused as a whole.
   try {
-    shapes::compile(c);
+    out = shapes::compile(c);
   } catch (const core::ShapeError& e) {
     error = std::string("command: ") + e.what();
     return false;
   }
-  out = std::move(c);
   return true;
 }
 

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <string>
 
-#include "core/command.hpp"
+#include "core/compiled_command.hpp"
 #include "core/metrics.hpp"
 #include "shapeform/msg/AgentState.h"
 #include "shapeform/msg/ShapeCommand.h"
@@ -20,7 +20,7 @@ inline constexpr double kStateLimit = 1e6;
 /// vertices flattened x0, y0, x1, y1, ...; the compiled curve is not sent: receivers compile).
 msg::ShapeCommand to_msg(const core::Command& cmd, std::uint32_t epoch);
 
-/// Wire message -> core::Command, its shape compiled (shapes::compile: out.shape.curve is set).
+/// Wire message -> core::CompiledCommand, its shape compiled (shapes::compile).
 /// On failure returns false, leaves `out` untouched and sets `error` to every problem found,
 /// separated by "; ", each naming its field, e.g. "command.dt: must be in (0, 10], got 50". Checks:
 /// every number finite and within the range the command table (core/params.hpp) declares for its
@@ -31,7 +31,7 @@ msg::ShapeCommand to_msg(const core::Command& cmd, std::uint32_t epoch);
 /// compiled; a core::ShapeError is reported as "command: <its message>", e.g.
 /// "command: polar: r(phi) = '4+foo': Unexpected token \"foo\" found at position 2.".
 /// The epoch is not part of core::Command: read m.epoch().
-bool from_msg(const msg::ShapeCommand& m, core::Command& out, std::string& error);
+bool from_msg(const msg::ShapeCommand& m, core::CompiledCommand& out, std::string& error);
 
 /// True when s is plausible: id >= 0, model_time, x, y, vx, vy, arc finite, |x|, |y| <=
 /// kStateLimit and speed |(vx, vy)| <= kStateLimit. Otherwise false with `why` naming the field

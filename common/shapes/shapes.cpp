@@ -49,19 +49,17 @@ void check_finite(const std::string& what, const std::string& text, double v, co
 }
 }  // namespace
 
-void compile(core::ShapeSpec& s) {
+std::shared_ptr<const core::Curve> compile_curve(const core::ShapeSpec& s) {
   if (!(s.scale > 0.0) || !std::isfinite(s.scale))
     throw core::ShapeError("shape scale must be finite and > 0, got " + std::to_string(s.scale));
   if (!std::isfinite(s.rotation) || !std::isfinite(s.centre.x()) || !std::isfinite(s.centre.y()))
     throw core::ShapeError("shape centre and rotation must be finite");
-  s.curve.reset();
   switch (s.kind) {
     case core::ShapeKind::Polar: {
       Expression r("polar: r(phi)", s.r_expr, {"phi"});
       std::vector<double> samples(kSamples);
       for (int k = 0; k < kSamples; ++k) samples[k] = r(2.0 * kPi * k / kSamples);
-      s.curve = core::make_polar(std::move(samples));
-      return;
+      return core::make_polar(std::move(samples));
     }
     case core::ShapeKind::Parametric: {
       Expression x("parametric: x(s)", s.x_expr, {"s"});
@@ -77,28 +75,26 @@ void compile(core::ShapeSpec& s) {
         check_finite("parametric: y(s)", s.y_expr, pts[k].y(), at.c_str());
       }
       try {
-        s.curve = core::make_sampled(std::move(pts), s.closed);
+        return core::make_sampled(std::move(pts), s.closed);
       } catch (const core::ShapeError& e) {
         throw core::ShapeError(std::string("parametric: ") + e.what());
       }
-      return;
     }
     case core::ShapeKind::Implicit: {
       auto f = std::make_shared<Expression>("implicit: f(x, y)", s.f_expr, std::initializer_list<const char*>{"x", "y"});
       try {
-        s.curve = core::make_implicit([f](double x, double y) { return (*f)(x, y); }, kImplicitHalfBox);
+        return core::make_implicit([f](double x, double y) { return (*f)(x, y); }, kImplicitHalfBox);
       } catch (const core::ShapeError& e) {
         throw core::ShapeError(std::string(e.what()) + " (f = '" + s.f_expr + "', box [-" +
                                std::to_string(static_cast<int>(kImplicitHalfBox)) + ", " +
                                std::to_string(static_cast<int>(kImplicitHalfBox)) + "]^2 around the centre)");
       }
-      return;
     }
     default:
-      core::ensure_curve(s);
+      return core::make_curve(s);
   }
 }
 
-void compile(core::Command& cmd) { compile(cmd.shape); }
+core::CompiledCommand compile(const core::Command& cmd) { return core::CompiledCommand(cmd, compile_curve(cmd.shape)); }
 
 }  // namespace shapeform::shapes

@@ -37,7 +37,7 @@ int main(int argc, char** argv) {
     std::cerr << "shapeform_bench_sim: " << e.what() << '\n';
     return 2;
   }
-  core::Command cmd;  // the paper's circle
+  core::CompiledCommand cmd;  // the paper's circle
   core::Swarm swarm(cmd, core::uniform_start(agents, 1, 5.0));
   swarm.set_kernel(impl == "fast" ? core::Kernel::Batch : core::Kernel::Agent);
   swarm.step();  // warm-up (allocations)

@@ -103,7 +103,7 @@ int main(int argc, char** argv) {
                : kernel == "batch" ? core::Kernel::Batch
                                    : sim::auto_kernel(static_cast<int>(start.size()));
 
-  const core::Command& cmd = cfg.command;
+  const core::CompiledCommand& cmd = cfg.command;
   sim::SimResult r;
   try {
     r = sim::run_simulation(cmd, start, cfg.sim.steps, opt);
@@ -132,7 +132,7 @@ int main(int argc, char** argv) {
   }
   if (outline > 0) {
     const core::ShapeSpec s = core::shape_at(cmd, r.model_time);
-    const auto curve = core::curve_of(s);
+    const core::Curve* curve = &cmd.curve();
     // The line is infinite: draw the stretch the agents span, with a margin.
     double lo = 0, hi = s.scale * curve->length();  // world units, as closest_point's s
     if (!std::isfinite(hi)) {

@@ -59,7 +59,7 @@ nlohmann::json metrics_json(const core::Metrics& m) {
   return j;
 }
 
-SimResult run_simulation(const core::Command& cmd, std::vector<core::Vec2> start, long steps,
+SimResult run_simulation(const core::CompiledCommand& cmd, std::vector<core::Vec2> start, long steps,
                          const SimOptions& opt) {
   core::Swarm swarm(cmd, std::move(start));
   swarm.set_kernel(opt.kernel);

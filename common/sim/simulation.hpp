@@ -32,7 +32,7 @@ struct SimResult {
 };
 
 /// Runs `steps` synchronous steps from `start` (the start itself is step 0 of every series).
-SimResult run_simulation(const core::Command& cmd, std::vector<core::Vec2> start, long steps,
+SimResult run_simulation(const core::CompiledCommand& cmd, std::vector<core::Vec2> start, long steps,
                          const SimOptions& opt = {});
 
 /// The metric columns shared by every metrics CSV of the project, in order.

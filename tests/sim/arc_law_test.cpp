@@ -10,7 +10,7 @@ using namespace shapeform;
 using core::Vec2;
 
 namespace {
-core::Command arc_command(core::ShapeKind kind) {
+core::CompiledCommand arc_command(core::ShapeKind kind) {
   core::Command c;
   c.law = core::Law::Arc;
   auto& s = c.shape;
@@ -25,15 +25,14 @@ core::Command arc_command(core::ShapeKind kind) {
     case core::ShapeKind::Implicit: s.f_expr = "x^4 + y^4 - 256"; break;  // a squircle of half width 4
     case core::ShapeKind::Parametric: s.x_expr = "4*cos(2*pi*s)", s.y_expr = "3*sin(4*pi*s)"; break;
   }
-  shapes::compile(c);
-  return c;
+  return shapes::compile(c);
 }
 
 struct Plateau {
   double curve_error = 0, arc_gap_cv = 0, gap_cv = 0, max_step = 0, extent = 0;
 };
 
-Plateau run(const core::Command& cmd, int n, long steps, std::uint64_t seed = 1) {
+Plateau run(const core::CompiledCommand& cmd, int n, long steps, std::uint64_t seed = 1) {
   const auto r = sim::run_simulation(cmd, core::uniform_start(n, seed), steps);
   return {r.metrics.curve_error_mean.value(), r.metrics.arc_gap_cv.value_or(1e9), r.metrics.gap_cv.value_or(1e9),
           r.max_step, r.metrics.extent.value_or(0)};
@@ -43,8 +42,8 @@ Plateau run(const core::Command& cmd, int n, long steps, std::uint64_t seed = 1)
 TEST_CASE("arc law: exact, evenly spaced, still, on every closed shape and size", "[sim][arc]") {
   for (auto kind : {core::ShapeKind::Circle, core::ShapeKind::Ellipse, core::ShapeKind::Square, core::ShapeKind::Polar,
                     core::ShapeKind::Polygon, core::ShapeKind::Implicit}) {
-    const core::Command cmd = arc_command(kind);
-    const double size = core::shape_size(cmd.shape);
+    const core::CompiledCommand cmd = arc_command(kind);
+    const double size = core::shape_size(cmd.shape, cmd.curve());
     for (int n : {3, 12, 50, 200}) {
       INFO(core::to_string(kind) << " N=" << n);
       const Plateau p = run(cmd, n, 600);
@@ -56,7 +55,7 @@ TEST_CASE("arc law: exact, evenly spaced, still, on every closed shape and size"
 }
 
 TEST_CASE("arc law on a line: a finite row at the commanded spacing", "[sim][arc]") {
-  core::Command cmd = arc_command(core::ShapeKind::Line);
+  core::CompiledCommand cmd = arc_command(core::ShapeKind::Line);
   for (int n : {3, 12, 50, 200}) {
     INFO("N=" << n);
     const Plateau a = run(cmd, n, 600);
@@ -73,18 +72,18 @@ TEST_CASE("arc law on a line: a finite row at the commanded spacing", "[sim][arc
 }
 
 TEST_CASE("arc law on an open curve: from end to end", "[sim][arc]") {
-  core::Command cmd = arc_command(core::ShapeKind::Polygon);
+  core::CompiledCommand cmd = arc_command(core::ShapeKind::Polygon);
   cmd.shape.closed = false;
-  shapes::compile(cmd);
+  cmd = shapes::compile(cmd);  // a new shape: a new curve
   const Plateau p = run(cmd, 12, 600);
   CHECK(p.arc_gap_cv <= 0.01);
-  CHECK(p.curve_error <= 1e-3 * core::shape_size(cmd.shape));
+  CHECK(p.curve_error <= 1e-3 * core::shape_size(cmd.shape, cmd.curve()));
 }
 
 TEST_CASE("arc law settles no slower than the paper's law (12 agents, circle)", "[sim][arc]") {
-  core::Command paper = arc_command(core::ShapeKind::Circle);
+  core::CompiledCommand paper = arc_command(core::ShapeKind::Circle);
   paper.law = core::Law::Paper;
-  const core::Command arc = arc_command(core::ShapeKind::Circle);
+  const core::CompiledCommand arc = arc_command(core::ShapeKind::Circle);
   std::vector<int> ps, as;
   for (std::uint64_t seed = 1; seed <= 10; ++seed) {
     const auto p = sim::run_simulation(paper, core::uniform_start(12, seed), 500);
@@ -101,9 +100,9 @@ TEST_CASE("arc law settles no slower than the paper's law (12 agents, circle)", 
 
 TEST_CASE("arc law tracks a moving centre with feed-forward (ring error <= 0.05)", "[sim][arc][tracking]") {
   for (auto path : {core::CentrePath::Kind::Line, core::CentrePath::Kind::Circle}) {
-    core::Command cmd = arc_command(core::ShapeKind::Circle);
+    core::CompiledCommand cmd = arc_command(core::ShapeKind::Circle);
     cmd.shape.r0 = 2;
-    shapes::compile(cmd);
+    cmd = shapes::compile(cmd);
     cmd.tracking.enabled = true;
     cmd.tracking.feedforward = true;
     cmd.tracking.path.kind = path;
@@ -119,7 +118,7 @@ TEST_CASE("arc law tracks a moving centre with feed-forward (ring error <= 0.05)
 
 TEST_CASE("max_speed limits every step of both laws", "[sim][arc]") {
   for (auto law : {core::Law::Paper, core::Law::Arc}) {
-    core::Command cmd = arc_command(core::ShapeKind::Circle);
+    core::CompiledCommand cmd = arc_command(core::ShapeKind::Circle);
     cmd.law = law;
     cmd.max_speed = 0.05;
     core::Swarm s(cmd, core::uniform_start(12, 4));

@@ -12,11 +12,11 @@ using core::Vec2;
 
 namespace {
 constexpr std::int64_t kMs = 1'000'000;
-core::Command circle() {
+core::CompiledCommand circle() {
   core::Command c;
   c.shape.kind = core::ShapeKind::Circle;
   c.shape.r0 = 4;
-  return c;
+  return core::compile(c);
 }
 }  // namespace
 
@@ -35,8 +35,9 @@ TEST_CASE("commands: newer epochs only; model time restarts", "[agent]") {
   a.step();
   a.step();
   CHECK(a.model_time() == 2.0);
-  core::Command sq = circle();
+  core::CompiledCommand sq = circle();
   sq.shape.kind = core::ShapeKind::Square;
+  sq = core::compile(sq);
   CHECK_FALSE(a.on_command(sq, 3));  // same epoch: ignored
   CHECK_FALSE(a.on_command(sq, 2));  // older: ignored
   CHECK(a.command().shape.kind == core::ShapeKind::Circle);
@@ -86,8 +87,9 @@ TEST_CASE("neighbour table: latest per agent, losses counted, stale and departed
 }
 
 TEST_CASE("tracking follows the latest target, extrapolated over model time", "[agent][tracking]") {
-  core::Command c = circle();
+  core::CompiledCommand c = circle();
   c.shape.r0 = 2;
+  c = core::compile(c);
   c.tracking.enabled = true;
   c.tracking.path.kind = core::CentrePath::Kind::Line;
   c.tracking.path.point = Vec2(-10, -10);
@@ -126,9 +128,10 @@ TEST_CASE("seeded starts match the simulator's uniform start", "[agent]") {
 }
 
 TEST_CASE("arc law: agents exchanging their arc lengths reproduce the simulator", "[agent][arc]") {
-  core::Command cmd;
-  cmd.law = core::Law::Arc;
-  cmd.shape.kind = core::ShapeKind::Ellipse;
+  core::Command ellipse;
+  ellipse.law = core::Law::Arc;
+  ellipse.shape.kind = core::ShapeKind::Ellipse;
+  const core::CompiledCommand cmd = core::compile(ellipse);
   const auto start = core::uniform_start(5, 4);
   core::Swarm swarm(cmd, start);
   std::vector<AgentLogic> agents;
@@ -159,7 +162,7 @@ namespace {
 /// Agents ticking once per period in a random order, each publishing after every tick (stepped or
 /// held), so that an agent sees some neighbours already at step k+1 and others still at k, as
 /// processes do; a fraction `loss` of deliveries is lost. Agents stop stepping at `steps`.
-std::vector<Vec2> run_shuffled(const core::Command& cmd, const std::vector<Vec2>& start, bool lockstep, long steps,
+std::vector<Vec2> run_shuffled(const core::CompiledCommand& cmd, const std::vector<Vec2>& start, bool lockstep, long steps,
                                double loss = 0.0) {
   std::vector<AgentLogic> agents;
   for (int i = 0; i < static_cast<int>(start.size()); ++i) agents.emplace_back(i, start[i], 60 * kMs, lockstep);
@@ -199,10 +202,11 @@ std::vector<Vec2> run_shuffled(const core::Command& cmd, const std::vector<Vec2>
 
 TEST_CASE("lockstep agents in any tick order reproduce the simulator exactly", "[agent][lockstep]") {
   for (auto law : {core::Law::Paper, core::Law::Arc}) {
-    core::Command cmd;
-    cmd.law = law;
-    cmd.shape.kind = core::ShapeKind::Square;
-    cmd.shape.a = 5;
+    core::Command square;
+    square.law = law;
+    square.shape.kind = core::ShapeKind::Square;
+    square.shape.a = 5;
+    const core::CompiledCommand cmd = core::compile(square);
     const auto start = core::uniform_start(8, 3);
     core::Swarm swarm(cmd, start);
     for (int k = 0; k < 60; ++k) swarm.step();
@@ -222,7 +226,7 @@ TEST_CASE("lockstep agents in any tick order reproduce the simulator exactly", "
 }
 
 TEST_CASE("lockstep: wait for a lagging neighbour, a late joiner starts at the swarm's step", "[agent][lockstep]") {
-  core::Command cmd;
+  const core::CompiledCommand cmd;
   AgentLogic a(0, Vec2(1, 0), 60 * kMs, true, 3);
   a.on_command(cmd, 1);
   a.on_state(1, Vec2(-1, 0), 1, 0, 1, std::nullopt, 0.0);

@@ -9,11 +9,11 @@ using supervisor::SwarmMonitor;
 
 namespace {
 constexpr std::int64_t kS = 1'000'000'000;
-core::Command circle() {
+core::CompiledCommand circle() {
   core::Command c;
   c.shape.kind = core::ShapeKind::Circle;
   c.shape.r0 = 4;
-  return c;
+  return core::compile(c);
 }
 void ring(SwarmMonitor& m, int n, double radius, std::uint32_t epoch, std::int64_t now) {
   for (int i = 0; i < n; ++i) {
@@ -92,7 +92,7 @@ namespace {
 
 SwarmMonitor monitor_with_two_agents(bool lockstep) {
   SwarmMonitor m(kS, core::ConvergenceDetector::Params{}, lockstep);
-  m.set_command(core::Command{}, 1, 0);
+  m.set_command(core::CompiledCommand{}, 1, 0);
   // Agent 0 has done step 3; agent 1 already step 4 (its step-3 position is prev).
   m.on_state(0, Vec2(1, 0), Vec2(0.5, 0), 1, 3.0, 0);
   m.on_state(1, Vec2(-1, 2), Vec2(-1, 1), 1, 4.0, 0);

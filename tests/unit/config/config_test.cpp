@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "shapes/shapes.hpp"
+
 using shapeform::config::Config;
 using shapeform::config::ConfigError;
 using shapeform::config::load;
@@ -17,6 +19,12 @@ using shapeform::config::to_yaml;
 namespace core = shapeform::core;
 
 namespace {
+/// True when the command's curve is the one its shape compiles to (not a default or stale curve).
+bool compiled_from_shape(const core::CompiledCommand& c) {
+  const auto fresh = shapeform::shapes::compile_curve(c.shape);
+  return fresh->closed() == c.curve().closed() && fresh->length() == c.curve().length();
+}
+
 
 const std::string kSourceDir = SHAPEFORM_SOURCE_DIR;
 
@@ -300,7 +308,7 @@ TEST_CASE("scenarios arc_circle, arc_ellipse, arc_square, arc_line") {
     CHECK_FALSE(c->command.tracking.enabled);
     require_paper_dynamics(*c);  // the paper's gains stay in the file, unused by the arc law
     require_arc_law(*c);
-    CHECK(c->command.shape.curve != nullptr);
+    CHECK(compiled_from_shape(c->command));
   }
 }
 
@@ -309,9 +317,9 @@ TEST_CASE("scenarios polar_star, polygon, implicit: compiled at load") {
   CHECK(star.name == "polar_star");
   CHECK(star.command.shape.kind == core::ShapeKind::Polar);
   CHECK(star.command.shape.r_expr == "4 + cos(5*phi)");
-  REQUIRE(star.command.shape.curve != nullptr);
+  REQUIRE(compiled_from_shape(star.command));
   // r(0) = 5 and r(pi/5) = 3: the radial target of far points lands on the star.
-  const core::Vec2 tip = core::target_point(star.command.shape, core::Vec2(20.0, 0.0));
+  const core::Vec2 tip = core::target_point(star.command.shape, star.command.curve(), core::Vec2(20.0, 0.0));
   CHECK(tip.x() == Approx(5.0).epsilon(1e-6));
   CHECK(tip.y() == Approx(0.0).margin(1e-9));
 
@@ -322,15 +330,15 @@ TEST_CASE("scenarios polar_star, polygon, implicit: compiled at load") {
   CHECK(poly.command.shape.vertices ==
         std::vector<core::Vec2>{core::Vec2(-4, -3), core::Vec2(4, -3), core::Vec2(4, 2),
                                 core::Vec2(0, 5), core::Vec2(-4, 2)});
-  REQUIRE(poly.command.shape.curve != nullptr);
-  CHECK(poly.command.shape.curve->length() == Approx(8 + 5 + 2 * 5 + 5));
+  REQUIRE(compiled_from_shape(poly.command));
+  CHECK(poly.command.curve().length() == Approx(8 + 5 + 2 * 5 + 5));
 
   const Config imp = load(scenario("implicit"));
   CHECK(imp.name == "implicit");
   CHECK(imp.command.shape.kind == core::ShapeKind::Implicit);
   CHECK(imp.command.shape.f_expr == "x^4 + y^4 - 256");
-  REQUIRE(imp.command.shape.curve != nullptr);
-  const core::Vec2 side = core::target_point(imp.command.shape, core::Vec2(7.0, 0.0));
+  REQUIRE(compiled_from_shape(imp.command));
+  const core::Vec2 side = core::target_point(imp.command.shape, imp.command.curve(), core::Vec2(7.0, 0.0));
   CHECK(side.x() == Approx(4.0).epsilon(1e-6));
   CHECK(side.y() == Approx(0.0).margin(1e-6));
 
@@ -457,8 +465,8 @@ dynamics: {law: arc, k_normal: 10, k_tangent: 0.25, spacing: 0.5}
   CHECK(c.command.arc.k_tangent == 0.25);
   CHECK(c.command.arc.spacing == 0.5);
   // Compiled and placed: r(0) = 2.5, rotated by 90 degrees, scaled by 2, about (1, 1).
-  REQUIRE(s.curve != nullptr);
-  const core::Vec2 p = core::target_point(s, core::Vec2(1.0, 30.0));
+  REQUIRE(compiled_from_shape(c.command));
+  const core::Vec2 p = core::target_point(s, c.command.curve(), core::Vec2(1.0, 30.0));
   CHECK(p.x() == Approx(1.0).margin(1e-9));
   CHECK(p.y() == Approx(1.0 + 2 * 2.5).epsilon(1e-6));
 
@@ -473,21 +481,21 @@ dynamics: {law: arc, k_normal: 10, k_tangent: 0.25, spacing: 0.5}
     CHECK(d.command.arc.k_normal == 0.5);
     CHECK(d.command.arc.k_tangent == 1.0);
     CHECK(d.command.arc.spacing == 1.0);
-    REQUIRE(d.command.shape.curve != nullptr);  // the default circle is compiled too
+    REQUIRE(compiled_from_shape(d.command));  // the default circle is compiled too
   }
   SECTION("every kind compiles, expressions of other kinds are not looked at") {
     const Config par = load("", {"shape.kind=parametric", "shape.x_expr=3*cos(2*pi*s)",
                                  "shape.y_expr=2*sin(2*pi*s)", "shape.f_expr=junk(",
                                  "shape.r_expr=-1"});
-    REQUIRE(par.command.shape.curve != nullptr);
-    CHECK(par.command.shape.curve->closed());
+    REQUIRE(compiled_from_shape(par.command));
+    CHECK(par.command.curve().closed());
     const Config open = load("", {"shape.kind=polygon", "shape.vertices=[[0, 0], [4, 0]]",
                                   "shape.closed=false"});
-    REQUIRE(open.command.shape.curve != nullptr);
-    CHECK_FALSE(open.command.shape.curve->closed());
-    CHECK(open.command.shape.curve->length() == Approx(4.0));
+    REQUIRE(compiled_from_shape(open.command));
+    CHECK_FALSE(open.command.curve().closed());
+    CHECK(open.command.curve().length() == Approx(4.0));
     const Config imp = load("", {"shape.kind=implicit", "shape.f_expr=x^2/16 + y^2/4 - 1"});
-    REQUIRE(imp.command.shape.curve != nullptr);
+    REQUIRE(compiled_from_shape(imp.command));
     const Config circle = load("", {"shape.r_expr=4+foo", "shape.vertices=[[0, 0]]"});
     CHECK(circle.command.shape.kind == core::ShapeKind::Circle);
   }
@@ -1038,7 +1046,7 @@ TEST_CASE("to_yaml round-trips the equation shapes and polygons") {
     INFO(text);
     const Config back = load_string(text);
     require_equal(back, c);
-    CHECK(back.command.shape.curve != nullptr);
+    CHECK(compiled_from_shape(back.command));
     CHECK(to_yaml(back) == text);
   }
   Config c;

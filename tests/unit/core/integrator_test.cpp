@@ -1,7 +1,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
-#include "core/command.hpp"
+#include "core/law.hpp"
 #include "core/integrator.hpp"
 
 using namespace shapeform::core;
@@ -39,8 +39,9 @@ TEST_CASE("RK4 sees time: a time-dependent field", "[integrator]") {
 }
 
 TEST_CASE("agent_step orders on the law itself (smooth case: one agent, a line)", "[integrator]") {
-  Command cmd;
-  cmd.shape.kind = ShapeKind::Line;
+  Command line;
+  line.shape.kind = ShapeKind::Line;
+  CompiledCommand cmd = compile(line);
   const Vec2 x0(-3, -2);
   const double T = 4.0;
   const auto run = [&](Integrator m, double dt) {

@@ -6,11 +6,11 @@
 using namespace shapeform::core;
 
 namespace {
-Command circle_cmd(double r0 = 4.0) {
+CompiledCommand circle_cmd(double r0 = 4.0) {
   Command c;
   c.shape.kind = ShapeKind::Circle;
   c.shape.r0 = r0;
-  return c;
+  return compile(c);
 }
 std::vector<Vec2> ring(int n, double radius, Vec2 centre = Vec2::Zero(), double phase = 0.3) {
   std::vector<Vec2> x;
@@ -55,13 +55,14 @@ TEST_CASE("two equal clusters have gap CV 1 and count as 2", "[metrics]") {
 }
 
 TEST_CASE("line gaps are ordered along the line", "[metrics]") {
-  Command c;
-  c.shape.kind = ShapeKind::Line;
-  c.shape.m = 0;
-  c.shape.c = 1;
+  Command line;
+  line.shape.kind = ShapeKind::Line;
+  line.shape.m = 0;
+  line.shape.c = 1;
+  const CompiledCommand c = compile(line);
   // Positions given out of order: 3, 0, 1 along x. Gaps 1 and 2: CV = 0.5 / 1.5.
   std::vector<Vec2> x = {Vec2(3, 1), Vec2(0, 1), Vec2(1, 1)};
-  const auto gaps = consecutive_gaps(c.shape, x);
+  const auto gaps = consecutive_gaps(c.shape, c.curve(), x);
   REQUIRE(gaps.size() == 2);
   const Metrics m = compute_metrics(c, x, 0);
   CHECK(*m.gap_cv == Approx(1.0 / 3.0));
@@ -70,9 +71,9 @@ TEST_CASE("line gaps are ordered along the line", "[metrics]") {
 
 TEST_CASE("closed gaps wrap around", "[metrics]") {
   // Three agents at angles 0, 90, 180 degrees on radius 1: gaps sqrt2, sqrt2, 2.
-  Command c = circle_cmd(1.0);
+  const CompiledCommand c = circle_cmd(1.0);
   std::vector<Vec2> x = {Vec2(0, 1), Vec2(1, 0), Vec2(-1, 0)};
-  const auto gaps = consecutive_gaps(c.shape, x);
+  const auto gaps = consecutive_gaps(c.shape, c.curve(), x);
   REQUIRE(gaps.size() == 3);
   double sum = 0;
   for (double g : gaps) sum += g;
@@ -106,7 +107,7 @@ TEST_CASE("undefined metrics are null, never 0 or NaN", "[metrics]") {
 }
 
 TEST_CASE("tracking metrics: centroid and ring errors about C(t)", "[metrics][tracking]") {
-  Command c = circle_cmd(2.0);
+  CompiledCommand c = circle_cmd(2.0);
   c.tracking.enabled = true;
   c.tracking.path.kind = CentrePath::Kind::Line;
   c.tracking.path.point = Vec2(-10, -10);
@@ -127,6 +128,7 @@ TEST_CASE("tracking metrics: centroid and ring errors about C(t)", "[metrics][tr
   // Another tracked shape has no ring: its shape error says how far the agents are from it.
   c.shape.kind = ShapeKind::Square;
   c.shape.a = 2.0;
+  c = compile(c);  // a new shape: a new curve
   const Metrics square = compute_metrics(c, ring(10, 2.0, Vec2(-5, -5)), 50);
   CHECK(square.centroid_error);
   CHECK_FALSE(square.ring_error);

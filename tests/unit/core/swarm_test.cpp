@@ -6,7 +6,7 @@ using namespace shapeform::core;
 
 TEST_CASE("the batched kernel equals the per-agent law", "[swarm][batch]") {
   for (int n : {1, 2, 3, 12, 97}) {
-    Command cmd;
+    CompiledCommand cmd;
     cmd.tracking.enabled = n % 2 == 1;  // also with a moving centre and feed-forward
     cmd.tracking.feedforward = true;
     cmd.tracking.path.kind = CentrePath::Kind::Circle;
@@ -27,7 +27,7 @@ TEST_CASE("the batched kernel equals the per-agent law", "[swarm][batch]") {
 }
 
 TEST_CASE("nearest-neighbour ties in the batched kernel go to the lowest id", "[swarm][batch]") {
-  Command cmd;
+  CompiledCommand cmd;
   cmd.gains.k1 = 0;
   cmd.gains.k2 = 0;
   // Agent 1 at the origin is equidistant from agents 0, 2 and 3; the repulsion must point away from 0.
@@ -40,7 +40,7 @@ TEST_CASE("nearest-neighbour ties in the batched kernel go to the lowest id", "[
 TEST_CASE("swarms with either kernel follow the same trajectory", "[swarm][batch]") {
   // Over a short horizon only: the published law amplifies rounding differences (its nearest
   // neighbours switch), so two exact implementations part ways after a few hundred steps.
-  Command cmd;
+  CompiledCommand cmd;
   Swarm a(cmd, uniform_start(30, 2)), b(cmd, uniform_start(30, 2));
   b.set_kernel(Kernel::Batch);
   for (int k = 0; k < 20; ++k) {

@@ -34,6 +34,12 @@ namespace fdds = eprosima::fastdds::dds;
 namespace frtps = eprosima::fastrtps::rtps;
 
 namespace {
+/// True when the command's curve is the one its shape compiles to (not a default or stale curve).
+bool compiled_from_shape(const core::CompiledCommand& c) {
+  const auto fresh = shapes::compile_curve(c.shape);
+  return fresh->closed() == c.curve().closed() && fresh->length() == c.curve().length();
+}
+
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -157,7 +163,7 @@ template <class Mutate>
 std::string reject(Mutate mutate) {
   msg::ShapeCommand m = dds::to_msg(sample_command(), 1);
   mutate(m);
-  core::Command out;
+  core::CompiledCommand out;
   out.dt = 123.0;  // sentinel: must stay untouched on failure
   std::string error;
   const bool ok = dds::from_msg(m, out, error);
@@ -221,12 +227,12 @@ TEST_CASE("ShapeCommand round trip keeps every field", "[dds][convert]") {
   CHECK(m.spacing() == 1.25);
   CHECK(dds::to_msg(core::Command{}, 1).law() == "paper");
 
-  core::Command out;
+  core::CompiledCommand out;
   std::string error;
   REQUIRE(dds::from_msg(m, out, error));
   CHECK(error.empty());
   require_same(in, out);
-  CHECK(out.shape.curve != nullptr);  // compiled on receipt
+  CHECK(compiled_from_shape(out));  // compiled on receipt
 
   SECTION("every kind and law survives, compiled to the same curve as the sender's") {
     for (auto kind : {core::ShapeKind::Line, core::ShapeKind::Circle, core::ShapeKind::Ellipse,
@@ -242,17 +248,16 @@ TEST_CASE("ShapeCommand round trip keeps every field", "[dds][convert]") {
           const msg::ShapeCommand w = dds::to_msg(c, 3);
           CHECK(w.shape_kind() == std::string(core::to_string(kind)));
           CHECK(w.law() == std::string(core::to_string(law)));
-          core::Command back;
+          core::CompiledCommand back;
           REQUIRE(dds::from_msg(w, back, error));
           require_same(c, back);
-          REQUIRE(back.shape.curve != nullptr);
-          core::Command local = c;
-          shapes::compile(local);
-          CHECK(back.shape.curve->closed() == local.shape.curve->closed());
-          CHECK(back.shape.curve->length() == local.shape.curve->length());
+          REQUIRE(compiled_from_shape(back));
+          const core::CompiledCommand local = shapes::compile(c);
+          CHECK(back.curve().closed() == local.curve().closed());
+          CHECK(back.curve().length() == local.curve().length());
           for (const core::Vec2& x : {core::Vec2(9, 1), core::Vec2(-2, 7), core::Vec2(0.5, -6)}) {
-            const core::Vec2 got = core::target_point(back.shape, x);
-            const core::Vec2 want = core::target_point(local.shape, x);
+            const core::Vec2 got = core::target_point(back.shape, back.curve(), x);
+            const core::Vec2 want = core::target_point(local.shape, local.curve(), x);
             CHECK(got == want);
           }
         }
@@ -270,7 +275,7 @@ TEST_CASE("ShapeCommand round trip keeps every field", "[dds][convert]") {
           c.shape.kind = kind;
           c.tracking.path.kind = path;
           c.integrator = integ;
-          core::Command back;
+          core::CompiledCommand back;
           REQUIRE(dds::from_msg(dds::to_msg(c, 1), back, error));
           CHECK(back.shape.kind == kind);
           CHECK(back.tracking.path.kind == path);
@@ -280,17 +285,17 @@ TEST_CASE("ShapeCommand round trip keeps every field", "[dds][convert]") {
     }
   }
   SECTION("the default command is accepted") {
-    core::Command back;
+    core::CompiledCommand back;
     REQUIRE(dds::from_msg(dds::to_msg(core::Command{}, 1), back, error));
     require_same(core::Command{}, back);
-    CHECK(back.shape.curve != nullptr);
+    CHECK(compiled_from_shape(back));
   }
   SECTION("an empty vertex list and empty expressions travel as such") {
     core::Command c = in;
     c.shape.vertices.clear();
     c.shape.r_expr.clear();
     c.shape.kind = core::ShapeKind::Circle;
-    core::Command back;
+    core::CompiledCommand back;
     REQUIRE(dds::from_msg(dds::to_msg(c, 1), back, error));
     CHECK(back.shape.vertices.empty());
     CHECK(back.shape.r_expr.empty());
@@ -321,14 +326,14 @@ TEST_CASE("ShapeCommand survives CDR serialization, large polygons and long expr
   REQUIRE(type.deserialize(&payload, &read));
   CHECK(read.vertices().size() == 2u * kVertices);
   CHECK(read.r_expr() == long_expr);
-  core::Command back;
+  core::CompiledCommand back;
   std::string error;
   REQUIRE(dds::from_msg(read, back, error));
   require_same(c, back);
   c.shape.kind = core::ShapeKind::Polar;
   REQUIRE(dds::from_msg(dds::to_msg(c, 10), back, error));
   // r(phi) = 4 (the long sum adds zeros), scaled by 1.5 about the centre (1, -2).
-  CHECK((core::target_point(back.shape, core::Vec2(30, 0)) - core::Vec2(1, -2)).norm() ==
+  CHECK((core::target_point(back.shape, back.curve(), core::Vec2(30, 0)) - core::Vec2(1, -2)).norm() ==
         Approx(6.0).epsilon(1e-9));
 }
 
@@ -406,7 +411,7 @@ TEST_CASE("every bounded command field is refused on the wire by the command tab
       if (!std::isfinite(outside)) continue;
       core::Command c = sample_command();
       p.set(c, params::Value(outside));
-      core::Command out;
+      core::CompiledCommand out;
       std::string error;
       CHECK_FALSE(dds::from_msg(dds::to_msg(c, 1), out, error));
       CHECK(error == "command." + p.wire[0] + ": " + r.text() + ", got " + params::format_number(outside));
@@ -1032,7 +1037,7 @@ TEST_CASE("command is reliable and transient local so a late reader gets the new
   CHECK(got.front().valid_data);
   CHECK(got.front().key_id == -1);
   CHECK(got.front().msg.epoch() == 2u);
-  core::Command out;
+  core::CompiledCommand out;
   std::string error;
   REQUIRE(dds::from_msg(got.front().msg, out, error));
   require_same(cmd, out);
@@ -1060,7 +1065,7 @@ TEST_CASE("a large polygon command crosses the wire; a bad shape or step is refu
   bad.r_expr("4+foo");
 
   // What an agent does: apply what from_msg accepts, count what it refuses.
-  core::Command in_force;
+  core::CompiledCommand in_force;
   std::uint32_t epoch = 0;
   int refused = 0;
   std::string last_error;
@@ -1068,7 +1073,7 @@ TEST_CASE("a large polygon command crosses the wire; a bad shape or step is refu
   const auto receive = [&] {
     reader.drain(batch);
     for (const auto& r : batch) {
-      core::Command c;
+      core::CompiledCommand c;
       std::string error;
       if (dds::from_msg(r.msg, c, error)) {
         in_force = c;
@@ -1097,8 +1102,8 @@ TEST_CASE("a large polygon command crosses the wire; a bad shape or step is refu
   CHECK(epoch == 1);
   CHECK(last_error == "command.dt: must be in (0, 10], got 50; command.k_tangent: must be in (0, 1], got 2");
   require_same(big, in_force);
-  REQUIRE(in_force.shape.curve != nullptr);
-  CHECK(in_force.shape.curve->closed());
+  REQUIRE(compiled_from_shape(in_force));
+  CHECK(in_force.curve().closed());
 }
 
 TEST_CASE("node refuses a topic of another type and handles survive their node", "[dds][node]") {

@@ -96,7 +96,7 @@ TEST_CASE("script source: lines with numbers, CR stripped, eof", "[supervisor][i
   REQUIRE(line);
   CHECK(src.eof());  // the last line has been returned
   CHECK(src.line_number() == 4);
-  const ParseResult r = parse_command(*line, core::Command{});
+  const ParseResult r = parse_command(*line, core::CompiledCommand{});
   CHECK(with_location(src, r.error) == p.string() + ":4: shape circle: missing parameter r");
   CHECK_FALSE(src.poll());
   CHECK(src.eof());

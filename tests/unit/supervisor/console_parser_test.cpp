@@ -14,7 +14,7 @@ using namespace shapeform::supervisor;
 namespace {
 
 /// A current command that differs from the defaults everywhere, so "unchanged" is observable.
-core::Command current_command() {
+core::CompiledCommand current_command() {
   core::Command c;
   c.shape.kind = core::ShapeKind::Ellipse;
   c.shape.a = 7.0;
@@ -28,11 +28,11 @@ core::Command current_command() {
   c.integrator = core::Integrator::RK4;
   c.dt = 0.5;
   c.max_speed = 2.0;
-  return c;
+  return core::compile(c);
 }
 
 template <class T>
-T parse_as(std::string_view line, const core::Command& cur = current_command()) {
+T parse_as(std::string_view line, const core::CompiledCommand& cur = current_command()) {
   const ParseResult r = parse_command(line, cur);
   INFO("line: " << line << "\nerror: " << r.error);
   REQUIRE(r.ok());
@@ -40,7 +40,7 @@ T parse_as(std::string_view line, const core::Command& cur = current_command()) 
   return std::get<T>(r.action);
 }
 
-core::Command set_command(std::string_view line, SetCommand::What what) {
+core::CompiledCommand set_command(std::string_view line, SetCommand::What what) {
   const SetCommand s = parse_as<SetCommand>(line);
   CHECK(s.what == what);
   return s.command;
@@ -64,8 +64,8 @@ void check_gains_equal(const core::Gains& a, const core::Gains& b) {
 }
 
 /// Everything but the shape and tracking equals the current command.
-void check_rest_unchanged(const core::Command& c) {
-  const core::Command cur = current_command();
+void check_rest_unchanged(const core::CompiledCommand& c) {
+  const core::CompiledCommand cur = current_command();
   check_gains_equal(c.gains, cur.gains);
   CHECK(c.integrator == cur.integrator);
   CHECK(c.dt == cur.dt);
@@ -73,14 +73,20 @@ void check_rest_unchanged(const core::Command& c) {
 }
 
 /// Shape and tracking equal the current command.
-void check_shape_unchanged(const core::Command& c) {
-  const core::Command cur = current_command();
+void check_shape_unchanged(const core::CompiledCommand& c) {
+  const core::CompiledCommand cur = current_command();
   CHECK(c.shape.kind == cur.shape.kind);
   CHECK(c.shape.a == cur.shape.a);
   CHECK(c.shape.b == cur.shape.b);
   CHECK(c.shape.centre == cur.shape.centre);
   CHECK(c.tracking.enabled == cur.tracking.enabled);
   CHECK(c.tracking.feedforward == cur.tracking.feedforward);
+}
+
+/// True when the command's curve is the one its shape compiles to (not a default or stale curve).
+bool compiled_from_shape(const core::CompiledCommand& c) {
+  const auto fresh = shapeform::shapes::compile_curve(c.shape);
+  return fresh->closed() == c.curve().closed() && fresh->length() == c.curve().length();
 }
 
 }  // namespace
@@ -92,12 +98,12 @@ TEST_CASE("blank lines and comments are no-ops", "[supervisor][parser]") {
 }
 
 TEST_CASE("a token starting with # ends the line", "[supervisor][parser]") {
-  const core::Command c = set_command("shape circle r=2 # r=-1 junk", SetCommand::What::Shape);
+  const core::CompiledCommand c = set_command("shape circle r=2 # r=-1 junk", SetCommand::What::Shape);
   CHECK(c.shape.r0 == 2.0);
 }
 
 TEST_CASE("shape line", "[supervisor][parser]") {
-  const core::Command c = set_command("shape line m=2 c=-1.5", SetCommand::What::Shape);
+  const core::CompiledCommand c = set_command("shape line m=2 c=-1.5", SetCommand::What::Shape);
   CHECK(c.shape.kind == core::ShapeKind::Line);
   CHECK(c.shape.m == 2.0);
   CHECK(c.shape.c == -1.5);
@@ -107,22 +113,22 @@ TEST_CASE("shape line", "[supervisor][parser]") {
 }
 
 TEST_CASE("shape circle with and without centre", "[supervisor][parser]") {
-  const core::Command c = set_command("shape circle r=3", SetCommand::What::Shape);
+  const core::CompiledCommand c = set_command("shape circle r=3", SetCommand::What::Shape);
   CHECK(c.shape.kind == core::ShapeKind::Circle);
   CHECK(c.shape.r0 == 3.0);
   CHECK(c.shape.centre == core::Vec2(0.0, 0.0));  // default 0, not the current centre
   CHECK_FALSE(c.tracking.enabled);
   check_rest_unchanged(c);
 
-  const core::Command d = set_command("shape circle cy=-4 r=0.5 cx=2", SetCommand::What::Shape);
+  const core::CompiledCommand d = set_command("shape circle cy=-4 r=0.5 cx=2", SetCommand::What::Shape);
   CHECK(d.shape.r0 == 0.5);
   CHECK(d.shape.centre == core::Vec2(2.0, -4.0));
-  const core::Command e = set_command("shape circle r=1 cx=3", SetCommand::What::Shape);
+  const core::CompiledCommand e = set_command("shape circle r=1 cx=3", SetCommand::What::Shape);
   CHECK(e.shape.centre == core::Vec2(3.0, 0.0));
 }
 
 TEST_CASE("shape ellipse and square", "[supervisor][parser]") {
-  const core::Command e = set_command("shape ellipse b=2 a=5 cx=1 cy=1", SetCommand::What::Shape);
+  const core::CompiledCommand e = set_command("shape ellipse b=2 a=5 cx=1 cy=1", SetCommand::What::Shape);
   CHECK(e.shape.kind == core::ShapeKind::Ellipse);
   CHECK(e.shape.a == 5.0);
   CHECK(e.shape.b == 2.0);
@@ -130,7 +136,7 @@ TEST_CASE("shape ellipse and square", "[supervisor][parser]") {
   CHECK_FALSE(e.tracking.enabled);
   check_rest_unchanged(e);
 
-  const core::Command s = set_command("shape square a=4.5", SetCommand::What::Shape);
+  const core::CompiledCommand s = set_command("shape square a=4.5", SetCommand::What::Shape);
   CHECK(s.shape.kind == core::ShapeKind::Square);
   CHECK(s.shape.a == 4.5);
   CHECK(s.shape.centre == core::Vec2(0.0, 0.0));
@@ -138,7 +144,7 @@ TEST_CASE("shape ellipse and square", "[supervisor][parser]") {
 }
 
 TEST_CASE("shape polar", "[supervisor][parser]") {
-  const core::Command c =
+  const core::CompiledCommand c =
       set_command("shape polar r=\"4 + cos(5*phi)\" cx=1 cy=-1", SetCommand::What::Shape);
   CHECK(c.shape.kind == core::ShapeKind::Polar);
   CHECK(c.shape.r_expr == "4 + cos(5*phi)");
@@ -148,8 +154,8 @@ TEST_CASE("shape polar", "[supervisor][parser]") {
   CHECK_FALSE(c.tracking.enabled);
   check_rest_unchanged(c);
   // Compiled by the parser: r(0) = 5 from the centre.
-  REQUIRE(c.shape.curve != nullptr);
-  const core::Vec2 tip = core::target_point(c.shape, core::Vec2(21.0, -1.0));
+  REQUIRE(compiled_from_shape(c));
+  const core::Vec2 tip = core::target_point(c.shape, c.curve(), core::Vec2(21.0, -1.0));
   CHECK(tip.x() == Approx(6.0).epsilon(1e-6));
   CHECK(tip.y() == Approx(-1.0).epsilon(1e-9));
   // Unquoted (no spaces) works as well.
@@ -158,58 +164,58 @@ TEST_CASE("shape polar", "[supervisor][parser]") {
 }
 
 TEST_CASE("shape parametric", "[supervisor][parser]") {
-  const core::Command c = set_command(
+  const core::CompiledCommand c = set_command(
       "shape parametric x=\"4*cos(2*pi*s)\" y=\"2*sin(2*pi*s)\"", SetCommand::What::Shape);
   CHECK(c.shape.kind == core::ShapeKind::Parametric);
   CHECK(c.shape.x_expr == "4*cos(2*pi*s)");
   CHECK(c.shape.y_expr == "2*sin(2*pi*s)");
   CHECK(c.shape.closed);  // default on
   CHECK(c.shape.centre == core::Vec2(0.0, 0.0));
-  REQUIRE(c.shape.curve != nullptr);
-  CHECK(c.shape.curve->closed());
+  REQUIRE(compiled_from_shape(c));
+  CHECK(c.curve().closed());
   check_rest_unchanged(c);
 
-  const core::Command open = set_command(
+  const core::CompiledCommand open = set_command(
       "shape parametric x=\"8*s - 4\" y=0 closed=off cx=2 cy=3", SetCommand::What::Shape);
   CHECK_FALSE(open.shape.closed);
   CHECK(open.shape.centre == core::Vec2(2.0, 3.0));
-  REQUIRE(open.shape.curve != nullptr);
-  CHECK_FALSE(open.shape.curve->closed());
-  CHECK(open.shape.curve->length() == Approx(8.0).epsilon(1e-9));
+  REQUIRE(compiled_from_shape(open));
+  CHECK_FALSE(open.curve().closed());
+  CHECK(open.curve().length() == Approx(8.0).epsilon(1e-9));
 }
 
 TEST_CASE("shape implicit", "[supervisor][parser]") {
-  const core::Command c =
+  const core::CompiledCommand c =
       set_command("shape implicit f=\"x^2/16 + y^2/4 - 1\" cy=2", SetCommand::What::Shape);
   CHECK(c.shape.kind == core::ShapeKind::Implicit);
   CHECK(c.shape.f_expr == "x^2/16 + y^2/4 - 1");
   CHECK(c.shape.centre == core::Vec2(0.0, 2.0));
-  REQUIRE(c.shape.curve != nullptr);
-  const core::Vec2 p = core::target_point(c.shape, core::Vec2(9.0, 2.0));
+  REQUIRE(compiled_from_shape(c));
+  const core::Vec2 p = core::target_point(c.shape, c.curve(), core::Vec2(9.0, 2.0));
   CHECK(p.x() == Approx(4.0).epsilon(1e-6));
   CHECK(p.y() == Approx(2.0).epsilon(1e-6));
   check_rest_unchanged(c);
 }
 
 TEST_CASE("shape polygon", "[supervisor][parser]") {
-  const core::Command c = set_command("shape polygon points=\"-4,-3; 4,-3; 4,2; 0,5; -4,2\"",
+  const core::CompiledCommand c = set_command("shape polygon points=\"-4,-3; 4,-3; 4,2; 0,5; -4,2\"",
                                       SetCommand::What::Shape);
   CHECK(c.shape.kind == core::ShapeKind::Polygon);
   CHECK(c.shape.vertices == std::vector<core::Vec2>{core::Vec2(-4, -3), core::Vec2(4, -3),
                                                     core::Vec2(4, 2), core::Vec2(0, 5),
                                                     core::Vec2(-4, 2)});
   CHECK(c.shape.closed);
-  REQUIRE(c.shape.curve != nullptr);
-  CHECK(c.shape.curve->length() == Approx(8 + 5 + 5 + 5 + 5));
+  REQUIRE(compiled_from_shape(c));
+  CHECK(c.curve().length() == Approx(8 + 5 + 5 + 5 + 5));
   check_rest_unchanged(c);
 
-  const core::Command open =
+  const core::CompiledCommand open =
       set_command("shape polygon points=0,0;4,0;4,4 closed=off cx=1", SetCommand::What::Shape);
   CHECK_FALSE(open.shape.closed);
   CHECK(open.shape.vertices.size() == 3u);
   CHECK(open.shape.centre == core::Vec2(1.0, 0.0));
-  REQUIRE(open.shape.curve != nullptr);
-  CHECK(open.shape.curve->length() == Approx(8.0));
+  REQUIRE(compiled_from_shape(open));
+  CHECK(open.curve().length() == Approx(8.0));
   // Two points make an open polygon (a segment).
   CHECK(set_command("shape polygon points=0,0;1,0 closed=off", SetCommand::What::Shape)
             .shape.vertices.size() == 2u);
@@ -222,19 +228,19 @@ TEST_CASE("every shape takes rot (degrees) and scale", "[supervisor][parser]") {
                                  "shape parametric x=cos(2*pi*s) y=sin(2*pi*s)",
                                  "shape implicit f=x^2+y^2-1", "shape polygon points=0,0;1,0;0,1"}) {
     INFO(base);
-    const core::Command c = set_command(base + " rot=90 scale=2.5", SetCommand::What::Shape);
+    const core::CompiledCommand c = set_command(base + " rot=90 scale=2.5", SetCommand::What::Shape);
     CHECK(c.shape.rotation == Approx(kPi / 2));
     CHECK(c.shape.rotation == 90.0 * (kPi / 180.0));  // the config loader's conversion, bit for bit
     CHECK(c.shape.scale == 2.5);
-    CHECK(c.shape.curve != nullptr);
-    const core::Command d = set_command(base, SetCommand::What::Shape);
+    CHECK(compiled_from_shape(c));
+    const core::CompiledCommand d = set_command(base, SetCommand::What::Shape);
     CHECK(d.shape.rotation == 0.0);  // defaults, not the current shape's
     CHECK(d.shape.scale == 1.0);
   }
   // The placement acts: an ellipse a=3 b=1 rotated by 90 degrees and doubled has its long axis on x2.
-  const core::Command e =
+  const core::CompiledCommand e =
       set_command("shape ellipse a=3 b=1 rot=90 scale=2 cx=1", SetCommand::What::Shape);
-  const core::Vec2 top = core::target_point(e.shape, core::Vec2(1.0, 20.0));
+  const core::Vec2 top = core::target_point(e.shape, e.curve(), core::Vec2(1.0, 20.0));
   CHECK(top.x() == Approx(1.0).margin(1e-9));
   CHECK(top.y() == Approx(6.0).epsilon(1e-9));
   CHECK(set_command("shape circle r=1 rot=-720.5", SetCommand::What::Shape).shape.rotation ==
@@ -242,7 +248,7 @@ TEST_CASE("every shape takes rot (degrees) and scale", "[supervisor][parser]") {
 }
 
 TEST_CASE("a new shape keeps nothing of the previous one", "[supervisor][parser]") {
-  core::Command cur = current_command();
+  core::CompiledCommand cur = current_command();
   cur.shape.kind = core::ShapeKind::Polar;
   cur.shape.r_expr = "3";
   cur.shape.rotation = 1.0;
@@ -256,8 +262,9 @@ TEST_CASE("a new shape keeps nothing of the previous one", "[supervisor][parser]
   CHECK(s.vertices.empty());
   CHECK(s.rotation == 0.0);
   CHECK(s.scale == 1.0);
-  REQUIRE(s.curve != nullptr);
-  CHECK(s.curve->length() == Approx(2 * 3.14159265358979323846 * 2));
+  const core::CompiledCommand& sc = std::get<SetCommand>(r.action).command;
+  REQUIRE(compiled_from_shape(sc));
+  CHECK(sc.curve().length() == Approx(2 * 3.14159265358979323846 * 2));
   // Tracking draws a plain circle too, freshly compiled.
   const ParseResult t = parse_command("track point at=0,0 r=1", cur);
   REQUIRE(t.ok());
@@ -265,8 +272,9 @@ TEST_CASE("a new shape keeps nothing of the previous one", "[supervisor][parser]
   CHECK(ts.kind == core::ShapeKind::Circle);
   CHECK(ts.scale == 1.0);
   CHECK(ts.rotation == 0.0);
-  REQUIRE(ts.curve != nullptr);
-  CHECK(ts.curve->length() == Approx(2 * 3.14159265358979323846));
+  const core::CompiledCommand& tc = std::get<SetCommand>(t.action).command;
+  REQUIRE(compiled_from_shape(tc));
+  CHECK(tc.curve().length() == Approx(2 * 3.14159265358979323846));
 }
 
 TEST_CASE("errors: shapes that do not compile", "[supervisor][parser]") {
@@ -327,7 +335,7 @@ TEST_CASE("errors: polygon points, closed, rot and scale", "[supervisor][parser]
 }
 
 TEST_CASE("law: paper and arc, the shape kept", "[supervisor][parser]") {
-  const core::Command a = set_command("law arc", SetCommand::What::Law);
+  const core::CompiledCommand a = set_command("law arc", SetCommand::What::Law);
   CHECK(a.law == core::Law::Arc);
   const core::ArcParams defaults;
   CHECK(a.arc.k_normal == defaults.k_normal);  // not given: the current values
@@ -336,7 +344,7 @@ TEST_CASE("law: paper and arc, the shape kept", "[supervisor][parser]") {
   check_shape_unchanged(a);
   check_rest_unchanged(a);
 
-  const core::Command b =
+  const core::CompiledCommand b =
       set_command("law arc spacing=2 k_tangent=0.5 k_normal=1", SetCommand::What::Law);
   CHECK(b.law == core::Law::Arc);
   CHECK(b.arc.k_normal == 1.0);
@@ -344,23 +352,22 @@ TEST_CASE("law: paper and arc, the shape kept", "[supervisor][parser]") {
   CHECK(b.arc.spacing == 2.0);
   check_shape_unchanged(b);
 
-  core::Command cur = current_command();
+  core::CompiledCommand cur = current_command();
   cur.law = core::Law::Arc;
   cur.arc = {0.25, 0.75, 3.0};
-  shapeform::shapes::compile(cur);
   const ParseResult r = parse_command("law arc k_normal=2", cur);
   REQUIRE(r.ok());
-  const core::Command c = std::get<SetCommand>(r.action).command;
+  const core::CompiledCommand c = std::get<SetCommand>(r.action).command;
   CHECK(c.arc.k_normal == 2.0);
   CHECK(c.arc.k_tangent == 0.75);
   CHECK(c.arc.spacing == 3.0);
-  CHECK(c.shape.curve == cur.shape.curve);  // the very same compiled shape
+  CHECK(&c.curve() == &cur.curve());  // the very same compiled shape
   const ParseResult p = parse_command("law paper", cur);
   REQUIRE(p.ok());
-  const core::Command d = std::get<SetCommand>(p.action).command;
+  const core::CompiledCommand d = std::get<SetCommand>(p.action).command;
   CHECK(d.law == core::Law::Paper);
   CHECK(d.arc.k_normal == 0.25);  // kept for a later `law arc`
-  CHECK(d.shape.curve == cur.shape.curve);
+  CHECK(&d.curve() == &cur.curve());
   CHECK(std::get<SetCommand>(p.action).what == SetCommand::What::Law);
 
   CHECK(set_command("law arc k_normal=10 k_tangent=1", SetCommand::What::Law).arc.k_normal == 10.0);
@@ -390,7 +397,7 @@ TEST_CASE("numbers: exponents, signs, hex; whitespace and quotes", "[supervisor]
 }
 
 TEST_CASE("track line", "[supervisor][parser]") {
-  const core::Command c =
+  const core::CompiledCommand c =
       set_command("track line from=1,2 vel=0.5,-0.25 r=2 ff=on", SetCommand::What::Track);
   CHECK(c.shape.kind == core::ShapeKind::Circle);
   CHECK(c.shape.r0 == 2.0);
@@ -409,7 +416,7 @@ TEST_CASE("track line", "[supervisor][parser]") {
 }
 
 TEST_CASE("track circle", "[supervisor][parser]") {
-  const core::Command c = set_command(
+  const core::CompiledCommand c = set_command(
       "track circle radius=6 period=200 r=3 cx=1 cy=-1 phase=0.5 ff=on", SetCommand::What::Track);
   CHECK(c.shape.kind == core::ShapeKind::Circle);
   CHECK(c.shape.r0 == 3.0);
@@ -426,7 +433,7 @@ TEST_CASE("track circle", "[supervisor][parser]") {
   CHECK(c.shape.centre.y() == Approx(-1.0 + 6.0 * std::sin(0.5)));
   check_rest_unchanged(c);
 
-  const core::Command d =
+  const core::CompiledCommand d =
       set_command("track circle r=1 period=50 radius=2", SetCommand::What::Track);
   CHECK(d.tracking.path.origin == core::Vec2(0.0, 0.0));
   CHECK(d.tracking.path.phase == 0.0);
@@ -436,7 +443,7 @@ TEST_CASE("track circle", "[supervisor][parser]") {
 }
 
 TEST_CASE("track point and track stop", "[supervisor][parser]") {
-  const core::Command c = set_command("track point at=3,-4 r=1.5", SetCommand::What::Track);
+  const core::CompiledCommand c = set_command("track point at=3,-4 r=1.5", SetCommand::What::Track);
   CHECK(c.shape.kind == core::ShapeKind::Circle);
   CHECK(c.shape.r0 == 1.5);
   CHECK(c.shape.centre == core::Vec2(3.0, -4.0));
@@ -451,7 +458,7 @@ TEST_CASE("track point and track stop", "[supervisor][parser]") {
 
 TEST_CASE("gains: given ones change, others keep current values", "[supervisor][parser]") {
   const core::Gains cur = current_command().gains;
-  const core::Command a = set_command("gains k1=0.2", SetCommand::What::Gains);
+  const core::CompiledCommand a = set_command("gains k1=0.2", SetCommand::What::Gains);
   CHECK(a.gains.k1 == 0.2);
   CHECK(a.gains.k2 == cur.k2);
   CHECK(a.gains.sigma == cur.sigma);
@@ -459,7 +466,7 @@ TEST_CASE("gains: given ones change, others keep current values", "[supervisor][
   CHECK(a.gains.r == cur.r);
   check_shape_unchanged(a);
 
-  const core::Command b =
+  const core::CompiledCommand b =
       set_command("gains r=0 beta=0 sigma=1 k2=3 k1=0", SetCommand::What::Gains);
   check_gains_equal(b.gains, core::Gains{0.0, 3.0, 1.0, 0.0, 0.0});
   CHECK(b.integrator == core::Integrator::RK4);
@@ -467,16 +474,16 @@ TEST_CASE("gains: given ones change, others keep current values", "[supervisor][
 }
 
 TEST_CASE("integrator and max_speed", "[supervisor][parser]") {
-  const core::Command a = set_command("integrator euler", SetCommand::What::Integrator);
+  const core::CompiledCommand a = set_command("integrator euler", SetCommand::What::Integrator);
   CHECK(a.integrator == core::Integrator::Euler);
   CHECK(a.dt == 0.5);  // kept
   check_shape_unchanged(a);
-  const core::Command b = set_command("integrator dt=0.25 rk4", SetCommand::What::Integrator);
+  const core::CompiledCommand b = set_command("integrator dt=0.25 rk4", SetCommand::What::Integrator);
   CHECK(b.integrator == core::Integrator::RK4);
   CHECK(b.dt == 0.25);
   CHECK(set_command("integrator euler dt=10", SetCommand::What::Integrator).dt == 10.0);
 
-  const core::Command c = set_command("max_speed 1.5", SetCommand::What::MaxSpeed);
+  const core::CompiledCommand c = set_command("max_speed 1.5", SetCommand::What::MaxSpeed);
   CHECK(c.max_speed == 1.5);
   check_shape_unchanged(c);
   CHECK(set_command("max_speed 0", SetCommand::What::MaxSpeed).max_speed == 0.0);
@@ -829,7 +836,7 @@ TEST_CASE("help examples parse", "[supervisor][parser][help]") {
                            "help track",
                            "quit",
                            "exit"}) {
-    const ParseResult r = parse_command(line, core::Command{});
+    const ParseResult r = parse_command(line, core::CompiledCommand{});
     INFO(line << ": " << r.error);
     CHECK(r.ok());
     CHECK_FALSE(std::holds_alternative<NoOp>(r.action));

@@ -1,0 +1,32 @@
+#pragma once
+/// A command ready to run: the plain Command and the curve compiled from its shape. A command is
+/// compiled once where it enters (config loader, console, command topic), never per step; copies
+/// share the immutable curve.
+#include <memory>
+
+#include "command.hpp"
+#include "curve.hpp"
+
+namespace shapeform::core {
+
+/// A Command (sent, saved and described as one) that also owns the curve of its shape, in the
+/// shape's local frame: on a copy the placement (centre, rotation, scale) and every field outside the
+/// shape may change and the curve stays right; a new shape is compiled anew (compile,
+/// shapes::compile).
+class CompiledCommand : public Command {
+ public:
+  /// The default Command (the paper's circle), compiled.
+  CompiledCommand();
+  /// cmd with `curve`, the curve compiled from cmd.shape. Throws std::invalid_argument when null.
+  CompiledCommand(Command cmd, std::shared_ptr<const Curve> curve);
+  const Curve& curve() const { return *curve_; }
+
+ private:
+  std::shared_ptr<const Curve> curve_;
+};
+
+/// cmd with the curve of its analytic shape or polygon (make_curve). Throws ShapeError for the
+/// expression kinds (shapes::compile builds every kind) and for bad parameters.
+CompiledCommand compile(const Command& cmd);
+
+}  // namespace shapeform::core
