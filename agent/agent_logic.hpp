@@ -1,22 +1,18 @@
 #pragma once
 /// The agent's behaviour without DDS or clocks: a latest-per-agent neighbour table, the command and
-/// tracking target in force, and one core::agent_step per tick. agent/main.cpp only wires DDS to it.
+/// tracking target in force, and one core::agent_step per tick. agent_node.cpp only wires DDS to it.
 #include <cstdint>
 #include <optional>
 #include <unordered_map>
 #include <vector>
 
 #include "core/compiled_command.hpp"
+#include "dds/samples.hpp"
 
 namespace shapeform::agent {
 
 /// The latest tracking target heard: the centre C and its velocity at the supervisor's model time.
-struct TargetSample {
-  std::uint32_t epoch = 0;
-  double model_time = 0.0;
-  core::Vec2 centre = core::Vec2::Zero();
-  core::Vec2 velocity = core::Vec2::Zero();
-};
+using TargetSample = dds::TargetSample;
 
 struct AgentCounters {
   std::uint64_t samples_received = 0;  ///< neighbour states accepted

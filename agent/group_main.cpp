@@ -1,14 +1,14 @@
 // shapeform_agent_group: several agents in one process (like a ROS 2 component container). Same loop,
 // same AgentLogic, same topics as shapeform_agent; one participant instead of one per agent, so a host
 // carries far fewer DDS deliveries (see docs/BENCHMARKS.md).
-#include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cstdio>
 #include <iostream>
 #include <set>
 
 #include "agent_logic.hpp"
 #include "agent_node.hpp"
-#include "config/config.hpp"
+#include "util/app.hpp"
 
 namespace {
 
@@ -52,36 +52,26 @@ bool parse_ids(const std::string& text, std::vector<std::int32_t>& ids, std::str
 
 int main(int argc, char** argv) {
   using namespace shapeform;
-  CLI::App app{"shapeform_agent_group: several agents in one process; each follows the supervisor's commands over DDS."};
-  std::string ids_text, config_path;
-  std::vector<std::string> sets;
-  int domain = -1;
-  std::string seed;
-  app.add_option("--ids", ids_text, "agent ids hosted here: 0-49, or 0,3,5, or 0-9,20-29 (unique in the swarm)")
+  util::App app("shapeform_agent_group",
+                "shapeform_agent_group: several agents in one process; each follows the supervisor's commands over DDS.");
+  std::string ids_text, seed;
+  agent::AgentOptions opt;
+  app.cli()
+      .add_option("--ids", ids_text, "agent ids hosted here: 0-49, or 0,3,5, or 0-9,20-29 (unique in the swarm)")
       ->required();
-  app.add_option("--config", config_path, "YAML config (default: built-in defaults)");
-  app.add_option("--domain", domain, "DDS domain id 0..232 (overrides transport.domain)");
-  app.add_option("--seed", seed, "seeded start: agent i starts at position i of the uniform start of swarm.agents");
-  app.add_option("--set", sets, "override any config key: dotted.key=value (repeatable)");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);
-    std::cerr << "shapeform_agent_group: " << e.what() << '\n';
-    return 2;
-  }
+  app.add_config_options();
+  app.cli().add_option("--seed", seed,
+                       "seeded start: agent i starts at position i of the uniform start of swarm.agents");
+  app.cli().add_flag("--json", opt.json, "machine output: JSON lines on stdout (status, command, rejected)");
+  if (const auto rc = app.parse(argc, argv)) return *rc;
   std::vector<std::int32_t> ids;
   std::string error;
-  if (!parse_ids(ids_text, ids, error)) {
-    std::cerr << "shapeform_agent_group: --ids: " << error << '\n';
-    return 2;
-  }
-  const auto cfg = agent::load_config("shapeform_agent_group", config_path, sets,
-                                      app.count("--domain") ? std::optional<int>(domain) : std::nullopt,
-                                      app.count("--seed") ? std::optional<std::string>(seed) : std::nullopt);
-  if (!cfg) return 2;
+  if (!parse_ids(ids_text, ids, error)) return app.usage_error("--ids: " + error);
+  const auto cfg = app.load_config(app.given("--seed") ? std::vector<std::string>{"swarm.seed=" + seed}
+                                                        : std::vector<std::string>{});
+  if (!cfg) return util::kExitUsage;
   std::vector<core::Vec2> starts;
   for (const auto id : ids)
     starts.push_back(agent::seeded_start(id, cfg->swarm.agents, cfg->swarm.seed, cfg->swarm.init_half_width));
-  return agent::run_agents(ids, starts, *cfg);
+  return agent::run_agents(ids, starts, *cfg, opt);
 }

@@ -8,8 +8,6 @@
 //
 // The participant comes from the project's one factory (dds::create_participant), so the transport
 // profile and the loopback rule are the agents' own.
-#include <CLI/CLI.hpp>
-
 #include <algorithm>
 #include <array>
 #include <cstdint>
@@ -31,11 +29,12 @@
 #include <fastdds/dds/topic/TypeSupport.hpp>
 #include <fastdds/dds/topic/qos/TopicQos.hpp>
 
-#include "config/config.hpp"
+#include "dds/convert.hpp"
 #include "dds/participant.hpp"
 #include "dds/topics.hpp"
 #include "shapeform/msg/AgentStatePubSubTypes.h"
 #include "shapeform/msg/AgentStatusPubSubTypes.h"
+#include "util/app.hpp"
 #include "util/log.hpp"
 #include "util/proc_stats.hpp"
 #include "util/rate_loop.hpp"
@@ -156,8 +155,8 @@ int run(std::int32_t id, const config::Config& cfg) {
     ages.reserve(kAgeCapacity);
     msg::AgentState out;
     out.id(id);
-    msg::AgentStatus st;
-    st.id(id);
+    sdds::StatusSample st;
+    st.id = id;
     std::uint64_t seq = 0, ticks = 0;
     while (loop.wait_next(util::stop_flag())) {
       out.seq(++seq);
@@ -167,19 +166,20 @@ int run(std::int32_t id, const config::Config& cfg) {
         const std::int64_t now = util::steady_ns();
         const auto snap = listener.snapshot(now, timeout_ns, ages);
         const util::LoopStats ls = loop.stats();
-        st.stamp_ns(now);
-        st.ticks(ls.ticks);
-        st.overruns(ls.overruns);
-        st.lateness_max_us(ls.lateness_max_us);
-        st.lateness_p99_us(ls.lateness_p99_us);
-        st.neighbours_heard(snap.heard);
-        st.samples_received(snap.received);
-        st.samples_lost(snap.lost);
-        st.age_p50_us(util::percentile(ages, 50).value_or(-1));
-        st.age_p99_us(util::percentile(ages, 99).value_or(-1));
-        st.cpu_percent(cpu.percent());
-        st.rss_mb(util::rss_mb());
-        status_writer->write(&st);
+        st.stamp_ns = now;
+        st.ticks = ls.ticks;
+        st.overruns = ls.overruns;
+        st.lateness_max_us = ls.lateness_max_us;
+        st.lateness_p99_us = ls.lateness_p99_us;
+        st.neighbours_heard = snap.heard;
+        st.samples_received = snap.received;
+        st.samples_lost = snap.lost;
+        st.age_p50_us = util::percentile(ages, 50).value_or(-1);
+        st.age_p99_us = util::percentile(ages, 99).value_or(-1);
+        st.cpu_percent = cpu.percent();
+        st.rss_mb = util::rss_mb();
+        msg::AgentStatus wire = sdds::to_msg(st);
+        status_writer->write(&wire);
       }
     }
     state_writer->dispose(&out, fdds::HANDLE_NIL);
@@ -197,33 +197,14 @@ int run(std::int32_t id, const config::Config& cfg) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"shapeform_bench_baseline: bare AgentState pub/sub at the agents' rate and transport (benchmark floor)."};
+  util::App app("shapeform_bench_baseline",
+                "shapeform_bench_baseline: bare AgentState pub/sub at the agents' rate and transport (benchmark floor).");
   int id = -1;
-  int domain = -1;
-  std::string config_path;
-  std::vector<std::string> sets;
-  app.add_option("--id", id, "process id, 0..9999 (unique in the run)")->required();
-  app.add_option("--config", config_path, "YAML config (agent.rate_hz, agent.status_rate_hz, transport.*)");
-  app.add_option("--domain", domain, "DDS domain id 0..232 (overrides transport.domain)");
-  app.add_option("--set", sets, "override any config key: dotted.key=value (repeatable)");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);
-    std::cerr << "shapeform_bench_baseline: " << e.what() << '\n';
-    return 2;
-  }
-  if (id < 0 || id > 9999) {
-    std::cerr << "shapeform_bench_baseline: --id must be in 0..9999, got " << id << '\n';
-    return 2;
-  }
-  if (app.count("--domain")) sets.push_back("transport.domain=" + std::to_string(domain));
-  config::Config cfg;
-  try {
-    cfg = config::load(config_path, sets);
-  } catch (const config::ConfigError& e) {
-    for (const auto& p : e.problems()) std::cerr << "shapeform_bench_baseline: " << p << '\n';
-    return 2;
-  }
-  return run(id, cfg);
+  app.cli().add_option("--id", id, "process id, 0..9999 (unique in the run)")->required();
+  app.add_config_options("YAML config (agent.rate_hz, agent.status_rate_hz, transport.*)");
+  if (const auto rc = app.parse(argc, argv)) return *rc;
+  if (id < 0 || id > 9999) return app.usage_error("--id must be in 0..9999, got " + std::to_string(id));
+  const auto cfg = app.load_config();
+  if (!cfg) return util::kExitUsage;
+  return run(id, *cfg);
 }

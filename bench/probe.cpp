@@ -5,19 +5,20 @@
 //                    neighbours_heard,stale_dropped,samples_rejected,samples_received,samples_lost,
 //                    age_p50_us,age_p99_us,cpu_percent,rss_mb,epoch
 //   DIR/metrics.csv  recv_ns,epoch,model_time,agents_alive,shape_error_mean,gap_cv,converged
+//                    (the metrics by their core::kMetricTable names; -1 = undefined)
 // Prints "ready <steady ns>" on stdout once its readers exist; runs until SIGINT/SIGTERM.
-#include <CLI/CLI.hpp>
-
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <string>
 #include <vector>
 
-#include "config/config.hpp"
+#include "core/metric_table.hpp"
+#include "dds/convert.hpp"
 #include "dds/node.hpp"
 #include "shapeform/msg/AgentStatus.h"
 #include "shapeform/msg/SwarmMetrics.h"
+#include "util/app.hpp"
 #include "util/log.hpp"
 #include "util/proc_stats.hpp"
 #include "util/rate_loop.hpp"
@@ -29,6 +30,10 @@ namespace dds = shapeform::dds;
 namespace msg = shapeform::msg;
 namespace util = shapeform::util;
 namespace config = shapeform::config;
+namespace core = shapeform::core;
+
+/// The metrics of metrics.csv (core::kMetricTable names), after recv_ns,epoch,model_time,agents_alive.
+constexpr const core::MetricInfo* kProbeMetrics[] = {&core::metric("shape_error_mean"), &core::metric("gap_cv")};
 
 int run(const config::Config& cfg, const std::filesystem::path& dir) {
   util::log_init("probe");
@@ -43,7 +48,9 @@ int run(const config::Config& cfg, const std::filesystem::path& dir) {
                "recv_ns,id,stamp_ns,ticks,overruns,lateness_max_us,lateness_p99_us,neighbours_heard,"
                "stale_dropped,samples_rejected,samples_received,samples_lost,age_p50_us,age_p99_us,"
                "cpu_percent,rss_mb,epoch\n");
-  std::fprintf(metrics_csv, "recv_ns,epoch,model_time,agents_alive,shape_error_mean,gap_cv,converged\n");
+  std::fprintf(metrics_csv, "recv_ns,epoch,model_time,agents_alive");
+  for (const auto* info : kProbeMetrics) std::fprintf(metrics_csv, ",%s", std::string(info->name).c_str());
+  std::fprintf(metrics_csv, ",converged\n");
   int status = 0;
   try {
     dds::Node node(cfg.transport, "shapeform_bench_probe");
@@ -72,9 +79,11 @@ int run(const config::Config& cfg, const std::filesystem::path& dir) {
       for (const auto& r : metrics) {
         if (!r.valid_data) continue;
         const auto& m = r.msg;
-        std::fprintf(metrics_csv, "%lld,%u,%.3f,%d,%.6f,%.6f,%d\n", static_cast<long long>(r.receive_stamp_ns),
-                     m.epoch(), m.model_time(), m.agents_alive(), m.shape_error_mean(), m.gap_cv(),
-                     m.converged() ? 1 : 0);
+        const core::Metrics values = dds::from_msg(m);
+        std::fprintf(metrics_csv, "%lld,%u,%.3f,%d", static_cast<long long>(r.receive_stamp_ns), m.epoch(),
+                     m.model_time(), m.agents_alive());
+        for (const auto* info : kProbeMetrics) std::fprintf(metrics_csv, ",%.6f", info->get(values).value_or(-1.0));
+        std::fprintf(metrics_csv, ",%d\n", m.converged() ? 1 : 0);
       }
       std::fflush(status_csv);
       std::fflush(metrics_csv);
@@ -93,34 +102,16 @@ int run(const config::Config& cfg, const std::filesystem::path& dir) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"shapeform_bench_probe: records AgentStatus and SwarmMetrics samples as CSV for benchmarks."};
-  int domain = -1;
-  std::string config_path, out;
-  std::vector<std::string> sets;
-  app.add_option("--out", out, "directory for status.csv and metrics.csv (created)")->required();
-  app.add_option("--config", config_path, "YAML config (transport.*)");
-  app.add_option("--domain", domain, "DDS domain id 0..232 (overrides transport.domain)");
-  app.add_option("--set", sets, "override any config key: dotted.key=value (repeatable)");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);
-    std::cerr << "shapeform_bench_probe: " << e.what() << '\n';
-    return 2;
-  }
-  if (app.count("--domain")) sets.push_back("transport.domain=" + std::to_string(domain));
-  config::Config cfg;
-  try {
-    cfg = config::load(config_path, sets);
-  } catch (const config::ConfigError& e) {
-    for (const auto& p : e.problems()) std::cerr << "shapeform_bench_probe: " << p << '\n';
-    return 2;
-  }
+  util::App app("shapeform_bench_probe",
+                "shapeform_bench_probe: records AgentStatus and SwarmMetrics samples as CSV for benchmarks.");
+  std::string out;
+  app.cli().add_option("--out", out, "directory for status.csv and metrics.csv (created)")->required();
+  app.add_config_options("YAML config (transport.*)");
+  if (const auto rc = app.parse(argc, argv)) return *rc;
+  const auto cfg = app.load_config();
+  if (!cfg) return util::kExitUsage;
   std::error_code ec;
   std::filesystem::create_directories(out, ec);
-  if (ec) {
-    std::cerr << "shapeform_bench_probe: --out: cannot create " << out << ": " << ec.message() << '\n';
-    return 2;
-  }
-  return run(cfg, out);
+  if (ec) return app.usage_error("--out: cannot create " + out + ": " + ec.message());
+  return run(*cfg, out);
 }

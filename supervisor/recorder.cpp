@@ -6,6 +6,8 @@
 #include <string>
 #include <system_error>
 
+#include "core/metric_table.hpp"
+
 namespace shapeform::supervisor {
 namespace {
 
@@ -23,15 +25,8 @@ void append(std::string& out, std::int64_t v) {
   out.append(buf, res.ptr);
 }
 
-void append(std::string& out, const std::optional<double>& v) {
-  if (v) append(out, *v);
-}
 
-void append(std::string& out, const std::optional<int>& v) {
-  if (v) append(out, static_cast<std::int64_t>(*v));
-}
-
-void open_file(std::ofstream& f, const std::filesystem::path& path, const char* header) {
+void open_file(std::ofstream& f, const std::filesystem::path& path, const std::string& header) {
   f.open(path, std::ios::out | std::ios::trunc);
   if (!f) throw std::runtime_error("cannot open " + path.string() + " for writing");
   f << header << '\n' << std::flush;  // a recording always has its header on disk
@@ -39,6 +34,12 @@ void open_file(std::ofstream& f, const std::filesystem::path& path, const char* 
 }
 
 }  // namespace
+
+std::string metrics_header() {
+  std::string h = "wall_s,model_time,epoch,agents_alive";
+  for (const core::MetricInfo& info : core::kMetricTable) (h += ',') += info.name;
+  return h + ",converged";
+}
 
 Recorder::Recorder(double flush_s) {
   if (!std::isfinite(flush_s) || !(flush_s > 0.0)) {
@@ -61,7 +62,7 @@ void Recorder::open(const std::filesystem::path& dir) {
   }
   // The new files first: if they cannot be made, a recording in progress goes on untouched.
   std::ofstream metrics, positions;
-  open_file(metrics, dir / "metrics.csv", kMetricsHeader);
+  open_file(metrics, dir / "metrics.csv", metrics_header());
   open_file(positions, dir / "positions.csv", kPositionsHeader);
   close();
   metrics_ = std::move(metrics);
@@ -74,7 +75,6 @@ void Recorder::open(const std::filesystem::path& dir) {
 
 void Recorder::write_metrics(const MetricsRow& row) {
   if (!open_) return;
-  const core::Metrics& m = row.metrics;
   std::string line;
   line.reserve(192);
   append(line, row.wall_s);
@@ -84,17 +84,12 @@ void Recorder::write_metrics(const MetricsRow& row) {
   append(line, row.epoch);
   line += ',';
   append(line, static_cast<std::int64_t>(row.agents_alive));
-  for (const std::optional<double>* v :
-       {&m.shape_error_mean, &m.shape_error_max, &m.gap_cv, &m.nn_cv, &m.min_separation}) {
+  for (const core::MetricInfo& info : core::kMetricTable) {
     line += ',';
-    append(line, *v);
-  }
-  line += ',';
-  append(line, m.clusters);
-  for (const std::optional<double>* v : {&m.extent, &m.centroid_error, &m.ring_error, &m.curve_error_mean,
-                                         &m.curve_error_max, &m.arc_gap_cv}) {
-    line += ',';
-    append(line, *v);
+    if (const auto v = info.get(row.metrics)) {
+      if (info.count) append(line, static_cast<std::int64_t>(std::llround(*v)));
+      else append(line, *v);
+    }
   }
   line += row.converged ? ",1\n" : ",0\n";
   metrics_ << line;

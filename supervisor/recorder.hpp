@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <optional>
+#include <string>
 
 #include "core/metrics.hpp"
 
@@ -22,11 +23,9 @@ struct MetricsRow {
   bool converged = false;  ///< written as 0 / 1
 };
 
-/// Header line of metrics.csv (without the newline).
-inline constexpr const char* kMetricsHeader =
-    "wall_s,model_time,epoch,agents_alive,shape_error_mean,shape_error_max,gap_cv,nn_cv,"
-    "min_separation,clusters,extent,centroid_error,ring_error,curve_error_mean,curve_error_max,"
-    "arc_gap_cv,converged";
+/// Header line of metrics.csv (without the newline): wall_s,model_time,epoch,agents_alive, the
+/// names of core::kMetricTable, converged.
+std::string metrics_header();
 /// Header line of positions.csv (without the newline). The simulator writes the last four columns.
 inline constexpr const char* kPositionsHeader = "wall_s,model_time,step,agent,x1,x2";
 

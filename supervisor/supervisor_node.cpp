@@ -1,5 +1,6 @@
 // DDS wiring of the supervisor: one fixed-rate loop that drains agent states, publishes the tracking
 // target, computes/publishes/records metrics, and runs console and script commands between ticks.
+// What it prints is composed in presentation.cpp.
 #include "supervisor_node.hpp"
 
 #include <algorithm>
@@ -7,7 +8,7 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
-#include <sstream>
+#include <set>
 
 #include <nlohmann/json.hpp>
 
@@ -16,13 +17,8 @@
 #include "dds/convert.hpp"
 #include "dds/node.hpp"
 #include "dds/participant.hpp"
+#include "presentation.hpp"
 #include "recorder.hpp"
-#include "shapeform/msg/AgentState.h"
-#include "shapeform/msg/AgentStatus.h"
-#include "shapeform/msg/ShapeCommand.h"
-#include "shapeform/msg/SwarmMetrics.h"
-#include "shapeform/msg/TrackingTarget.h"
-#include "sim/simulation.hpp"
 #include "swarm_monitor.hpp"
 #include "util/log.hpp"
 #include "util/proc_stats.hpp"
@@ -33,44 +29,37 @@ namespace shapeform::supervisor {
 
 namespace {
 
-std::string fmt_opt(const std::optional<double>& v, const char* f = "%.4f") {
-  if (!v) return "-";
+/// Where the supervisor's output goes. Without --json: human text on stdout. With --json: the same
+/// text on stderr, and on stdout only JSON lines, one event each.
+class Output {
+ public:
+  explicit Output(bool json) : json_(json), human_(json ? std::cerr : std::cout) {}
+  bool json() const { return json_; }
+  std::ostream& human() { return human_; }
+  /// With --json, `j` with "event": name as one line on stdout.
+  void event(const char* name, nlohmann::json j) {
+    if (!json_) return;
+    j["event"] = name;
+    std::cout << j.dump() << std::endl;
+  }
+
+ private:
+  bool json_;
+  std::ostream& human_;
+};
+
+std::string fmt(double v, const char* f) {
   char b[32];
-  std::snprintf(b, sizeof b, f, *v);
+  std::snprintf(b, sizeof b, f, v);
   return b;
 }
 
-std::string describe_command(const core::CompiledCommand& c) {
-  std::ostringstream o;
-  const auto& s = c.shape;
-  o << core::to_string(s.kind);
-  switch (s.kind) {
-    case core::ShapeKind::Line: o << " m=" << s.m << " c=" << s.c; break;
-    case core::ShapeKind::Circle: o << " r=" << s.r0; break;
-    case core::ShapeKind::Ellipse: o << " a=" << s.a << " b=" << s.b; break;
-    case core::ShapeKind::Square: o << " a=" << s.a; break;
-    case core::ShapeKind::Polar: o << " r=\"" << s.r_expr << '"'; break;
-    case core::ShapeKind::Parametric:
-      o << " x=\"" << s.x_expr << "\" y=\"" << s.y_expr << '"' << (s.closed ? " closed" : " open");
-      break;
-    case core::ShapeKind::Implicit: o << " f=\"" << s.f_expr << '"'; break;
-    case core::ShapeKind::Polygon: o << " with " << s.vertices.size() << (s.closed ? " vertices, closed" : " vertices, open"); break;
-  }
-  if (s.rotation != 0.0) o << " rotated " << s.rotation * 180.0 / 3.14159265358979323846 << " deg";
-  if (s.scale != 1.0) o << " scaled " << s.scale;
-  if (c.tracking.enabled)
-    o << ", tracking on a " << core::to_string(c.tracking.path.kind) << " path"
-      << (c.tracking.feedforward ? " with feed-forward" : "");
-  else if (c.curve().closed())
-    o << " centre (" << s.centre.x() << ", " << s.centre.y() << ")";
-  if (c.law == core::Law::Arc) {
-    o << "; law arc k_normal=" << c.arc.k_normal << " k_tangent=" << c.arc.k_tangent;
-    if (s.kind == core::ShapeKind::Line) o << " spacing=" << c.arc.spacing;
-  }
-  o << "; k1=" << c.gains.k1 << " k2=" << c.gains.k2 << " sigma=" << c.gains.sigma << " beta=" << c.gains.beta
-    << " r=" << c.gains.r << ", " << core::to_string(c.integrator) << " dt=" << c.dt;
-  if (c.max_speed > 0) o << ", max_speed=" << c.max_speed;
-  return o.str();
+/// The name of a blocking action in the "wait" event.
+const char* wait_name(const Action& a) {
+  if (std::holds_alternative<WaitConverged>(a)) return "converged";
+  if (std::holds_alternative<WaitAgents>(a)) return "agents";
+  if (std::holds_alternative<WaitTime>(a)) return "time";
+  return "sleep";
 }
 
 /// The running supervisor. One thread of control; Fast DDS threads only fill reader mailboxes.
@@ -79,7 +68,7 @@ class Supervisor {
   Supervisor(const config::Config& cfg, const SupervisorOptions& opt)
       : cfg_(cfg),
         opt_(opt),
-        out_(opt.json ? std::cerr : std::cout),
+        out_(opt.json),
         // Agents publish once per period: never call one dead before it missed 3 periods.
         monitor_(static_cast<std::int64_t>(std::max(cfg.supervisor.agent_timeout_s, 3.0 / cfg.agent.rate_hz) * 1e9),
                  cfg.supervisor.converge, cfg.agent.lockstep),
@@ -89,6 +78,14 @@ class Supervisor {
   int run();
 
  private:
+  /// One period of the loop.
+  void tick(std::int64_t now, bool metrics_due) {
+    drain(now);
+    report_membership(now);
+    publish_target(now);
+    if (metrics_due) metrics_tick(now);
+    run_input(now);
+  }
   double model_time(std::int64_t now) const {
     if (epoch_ == 0) return 0.0;
     return static_cast<double>(now - epoch_start_ns_) * 1e-9 * cfg_.agent.rate_hz * current_.dt;
@@ -100,21 +97,27 @@ class Supervisor {
       if (const auto t = monitor_.min_following_model_time(now)) return *t;
     return model_time(now);
   }
+  /// Validates the whole --script before anything is sent; false (reported) on a bad line.
+  bool load_script();
+  void open_dds();
   void drain(std::int64_t now);
+  /// --json: an "agent" event for every agent that became alive or stopped being alive.
+  void report_membership(std::int64_t now);
   void publish_target(std::int64_t now);
   void metrics_tick(std::int64_t now);
   void publish_command(const core::CompiledCommand& cmd, std::int64_t now);
   /// Runs input lines until one blocks (wait, sleep) or none is available.
   void run_input(std::int64_t now);
-  /// Executes one parsed action; returns false when it blocks.
+  /// Executes one parsed action; a blocking one becomes pending_.
   void execute(const Action& a, std::int64_t now);
-  bool pending_done(std::int64_t now);
-  void print_summary(std::int64_t now);
-  void print_metrics_line(const SwarmMonitor::Sample& s);
+  /// The pending action's outcome: nullopt while it blocks, else whether it succeeded (false: timed out).
+  std::optional<bool> wait_outcome(const Action& a, std::int64_t now);
+  void start_recording(const std::string& dir);
+  Summary summary(std::int64_t now) const;
 
   const config::Config& cfg_;
   SupervisorOptions opt_;
-  std::ostream& out_;
+  Output out_;
   SwarmMonitor monitor_;
   Recorder recorder_;
   core::CompiledCommand current_;  ///< the command in force (or the config's, before any)
@@ -132,6 +135,7 @@ class Supervisor {
   std::vector<dds::Received<msg::AgentStatus>> statuses_;
   std::uint64_t rejected_ = 0;
   util::ThrottledLog throttled_{5.0};
+  std::set<std::int32_t> alive_ids_;  ///< --json: the agents reported alive
 
   std::unique_ptr<ScriptSource> script_;
   std::unique_ptr<ConsoleInput> console_;
@@ -140,52 +144,56 @@ class Supervisor {
   bool quit_ = false;
   int exit_status_ = kExitOk;
   std::int64_t last_progress_ns_ = 0;
-  std::uint64_t metrics_ticks_ = 0;
 };
 
 void Supervisor::drain(std::int64_t now) {
   state_reader_.drain(states_);
-  for (const auto& s : states_) {
-    if (!s.valid_data) {
+  for (const auto& r : states_) {
+    if (!r.valid_data) {
       // Disposed, or its writer left (its dispose, best effort, may be lost) while it was still heard:
       // a clean exit, logged once. A writer leaving after the agent fell silent (a lease expiring after
       // a kill) changes nothing: that agent is shown dead already.
-      const auto it = monitor_.agents().find(s.key_id);
-      if (s.instance != dds::InstanceState::Alive && it != monitor_.agents().end() && monitor_.alive(it->second, now)) {
-        monitor_.on_departed(s.key_id);
-        util::log_info("agent " + std::to_string(s.key_id) + " left");
+      const auto it = monitor_.agents().find(r.key_id);
+      if (r.instance != dds::InstanceState::Alive && it != monitor_.agents().end() && monitor_.alive(it->second, now)) {
+        monitor_.on_departed(r.key_id);
+        util::log_info("agent " + std::to_string(r.key_id) + " left");
       }
       continue;
     }
+    dds::StateSample s;
     std::string why;
-    if (!dds::valid_state(s.msg, why)) {
+    if (!dds::from_msg(r.msg, s, why)) {
       ++rejected_;
       throttled_.warn("state", "agent state rejected: " + why);
       continue;
     }
-    monitor_.on_state(s.msg.id(), core::Vec2(s.msg.x(), s.msg.y()), core::Vec2(s.msg.prev_x(), s.msg.prev_y()),
-                      s.msg.epoch(), s.msg.model_time(), now);
+    monitor_.on_state(s.id, s.x, s.prev_x, s.epoch, s.model_time, now);
   }
   status_reader_.drain(statuses_);
-  for (const auto& s : statuses_)
-    if (s.valid_data && s.msg.id() >= 0)
-      monitor_.on_status(s.msg.id(), s.msg.neighbours_heard(), s.msg.samples_rejected());
+  for (const auto& r : statuses_) {
+    dds::StatusSample s;
+    std::string why;
+    if (r.valid_data && dds::from_msg(r.msg, s, why)) monitor_.on_status(s.id, s.neighbours_heard, s.samples_rejected);
+  }
+}
+
+void Supervisor::report_membership(std::int64_t now) {
+  if (!out_.json()) return;
+  std::set<std::int32_t> alive;
+  for (const auto& [id, a] : monitor_.agents())
+    if (monitor_.alive(a, now)) alive.insert(id);
+  for (const auto id : alive)
+    if (!alive_ids_.count(id)) out_.event("agent", {{"id", id}, {"change", "joined"}});
+  for (const auto id : alive_ids_)
+    if (!alive.count(id)) out_.event("agent", {{"id", id}, {"change", "left"}});
+  alive_ids_.swap(alive);
 }
 
 void Supervisor::publish_target(std::int64_t now) {
   if (epoch_ == 0 || !current_.tracking.enabled) return;
   const double t = model_time(now);
-  const core::Vec2 c = core::centre_at(current_.tracking.path, t);
-  const core::Vec2 v = core::centre_velocity(current_.tracking.path, t);
-  msg::TrackingTarget m;
-  m.epoch(epoch_);
-  m.model_time(t);
-  m.cx(c.x());
-  m.cy(c.y());
-  m.vx(v.x());
-  m.vy(v.y());
-  m.stamp_ns(now);
-  target_writer_.write(m);
+  target_writer_.write(dds::to_msg(dds::TargetSample{epoch_, t, core::centre_at(current_.tracking.path, t),
+                                                     core::centre_velocity(current_.tracking.path, t), now}));
 }
 
 void Supervisor::publish_command(const core::CompiledCommand& cmd, std::int64_t now) {
@@ -195,21 +203,11 @@ void Supervisor::publish_command(const core::CompiledCommand& cmd, std::int64_t 
   epoch_start_ns_ = now;
   monitor_.set_command(cmd, epoch_, now);
   if (!command_writer_.write(dds::to_msg(cmd, epoch_))) util::log_warn("command write failed");
-  out_ << "epoch " << epoch_ << ": " << describe_command(cmd) << std::endl;
-}
-
-void Supervisor::print_metrics_line(const SwarmMonitor::Sample& s) {
-  const core::Metrics& m = s.metrics;
-  std::ostringstream o;
-  o << "t=" << fmt_opt(s.model_time, "%.0f") << " agents=" << s.alive << " following=" << s.following
-    << " shape_error=" << fmt_opt(m.shape_error_mean) << " max=" << fmt_opt(m.shape_error_max)
-    << " gap_cv=" << fmt_opt(m.gap_cv) << " min_sep=" << fmt_opt(m.min_separation)
-    << " clusters=" << (m.clusters ? std::to_string(*m.clusters) : "-");
-  if (m.centroid_error) o << " centroid_error=" << fmt_opt(m.centroid_error) << " ring_error=" << fmt_opt(m.ring_error);
-  if (current_.law == core::Law::Arc || !m.shape_error_mean || m.curve_error_mean != m.shape_error_mean)
-    o << " curve_error=" << fmt_opt(m.curve_error_mean, "%.2e") << " arc_gap_cv=" << fmt_opt(m.arc_gap_cv, "%.2e");
-  o << (s.converged ? " converged" : "");
-  util::log_info(o.str());
+  out_.human() << "epoch " << epoch_ << ": " << describe_command(cmd) << std::endl;
+  out_.event("epoch", {{"epoch", epoch_},
+                       {"shape", std::string(core::to_string(cmd.shape.kind))},
+                       {"law", std::string(core::to_string(cmd.law))},
+                       {"tracking", cmd.tracking.enabled}});
 }
 
 void Supervisor::metrics_tick(std::int64_t now) {
@@ -229,58 +227,57 @@ void Supervisor::metrics_tick(std::int64_t now) {
   }
   if (now - last_progress_ns_ >= 1'000'000'000LL) {
     last_progress_ns_ = now;
-    print_metrics_line(s);
+    util::log_info(progress_line(s, current_));
   }
 }
 
-bool Supervisor::pending_done(std::int64_t now) {
-  if (!pending_) return true;
+std::optional<bool> Supervisor::wait_outcome(const Action& a, std::int64_t now) {
+  std::ostream& out = out_.human();
   const bool timed_out = now >= pending_deadline_ns_;
-  if (const auto* w = std::get_if<WaitConverged>(&*pending_)) {
+  if (const auto* w = std::get_if<WaitConverged>(&a)) {
     if (epoch_ != 0 && monitor_.converged()) {
-      out_ << "converged at t=" << fmt_opt(model_time(now), "%.0f") << " ("
-           << fmt_opt(static_cast<double>(now - epoch_start_ns_) * 1e-9, "%.1f") << " s after epoch " << epoch_ << ")"
-           << std::endl;
+      out << "converged at t=" << fmt(model_time(now), "%.0f") << " ("
+          << fmt(static_cast<double>(now - epoch_start_ns_) * 1e-9, "%.1f") << " s after epoch " << epoch_ << ")"
+          << std::endl;
       return true;
     }
-    if (timed_out) {
-      out_ << "wait converged: timed out after " << w->timeout_s << " s" << std::endl;
-      util::log_warn("wait converged timed out after " + fmt_opt(w->timeout_s, "%g") + " s");
-      exit_status_ = kExitWaitTimedOut;
-      return true;
-    }
+    if (!timed_out) return std::nullopt;
+    out << "wait converged: timed out after " << w->timeout_s << " s" << std::endl;
+    util::log_warn("wait converged timed out after " + fmt(w->timeout_s, "%g") + " s");
+    exit_status_ = kExitWaitTimedOut;
     return false;
   }
-  if (const auto* w = std::get_if<WaitAgents>(&*pending_)) {
+  if (const auto* w = std::get_if<WaitAgents>(&a)) {
     // N agents alive, and each hears the others (its status says so): a command sent before discovery
     // completes would be followed by agents that do not yet know all their neighbours.
     const int n = monitor_.alive_count(now);
     if (n >= w->count && monitor_.all_hear(w->count - 1, now)) {
-      out_ << "agents: " << n << " alive, each hearing " << w->count - 1 << " or more" << std::endl;
+      out << "agents: " << n << " alive, each hearing " << w->count - 1 << " or more" << std::endl;
       return true;
     }
-    if (timed_out) {
-      out_ << "wait agents: timed out after " << w->timeout_s << " s with " << n << " of " << w->count << " agents"
-           << std::endl;
-      util::log_warn("wait agents timed out with " + std::to_string(n) + " of " + std::to_string(w->count));
-      exit_status_ = kExitWaitTimedOut;
-      return true;
-    }
+    if (!timed_out) return std::nullopt;
+    out << "wait agents: timed out after " << w->timeout_s << " s with " << n << " of " << w->count << " agents"
+        << std::endl;
+    util::log_warn("wait agents timed out with " + std::to_string(n) + " of " + std::to_string(w->count));
+    exit_status_ = kExitWaitTimedOut;
     return false;
   }
-  if (const auto* w = std::get_if<WaitTime>(&*pending_)) {
+  if (const auto* w = std::get_if<WaitTime>(&a)) {
     // Done when every agent on the current command has done T of model time by its own count (a
     // loaded agent skips ticks, a lockstep agent waits for the others: wall time is not enough).
     const auto t = monitor_.min_following_model_time(now);
     if (t && monitor_.following_count(now) == monitor_.alive_count(now) && *t >= w->model_time - 1e-9) return true;
-    if (timed_out) {
-      out_ << "wait time: timed out after " << w->timeout_s << " s" << std::endl;
-      exit_status_ = kExitWaitTimedOut;
-      return true;
-    }
+    if (!timed_out) return std::nullopt;
+    out << "wait time: timed out after " << w->timeout_s << " s" << std::endl;
+    exit_status_ = kExitWaitTimedOut;
     return false;
   }
-  return timed_out;  // Sleep
+  return timed_out ? std::optional<bool>(true) : std::nullopt;  // Sleep
+}
+
+void Supervisor::start_recording(const std::string& dir) {
+  recorder_.open(dir);  // closes the current recording only once the new one is open
+  out_.event("record", {{"dir", dir}, {"open", true}});
 }
 
 void Supervisor::execute(const Action& a, std::int64_t now) {
@@ -289,6 +286,7 @@ void Supervisor::execute(const Action& a, std::int64_t now) {
     // Capped at 10^9 s (32 years), so that any accepted number of seconds stays inside int64 ns.
     pending_deadline_ns_ = now + static_cast<std::int64_t>(std::min(seconds, 1e9) * 1e9);
   };
+  std::ostream& out = out_.human();
   std::visit(
       [&](const auto& act) {
         using T = std::decay_t<decltype(act)>;
@@ -302,34 +300,35 @@ void Supervisor::execute(const Action& a, std::int64_t now) {
           c.tracking.enabled = false;
           publish_command(c, now);
         } else if constexpr (std::is_same_v<T, Status>) {
-          out_ << monitor_.status_table(now, model_time(now)) << std::flush;
+          const double t = model_time(now);
+          const auto rows = agent_rows(monitor_, now, t);
+          out << status_table(rows) << std::flush;
+          out_.event("status", status_json(rows, epoch_, t));
         } else if constexpr (std::is_same_v<T, ShowMetrics>) {
-          const auto s = monitor_.measure(metrics_time(now), now);  // a query: the detector sees only the metrics ticks
-          nlohmann::json j = sim::metrics_json(s.metrics);
-          j["epoch"] = epoch_;
-          j["model_time"] = s.model_time;
-          j["converged"] = s.converged;
-          out_ << j.dump() << std::endl;
-        } else if constexpr (std::is_same_v<T, WaitConverged>) {
-          block(act.timeout_s);
-        } else if constexpr (std::is_same_v<T, WaitAgents>) {
-          block(act.timeout_s);
-        } else if constexpr (std::is_same_v<T, WaitTime>) {
+          // A query: the detector sees only the metrics ticks.
+          const nlohmann::json j = metrics_answer(monitor_.measure(metrics_time(now), now), epoch_);
+          out << j.dump() << std::endl;
+          out_.event("metrics", j);
+        } else if constexpr (std::is_same_v<T, WaitConverged> || std::is_same_v<T, WaitAgents> ||
+                             std::is_same_v<T, WaitTime>) {
           block(act.timeout_s);
         } else if constexpr (std::is_same_v<T, Sleep>) {
           block(act.seconds);
         } else if constexpr (std::is_same_v<T, RecordStart>) {
           try {
-            recorder_.open(act.dir);  // closes the current recording only once the new one is open
-            out_ << "recording into " << act.dir << std::endl;
+            start_recording(act.dir);
+            out << "recording into " << act.dir << std::endl;
           } catch (const std::exception& e) {
             std::cerr << "record start: " << e.what() << std::endl;
           }
         } else if constexpr (std::is_same_v<T, RecordStop>) {
-          if (recorder_.is_open()) out_ << "recording stopped: " << recorder_.dir().string() << std::endl;
+          if (recorder_.is_open()) {
+            out << "recording stopped: " << recorder_.dir().string() << std::endl;
+            out_.event("record", {{"dir", recorder_.dir().string()}, {"open", false}});
+          }
           recorder_.close();
         } else if constexpr (std::is_same_v<T, Help>) {
-          out_ << help_text(act.topic) << std::flush;
+          out << help_text(act.topic) << std::flush;
         } else if constexpr (std::is_same_v<T, Quit>) {
           quit_ = true;
         }
@@ -340,7 +339,12 @@ void Supervisor::execute(const Action& a, std::int64_t now) {
 void Supervisor::run_input(std::int64_t now) {
   while (!quit_) {
     if (pending_) {
-      if (!pending_done(now)) return;
+      const std::optional<bool> ok = wait_outcome(*pending_, now);
+      if (!ok) return;
+      out_.event("wait", {{"wait", wait_name(*pending_)},
+                          {"ok", *ok},
+                          {"model_time", metrics_time(now)},
+                          {"alive", monitor_.alive_count(now)}});
       pending_.reset();
     }
     LineSource* src = nullptr;
@@ -358,96 +362,70 @@ void Supervisor::run_input(std::int64_t now) {
   }
 }
 
-void Supervisor::print_summary(std::int64_t now) {
-  const double t = metrics_time(now);
-  const SwarmMonitor::Sample s = monitor_.measure(t, now);
-  nlohmann::json j = sim::metrics_json(s.metrics);
-  j["name"] = cfg_.name;
-  j["shape"] = std::string(core::to_string(current_.shape.kind));
-  j["law"] = std::string(core::to_string(current_.law));
-  j["tracking"] = current_.tracking.enabled;
-  j["epoch"] = epoch_;
-  j["model_time"] = t;
-  j["dt"] = current_.dt;
-  j["steps"] = static_cast<long>(std::llround(t / current_.dt));
-  j["agents_seen"] = monitor_.agents().size();
-  j["converged"] = s.converged;
+Summary Supervisor::summary(std::int64_t now) const {
+  Summary s;
+  s.name = cfg_.name;
+  s.command = current_;
+  s.epoch = epoch_;
+  s.sample = monitor_.measure(metrics_time(now), now);
+  s.agents_seen = monitor_.agents().size();
   const auto& cv = cfg_.supervisor.converge;
-  const auto settle = monitor_.settle_time({cv.band_abs, cv.band_rel, cv.gap_cv_max});
-  j["settle_step"] = settle ? nlohmann::json(std::llround(*settle / current_.dt)) : nlohmann::json(nullptr);
-  if (!current_.tracking.enabled) {
-    j.erase("centroid_error");
-    j.erase("ring_error");
+  s.settle_time = monitor_.settle_time({cv.band_abs, cv.band_rel, cv.gap_cv_max});
+  s.final_positions = monitor_.alive_positions(now);
+  for (const auto& [id, x] : s.final_positions) s.final_model_times.push_back(monitor_.agents().at(id).model_time);
+  s.samples_rejected = rejected_;
+  if (recorder_.is_open()) s.recording = recorder_.dir().string();
+  s.exit_status = exit_status_;
+  return s;
+}
+
+bool Supervisor::load_script() {
+  try {
+    ScriptSource check(opt_.script);
+    bool bad = false;
+    core::CompiledCommand c = cfg_.command;
+    while (auto line = check.poll()) {
+      const ParseResult r = parse_command(*line, c);
+      if (!r.ok()) {
+        std::cerr << with_location(check, r.error) << std::endl;
+        bad = true;
+      } else if (const auto* set = std::get_if<SetCommand>(&r.action)) {
+        c = set->command;
+      }
+    }
+    if (bad) return false;
+    script_ = std::make_unique<ScriptSource>(opt_.script);
+    return true;
+  } catch (const std::exception& e) {
+    std::cerr << "shapeform_supervisor: --script: " << e.what() << std::endl;
+    return false;
   }
-  auto& ids = j["final_ids"] = nlohmann::json::array();
-  auto& fp = j["final_positions"] = nlohmann::json::array();
-  auto& ft = j["final_model_times"] = nlohmann::json::array();  // each agent's own model time
-  for (const auto& [id, x] : monitor_.alive_positions(now)) {
-    ids.push_back(id);
-    fp.push_back({x.x(), x.y()});
-    ft.push_back(monitor_.agents().at(id).model_time);
-  }
-  j["samples_rejected"] = rejected_;
-  j["recording"] = recorder_.is_open() ? nlohmann::json(recorder_.dir().string()) : nlohmann::json(nullptr);
-  j["exit_status"] = exit_status_;
-  if (opt_.json) {
-    std::cout << j.dump() << std::endl;
-    return;
-  }
-  std::cout << "summary: epoch " << epoch_ << ", " << s.alive << " agents, t=" << fmt_opt(t, "%.0f")
-            << (s.converged ? ", converged" : ", not converged") << "\n  shape_error_mean="
-            << fmt_opt(s.metrics.shape_error_mean) << " shape_error_max=" << fmt_opt(s.metrics.shape_error_max)
-            << " gap_cv=" << fmt_opt(s.metrics.gap_cv) << " min_separation=" << fmt_opt(s.metrics.min_separation)
-            << " clusters=" << (s.metrics.clusters ? std::to_string(*s.metrics.clusters) : "-")
-            << " settle_step=" << (settle ? std::to_string(std::llround(*settle / current_.dt)) : "-");
-  std::cout << " curve_error_mean=" << fmt_opt(s.metrics.curve_error_mean, "%.3g")
-            << " arc_gap_cv=" << fmt_opt(s.metrics.arc_gap_cv, "%.3g");
-  if (s.metrics.centroid_error)
-    std::cout << " centroid_error=" << fmt_opt(s.metrics.centroid_error) << " ring_error=" << fmt_opt(s.metrics.ring_error);
-  std::cout << std::endl;
-  if (recorder_.is_open()) std::cout << "  recording: " << recorder_.dir().string() << std::endl;
+}
+
+void Supervisor::open_dds() {
+  node_ = std::make_unique<dds::Node>(cfg_.transport, "shapeform_supervisor");
+  command_writer_ = node_->writer<msg::ShapeCommand>(dds::TopicId::Command);
+  target_writer_ = node_->writer<msg::TrackingTarget>(dds::TopicId::Target);
+  metrics_writer_ = node_->writer<msg::SwarmMetrics>(dds::TopicId::Metrics);
+  state_reader_ = node_->reader<msg::AgentState>(dds::TopicId::State);
+  status_reader_ = node_->reader<msg::AgentStatus>(dds::TopicId::Status);
 }
 
 int Supervisor::run() {
   util::log_init("supervisor");
   util::install_stop_signals();
   // Validate the whole script before touching the swarm: a bad line is exit status 2, nothing sent.
-  if (!opt_.script.empty()) {
-    try {
-      ScriptSource check(opt_.script);
-      bool bad = false;
-      core::CompiledCommand c = cfg_.command;
-      while (auto line = check.poll()) {
-        const ParseResult r = parse_command(*line, c);
-        if (!r.ok()) {
-          std::cerr << with_location(check, r.error) << std::endl;
-          bad = true;
-        } else if (const auto* set = std::get_if<SetCommand>(&r.action)) {
-          c = set->command;
-        }
-      }
-      if (bad) return kExitBadInput;
-      script_ = std::make_unique<ScriptSource>(opt_.script);
-    } catch (const std::exception& e) {
-      std::cerr << "shapeform_supervisor: --script: " << e.what() << std::endl;
-      return kExitBadInput;
-    }
-  }
+  if (!opt_.script.empty() && !load_script()) return kExitBadInput;
   util::log_info(std::string("transport: ") + dds::describe(cfg_.transport));
   try {
-    node_ = std::make_unique<dds::Node>(cfg_.transport, "shapeform_supervisor");
-    command_writer_ = node_->writer<msg::ShapeCommand>(dds::TopicId::Command);
-    target_writer_ = node_->writer<msg::TrackingTarget>(dds::TopicId::Target);
-    metrics_writer_ = node_->writer<msg::SwarmMetrics>(dds::TopicId::Metrics);
-    state_reader_ = node_->reader<msg::AgentState>(dds::TopicId::State);
-    status_reader_ = node_->reader<msg::AgentStatus>(dds::TopicId::Status);
+    open_dds();
   } catch (const std::exception& e) {
     util::log_error(e.what());
     return kExitRuntime;
   }
   if (!opt_.record_dir.empty()) {
     try {
-      recorder_.open(opt_.record_dir);
+      start_recording(opt_.record_dir);
     } catch (const std::exception& e) {
       std::cerr << "shapeform_supervisor: --record: " << e.what() << std::endl;
       return kExitBadInput;
@@ -458,19 +436,16 @@ int Supervisor::run() {
   util::RateLoop loop(cfg_.supervisor.target_rate_hz);
   const auto metrics_every = std::max<std::uint64_t>(
       1, static_cast<std::uint64_t>(std::llround(cfg_.supervisor.target_rate_hz / cfg_.supervisor.metrics_rate_hz)));
-  std::uint64_t tick = 0;
-  while (!quit_ && loop.wait_next(util::stop_flag())) {
-    const std::int64_t now = util::steady_ns();
-    drain(now);
-    publish_target(now);
-    if (tick++ % metrics_every == 0) metrics_tick(now);
-    run_input(now);
+  for (std::uint64_t ticks = 0; !quit_ && loop.wait_next(util::stop_flag()); ++ticks) {
+    tick(util::steady_ns(), ticks % metrics_every == 0);
     const bool input_done = (!script_ || script_->eof()) && !pending_ && console_->eof();
     if (input_done && !recorder_.is_open()) break;
   }
   const std::int64_t now = util::steady_ns();
   drain(now);
-  print_summary(now);
+  const Summary s = summary(now);
+  if (opt_.json) std::cout << summary_json(s).dump() << std::endl;
+  else std::cout << summary_text(s) << std::flush;
   recorder_.close();
   console_.reset();
   return exit_status_;

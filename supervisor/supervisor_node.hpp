@@ -8,7 +8,9 @@ namespace shapeform::supervisor {
 struct SupervisorOptions {
   std::string script;      ///< run this script's lines first (validated up front)
   std::string record_dir;  ///< start recording here at once
-  bool json = false;       ///< summary as one JSON object on stdout
+  /// Machine output: stdout carries only JSON lines with an "event" key (epoch, wait, status, metrics,
+  /// agent, record, summary); the human text goes to stderr.
+  bool json = false;
 };
 
 /// Exit statuses.

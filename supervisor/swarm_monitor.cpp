@@ -125,27 +125,4 @@ std::optional<double> SwarmMonitor::settle_time(const core::SettleParams& p) con
   return hist_t_[static_cast<std::size_t>(*k)];
 }
 
-std::string SwarmMonitor::status_table(std::int64_t now_ns, double model_time) const {
-  std::ostringstream o;
-  char line[200];
-  std::snprintf(line, sizeof line, "%6s %-6s %10s %10s %10s %6s %11s %6s\n", "agent", "alive", "last_seen",
-                "x1", "x2", "epoch", "shape_error", "heard");
-  o << line;
-  const std::optional<core::ShapeSpec> shape =
-      command_ ? std::optional<core::ShapeSpec>(core::shape_at(*command_, model_time)) : std::nullopt;
-  for (const auto& [id, a] : agents_) {
-    const double ago = static_cast<double>(now_ns - a.last_seen_ns) * 1e-9;
-    const bool up = alive(a, now_ns);
-    char err[32] = "-";
-    if (shape && a.epoch == epoch_) std::snprintf(err, sizeof err, "%.4f", (a.x - core::target_point(*shape, command_->curve(), a.x)).norm());
-    char heard[16] = "-";
-    if (a.neighbours_heard) std::snprintf(heard, sizeof heard, "%d", *a.neighbours_heard);
-    std::snprintf(line, sizeof line, "%6d %-6s %9.2fs %10.4f %10.4f %6u %11s %6s\n", id,
-                  up ? "yes" : (a.departed ? "left" : "DEAD"), ago, a.x.x(), a.x.y(), a.epoch, err, heard);
-    o << line;
-  }
-  if (agents_.empty()) o << "(no agent heard yet)\n";
-  return o.str();
-}
-
 }  // namespace shapeform::supervisor

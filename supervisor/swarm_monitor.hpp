@@ -77,9 +77,6 @@ class SwarmMonitor {
   /// Model time at which the current epoch settled (core::settle_index over this epoch's samples).
   std::optional<double> settle_time(const core::SettleParams& p) const;
 
-  /// The console's `status` table: agent, alive, last seen, position, epoch followed, shape error.
-  std::string status_table(std::int64_t now_ns, double model_time) const;
-
  private:
   std::int64_t agent_timeout_ns_;
   core::ConvergenceDetector detector_;

@@ -4,8 +4,10 @@
 #include <limits>
 #include <optional>
 #include <sstream>
+#include <utility>
 #include <vector>
 
+#include "core/metric_table.hpp"
 #include "core/params.hpp"
 #include "shapes/shapes.hpp"
 
@@ -58,9 +60,11 @@ std::string accepted(const core::params::Name<E> (&table)[N]) {
   return " (" + core::params::join(core::params::names(table), "|") + ")";
 }
 
-std::optional<double> undefined_if_negative(double v) {
-  if (!std::isfinite(v) || v < 0.0) return std::nullopt;
-  return v;
+/// A received metric: negative (-1) or non-finite values are undefined.
+template <class Optional, class T>
+Optional defined_or_null(T v) {
+  if (!std::isfinite(static_cast<double>(v)) || v < 0) return std::nullopt;
+  return static_cast<typename Optional::value_type>(v);
 }
 
 }  // namespace
@@ -251,8 +255,97 @@ bool valid_state(const msg::AgentState& s, std::string& why) {
   return true;
 }
 
-double neighbour_arc(const msg::AgentState& s) {
-  return s.has_arc() ? s.arc() : std::numeric_limits<double>::quiet_NaN();
+msg::AgentState to_msg(const StateSample& s) {
+  msg::AgentState m;
+  m.id(s.id);
+  m.seq(s.seq);
+  m.stamp_ns(s.stamp_ns);
+  m.epoch(s.epoch);
+  m.model_time(s.model_time);
+  m.x(s.x.x());
+  m.y(s.x.y());
+  m.vx(s.v.x());
+  m.vy(s.v.y());
+  m.has_arc(s.arc.has_value());
+  m.arc(s.arc.value_or(0.0));
+  m.prev_x(s.prev_x.x());
+  m.prev_y(s.prev_x.y());
+  m.prev_arc(s.arc ? s.prev_arc.value_or(*s.arc) : 0.0);
+  return m;
+}
+
+bool from_msg(const msg::AgentState& m, StateSample& out, std::string& why) {
+  if (!valid_state(m, why)) return false;
+  out.id = m.id();
+  out.seq = m.seq();
+  out.stamp_ns = m.stamp_ns();
+  out.epoch = m.epoch();
+  out.model_time = m.model_time();
+  out.x = core::Vec2(m.x(), m.y());
+  out.v = core::Vec2(m.vx(), m.vy());
+  out.arc = m.has_arc() ? std::optional<double>(m.arc()) : std::nullopt;
+  out.prev_x = core::Vec2(m.prev_x(), m.prev_y());
+  out.prev_arc = m.has_arc() ? std::optional<double>(m.prev_arc()) : std::nullopt;
+  return true;
+}
+
+msg::TrackingTarget to_msg(const TargetSample& t) {
+  msg::TrackingTarget m;
+  m.epoch(t.epoch);
+  m.model_time(t.model_time);
+  m.cx(t.centre.x());
+  m.cy(t.centre.y());
+  m.vx(t.velocity.x());
+  m.vy(t.velocity.y());
+  m.stamp_ns(t.stamp_ns);
+  return m;
+}
+
+bool from_msg(const msg::TrackingTarget& m, TargetSample& out, std::string& why) {
+  Problems p("target");
+  const std::pair<const char*, double> fields[] = {
+      {"model_time", m.model_time()}, {"cx", m.cx()}, {"cy", m.cy()}, {"vx", m.vx()}, {"vy", m.vy()}};
+  for (const auto& [name, v] : fields)
+    if (p.finite(name, v) && std::abs(v) > kStateLimit) p.add(name, "|" + std::string(name) + "| must be <= 1e6, got " + num(v));
+  if (!p.empty()) {
+    why = p.joined();
+    return false;
+  }
+  out = TargetSample{m.epoch(), m.model_time(), core::Vec2(m.cx(), m.cy()), core::Vec2(m.vx(), m.vy()), m.stamp_ns()};
+  return true;
+}
+
+msg::AgentStatus to_msg(const StatusSample& s) {
+  msg::AgentStatus m;
+  m.id(s.id);
+  m.stamp_ns(s.stamp_ns);
+  m.ticks(s.ticks);
+  m.overruns(s.overruns);
+  m.lateness_max_us(s.lateness_max_us);
+  m.lateness_p99_us(s.lateness_p99_us);
+  m.neighbours_heard(s.neighbours_heard);
+  m.stale_dropped(s.stale_dropped);
+  m.samples_rejected(s.samples_rejected);
+  m.samples_received(s.samples_received);
+  m.samples_lost(s.samples_lost);
+  m.age_p50_us(s.age_p50_us);
+  m.age_p99_us(s.age_p99_us);
+  m.cpu_percent(s.cpu_percent);
+  m.rss_mb(s.rss_mb);
+  m.epoch(s.epoch);
+  return m;
+}
+
+bool from_msg(const msg::AgentStatus& m, StatusSample& out, std::string& why) {
+  if (m.id() < 0) {
+    why = "status.id: must be >= 0, got " + std::to_string(m.id());
+    return false;
+  }
+  out = StatusSample{m.id(),           m.stamp_ns(),        m.ticks(),         m.overruns(),
+                     m.lateness_max_us(), m.lateness_p99_us(), m.neighbours_heard(), m.stale_dropped(),
+                     m.samples_rejected(), m.samples_received(), m.samples_lost(), m.age_p50_us(),
+                     m.age_p99_us(),    m.cpu_percent(),     m.rss_mb(),        m.epoch()};
+  return true;
 }
 
 msg::SwarmMetrics to_msg(const core::Metrics& m, std::uint32_t epoch, double model_time,
@@ -262,18 +355,9 @@ msg::SwarmMetrics to_msg(const core::Metrics& m, std::uint32_t epoch, double mod
   w.model_time(model_time);
   w.stamp_ns(stamp_ns);
   w.agents_alive(m.agents);
-  w.shape_error_mean(m.shape_error_mean.value_or(-1.0));
-  w.shape_error_max(m.shape_error_max.value_or(-1.0));
-  w.gap_cv(m.gap_cv.value_or(-1.0));
-  w.nn_cv(m.nn_cv.value_or(-1.0));
-  w.min_separation(m.min_separation.value_or(-1.0));
-  w.extent(m.extent.value_or(-1.0));
-  w.centroid_error(m.centroid_error.value_or(-1.0));
-  w.ring_error(m.ring_error.value_or(-1.0));
-  w.clusters(m.clusters.value_or(-1));
-  w.curve_error_mean(m.curve_error_mean.value_or(-1.0));
-  w.curve_error_max(m.curve_error_max.value_or(-1.0));
-  w.arc_gap_cv(m.arc_gap_cv.value_or(-1.0));
+#define SHAPEFORM_METRIC_TO_WIRE(name, unit, description) w.name(m.name.value_or(-1));
+  SHAPEFORM_METRICS(SHAPEFORM_METRIC_TO_WIRE)
+#undef SHAPEFORM_METRIC_TO_WIRE
   w.converged(converged);
   return w;
 }
@@ -281,18 +365,9 @@ msg::SwarmMetrics to_msg(const core::Metrics& m, std::uint32_t epoch, double mod
 core::Metrics from_msg(const msg::SwarmMetrics& w) {
   core::Metrics m;
   m.agents = w.agents_alive();
-  m.shape_error_mean = undefined_if_negative(w.shape_error_mean());
-  m.shape_error_max = undefined_if_negative(w.shape_error_max());
-  m.gap_cv = undefined_if_negative(w.gap_cv());
-  m.nn_cv = undefined_if_negative(w.nn_cv());
-  m.min_separation = undefined_if_negative(w.min_separation());
-  m.extent = undefined_if_negative(w.extent());
-  m.centroid_error = undefined_if_negative(w.centroid_error());
-  m.ring_error = undefined_if_negative(w.ring_error());
-  if (w.clusters() >= 0) m.clusters = w.clusters();
-  m.curve_error_mean = undefined_if_negative(w.curve_error_mean());
-  m.curve_error_max = undefined_if_negative(w.curve_error_max());
-  m.arc_gap_cv = undefined_if_negative(w.arc_gap_cv());
+#define SHAPEFORM_METRIC_FROM_WIRE(name, unit, description) m.name = defined_or_null<decltype(m.name)>(w.name());
+  SHAPEFORM_METRICS(SHAPEFORM_METRIC_FROM_WIRE)
+#undef SHAPEFORM_METRIC_FROM_WIRE
   return m;
 }
 

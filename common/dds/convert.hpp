@@ -1,5 +1,6 @@
 #pragma once
-/// Conversions between wire messages and core types, and validation of received samples.
+/// Conversions between wire messages and core types (or the plain structs of dds/samples.hpp), one
+/// to_msg / from_msg pair per message, and validation of received samples.
 /// Received data is never trusted: non-finite numbers, unknown names and absurd values are rejected
 /// with a message naming the field.
 #include <cstdint>
@@ -7,9 +8,12 @@
 
 #include "core/compiled_command.hpp"
 #include "core/metrics.hpp"
+#include "dds/samples.hpp"
 #include "shapeform/msg/AgentState.h"
+#include "shapeform/msg/AgentStatus.h"
 #include "shapeform/msg/ShapeCommand.h"
 #include "shapeform/msg/SwarmMetrics.h"
+#include "shapeform/msg/TrackingTarget.h"
 
 namespace shapeform::dds {
 
@@ -38,10 +42,29 @@ bool from_msg(const msg::ShapeCommand& m, core::CompiledCommand& out, std::strin
 /// ("state.x: ...").
 bool valid_state(const msg::AgentState& s, std::string& why);
 
-/// The sender's arc length as core::Neighbour::s wants it: s.arc() when has_arc, else NaN.
-double neighbour_arc(const msg::AgentState& s);
+/// StateSample -> AgentState: has_arc when s.arc is known (arc and prev_arc then carry s.arc and
+/// s.prev_arc, prev_arc falling back to arc); without it both are sent as 0, which receivers ignore.
+msg::AgentState to_msg(const StateSample& s);
 
-/// core::Metrics -> wire message; undefined (nullopt) values become -1.
+/// AgentState -> StateSample when valid_state(m) holds (arc and prev_arc are nullopt unless has_arc);
+/// otherwise false, `out` untouched and `why` naming every bad field.
+bool from_msg(const msg::AgentState& m, StateSample& out, std::string& why);
+
+/// TargetSample -> TrackingTarget (every field).
+msg::TrackingTarget to_msg(const TargetSample& t);
+
+/// TrackingTarget -> TargetSample when model_time, cx, cy, vx, vy are finite and within
+/// kStateLimit; otherwise false, `out` untouched and `why` naming the fields ("target.cx: ...").
+bool from_msg(const msg::TrackingTarget& m, TargetSample& out, std::string& why);
+
+/// StatusSample -> AgentStatus (every field).
+msg::AgentStatus to_msg(const StatusSample& s);
+
+/// AgentStatus -> StatusSample when id >= 0; otherwise false, `out` untouched, `why` says so.
+bool from_msg(const msg::AgentStatus& m, StatusSample& out, std::string& why);
+
+/// core::Metrics -> wire message (agents as agents_alive, every metric of core::kMetricTable under its
+/// name); undefined (nullopt) values become -1.
 msg::SwarmMetrics to_msg(const core::Metrics& m, std::uint32_t epoch, double model_time,
                          std::int64_t stamp_ns, bool converged);
 

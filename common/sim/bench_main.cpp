@@ -1,6 +1,5 @@
 // shapeform_bench_sim: Euler steps per second of the paper's law, batched kernel against the scalar
 // reference (every agent through agent_step, each pair computed twice). Prints one JSON object.
-#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -9,6 +8,7 @@
 #include <string>
 
 #include "core/swarm.hpp"
+#include "util/app.hpp"
 
 namespace {
 double rss_mb() {
@@ -22,21 +22,15 @@ double rss_mb() {
 
 int main(int argc, char** argv) {
   using namespace shapeform;
-  CLI::App app{"shapeform_bench_sim: simulator throughput (paper law, Euler dt = 1, circle r0 = 4)"};
+  util::App app("shapeform_bench_sim", "shapeform_bench_sim: simulator throughput (paper law, Euler dt = 1, circle r0 = 4)");
   int agents = 1000;
   long steps = 100;
   std::string impl = "fast";
-  app.add_option("--agents", agents, "swarm size")->check(CLI::Range(1, 1000000));
-  app.add_option("--steps", steps, "steps to time")->check(CLI::Range(1L, 100000000L));
-  app.add_option("--impl", impl, "fast (batched, vectorised) | reference (scalar, per agent)")
+  app.cli().add_option("--agents", agents, "swarm size")->check(CLI::Range(1, 1000000));
+  app.cli().add_option("--steps", steps, "steps to time")->check(CLI::Range(1L, 100000000L));
+  app.cli().add_option("--impl", impl, "fast (batched, vectorised) | reference (scalar, per agent)")
       ->check(CLI::IsMember({"fast", "reference"}));
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);
-    std::cerr << "shapeform_bench_sim: " << e.what() << '\n';
-    return 2;
-  }
+  if (const auto rc = app.parse(argc, argv)) return *rc;
   core::CompiledCommand cmd;  // the paper's circle
   core::Swarm swarm(cmd, core::uniform_start(agents, 1, 5.0));
   swarm.set_kernel(impl == "fast" ? core::Kernel::Batch : core::Kernel::Agent);

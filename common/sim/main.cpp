@@ -1,74 +1,59 @@
 // shapeform_sim: the headless simulator. Prints ONE JSON object on stdout.
-#include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
 
-#include "config/config.hpp"
 #include "simulation.hpp"
-
-namespace {
-int fail(const std::string& msg) {
-  std::cerr << "shapeform_sim: " << msg << '\n';
-  return 2;
-}
-}  // namespace
+#include "util/app.hpp"
+#include "util/metrics_json.hpp"
 
 int main(int argc, char** argv) {
   using namespace shapeform;
-  CLI::App app{"shapeform_sim: N agents of the configured law (paper or arc) in one process, no DDS. Prints one JSON object."};
-  std::string config_path, init_path, csv_path, positions_path, integrator;
-  std::vector<std::string> sets;
+  util::App app("shapeform_sim",
+                "shapeform_sim: N agents of the configured law (paper or arc) in one process, no DDS. Prints one JSON object.");
+  CLI::App& cli = app.cli();
+  std::string init_path, csv_path, positions_path, integrator;
   int agents = 0;
   std::string seed, steps;  // checked by the config loader (as swarm.seed and sim.steps)
   double dt = 0.0;
   bool verbose = false;
   std::string kernel = "auto";
   int outline = 0;
-  app.add_option("--config", config_path, "scenario YAML file (default: built-in defaults)");
-  app.add_option("--agents", agents, "number of agents (overrides swarm.agents)");
-  app.add_option("--seed", seed, "seed of the uniform start (overrides swarm.seed)");
-  app.add_option("--steps", steps, "number of steps (overrides sim.steps)");
-  app.add_option("--dt", dt, "model time per step (overrides integration.dt)");
-  app.add_option("--integrator", integrator, "euler | rk4 (overrides integration.integrator)");
-  app.add_option("--init", init_path, "CSV of starting positions, one x1,x2 row per agent");
-  app.add_option("--set", sets, "override any config key: dotted.key=value (repeatable)");
-  app.add_option("--csv", csv_path, "write per-step metrics to this CSV file");
-  app.add_option("--positions", positions_path, "write per-step positions (step,agent,x1,x2) to this CSV file");
-  app.add_flag("--verbose", verbose, "print the effective configuration on stderr");
-  app.add_option("--kernel", kernel,
+  app.add_config_options("scenario YAML file (default: built-in defaults)", false);
+  cli.add_option("--agents", agents, "number of agents (overrides swarm.agents)");
+  cli.add_option("--seed", seed, "seed of the uniform start (overrides swarm.seed)");
+  cli.add_option("--steps", steps, "number of steps (overrides sim.steps)");
+  cli.add_option("--dt", dt, "model time per step (overrides integration.dt)");
+  cli.add_option("--integrator", integrator, "euler | rk4 (overrides integration.integrator)");
+  cli.add_option("--init", init_path, "CSV of starting positions, one x1,x2 row per agent");
+  cli.add_option("--csv", csv_path, "write per-step metrics to this CSV file");
+  cli.add_option("--positions", positions_path, "write per-step positions (step,agent,x1,x2) to this CSV file");
+  cli.add_flag("--verbose", verbose, "print the effective configuration on stderr");
+  cli.add_option("--kernel", kernel,
                  "auto | agent (each agent through agent_step, as agent processes) | batch (paper law + Euler: "
                  "each pair once, vectorised); auto = batch from 64 agents")
       ->check(CLI::IsMember({"auto", "agent", "batch"}));
-  app.add_option("--outline", outline, "add `outline`: this many points along the shape at the final time")
+  cli.add_option("--outline", outline, "add `outline`: this many points along the shape at the final time")
       ->check(CLI::Range(0, 100000));
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);
-    return fail(e.what());
-  }
+  if (const auto rc = app.parse(argc, argv)) return *rc;
 
   // Flags are overrides like any other, so the one validation applies to them.
-  if (app.count("--agents")) sets.push_back("swarm.agents=" + std::to_string(agents));
-  if (app.count("--seed")) sets.push_back("swarm.seed=" + seed);
-  if (app.count("--steps")) sets.push_back("sim.steps=" + steps);
-  if (app.count("--dt")) {
+  std::vector<std::string> sets;
+  if (app.given("--agents")) sets.push_back("swarm.agents=" + std::to_string(agents));
+  if (app.given("--seed")) sets.push_back("swarm.seed=" + seed);
+  if (app.given("--steps")) sets.push_back("sim.steps=" + steps);
+  if (app.given("--dt")) {
     char buf[64];
     std::snprintf(buf, sizeof buf, "integration.dt=%.17g", dt);
     sets.push_back(buf);
   }
-  if (app.count("--integrator")) sets.push_back("integration.integrator=" + integrator);
-
-  config::Config cfg;
-  try {
-    cfg = config::load(config_path, sets);
-  } catch (const config::ConfigError& e) {
-    for (const auto& p : e.problems()) std::cerr << "shapeform_sim: " << p << '\n';
-    return 2;
-  }
+  if (app.given("--integrator")) sets.push_back("integration.integrator=" + integrator);
+  const auto loaded = app.load_config(sets);
+  if (!loaded) return util::kExitUsage;
+  const config::Config& cfg = *loaded;
+  const auto fail = [&](const std::string& msg) { return app.usage_error(msg); };
   if (verbose) std::cerr << config::to_yaml(cfg);
 
   std::vector<core::Vec2> start;
@@ -78,7 +63,7 @@ int main(int argc, char** argv) {
     } catch (const std::exception& e) {
       return fail(e.what());
     }
-    if (app.count("--agents") && static_cast<int>(start.size()) != agents)
+    if (app.given("--agents") && static_cast<int>(start.size()) != agents)
       return fail("--agents " + std::to_string(agents) + " does not match the " +
                   std::to_string(start.size()) + " positions in --init " + init_path);
   } else {
@@ -111,7 +96,7 @@ int main(int argc, char** argv) {
     return fail(e.what());
   }
 
-  nlohmann::json j = sim::metrics_json(r.metrics);
+  nlohmann::json j = util::metrics_json(r.metrics);
   j["name"] = cfg.name;
   j["shape"] = std::string(core::to_string(cmd.shape.kind));
   j["tracking"] = cmd.tracking.enabled;

@@ -7,6 +7,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/metric_table.hpp"
+
 namespace shapeform::sim {
 
 namespace {
@@ -16,48 +18,18 @@ std::string fmt(double v) {
   s << v;
   return s.str();
 }
-std::string opt_str(const std::optional<double>& v) { return v ? fmt(*v) : std::string(); }
-std::string opt_str(const std::optional<int>& v) { return v ? std::to_string(*v) : std::string(); }
-template <class T>
-nlohmann::json opt_json(const std::optional<T>& v) {
-  return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
+/// One CSV fragment with the metric table's values ("" for undefined values).
+std::string metric_csv_values(const core::Metrics& m) {
+  std::string out;
+  for (const core::MetricInfo& info : core::kMetricTable) {
+    if (&info != core::kMetricTable) out += ',';  // no comma before the first
+    if (const auto v = info.get(m)) out += info.count ? std::to_string(std::llround(*v)) : fmt(*v);
+  }
+  return out;
 }
 }  // namespace
 
 core::Kernel auto_kernel(int agents) { return agents >= 64 ? core::Kernel::Batch : core::Kernel::Agent; }
-
-const std::vector<std::string>& metric_columns() {
-  static const std::vector<std::string> cols = {
-      "shape_error_mean", "shape_error_max", "gap_cv", "nn_cv",          "min_separation",
-      "clusters",         "extent",          "centroid_error", "ring_error",     "curve_error_mean",
-      "curve_error_max",  "arc_gap_cv"};
-  return cols;
-}
-
-std::string metric_csv_values(const core::Metrics& m) {
-  return opt_str(m.shape_error_mean) + "," + opt_str(m.shape_error_max) + "," + opt_str(m.gap_cv) + "," +
-         opt_str(m.nn_cv) + "," + opt_str(m.min_separation) + "," + opt_str(m.clusters) + "," +
-         opt_str(m.extent) + "," + opt_str(m.centroid_error) + "," + opt_str(m.ring_error) + "," +
-         opt_str(m.curve_error_mean) + "," + opt_str(m.curve_error_max) + "," + opt_str(m.arc_gap_cv);
-}
-
-nlohmann::json metrics_json(const core::Metrics& m) {
-  nlohmann::json j;
-  j["agents"] = m.agents;
-  j["shape_error_mean"] = opt_json(m.shape_error_mean);
-  j["shape_error_max"] = opt_json(m.shape_error_max);
-  j["gap_cv"] = opt_json(m.gap_cv);
-  j["nn_cv"] = opt_json(m.nn_cv);
-  j["min_separation"] = opt_json(m.min_separation);
-  j["clusters"] = opt_json(m.clusters);
-  j["extent"] = opt_json(m.extent);
-  j["centroid_error"] = opt_json(m.centroid_error);
-  j["ring_error"] = opt_json(m.ring_error);
-  j["curve_error_mean"] = opt_json(m.curve_error_mean);
-  j["curve_error_max"] = opt_json(m.curve_error_max);
-  j["arc_gap_cv"] = opt_json(m.arc_gap_cv);
-  return j;
-}
 
 SimResult run_simulation(const core::CompiledCommand& cmd, std::vector<core::Vec2> start, long steps,
                          const SimOptions& opt) {
@@ -70,7 +42,7 @@ SimResult run_simulation(const core::CompiledCommand& cmd, std::vector<core::Vec
   gap.reserve(static_cast<std::size_t>(steps) + 1);
   if (opt.metrics_csv) {
     *opt.metrics_csv << "step,model_time";
-    for (const auto& c : metric_columns()) *opt.metrics_csv << ',' << c;
+    for (const core::MetricInfo& info : core::kMetricTable) *opt.metrics_csv << ',' << info.name;
     *opt.metrics_csv << '\n';
   }
   if (opt.positions_csv) *opt.positions_csv << "step,agent,x1,x2\n";

@@ -5,15 +5,15 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "core/metrics.hpp"
 #include "core/swarm.hpp"
 
 namespace shapeform::sim {
 
 struct SimOptions {
-  std::ostream* metrics_csv = nullptr;    ///< per-step metrics (header + one row per step)
+  /// per-step metrics: header step,model_time and the core::kMetricTable names, one row per step
+  /// ("" for undefined values)
+  std::ostream* metrics_csv = nullptr;
   std::ostream* positions_csv = nullptr;  ///< per-step positions: step,agent,x1,x2
   core::SettleParams settle;
   core::Kernel kernel = core::Kernel::Agent;  ///< see core::Kernel (Batch applies to paper law + Euler)
@@ -34,13 +34,6 @@ struct SimResult {
 /// Runs `steps` synchronous steps from `start` (the start itself is step 0 of every series).
 SimResult run_simulation(const core::CompiledCommand& cmd, std::vector<core::Vec2> start, long steps,
                          const SimOptions& opt = {});
-
-/// The metric columns shared by every metrics CSV of the project, in order.
-const std::vector<std::string>& metric_columns();
-/// One CSV fragment with the metric_columns() values ("" for undefined values).
-std::string metric_csv_values(const core::Metrics& m);
-/// Metrics as JSON, with the metric names used everywhere (undefined = null).
-nlohmann::json metrics_json(const core::Metrics& m);
 
 /// Reads starting positions: CSV, one "x1,x2" row per agent, optional header, '#' comments.
 /// Throws std::runtime_error naming the file and line of the first problem.

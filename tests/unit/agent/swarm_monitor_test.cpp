@@ -32,9 +32,9 @@ TEST_CASE("alive, dead and departed agents", "[supervisor]") {
   CHECK(m.alive_count(kS / 2) == 3);
   m.on_state(0, Vec2(4, 0), Vec2(4, 0), 0, 0, kS);
   CHECK(m.alive_count(kS + kS / 2) == 1);  // the others unheard for 1.5 s
-  const std::string table = m.status_table(kS + kS / 2, 0);
-  CHECK(table.find("DEAD") != std::string::npos);
-  CHECK(table.find("left") != std::string::npos);
+  CHECK(m.agents().at(2).departed);
+  CHECK_FALSE(m.agents().at(1).departed);  // silent, not departed (the status table's DEAD)
+  CHECK_FALSE(m.alive(m.agents().at(1), kS + kS / 2));
 }
 
 TEST_CASE("metrics with the core functions; converged only when every agent follows the epoch", "[supervisor]") {

@@ -16,6 +16,7 @@
 #include <fastrtps/utils/IPLocator.h>
 #include <fastrtps/xmlparser/XMLProfileManager.h>
 
+#include "core/metric_table.hpp"
 #include "core/params.hpp"
 #include "dds/convert.hpp"
 #include "dds/node.hpp"
@@ -32,6 +33,7 @@
 namespace shapeform {
 namespace fdds = eprosima::fastdds::dds;
 namespace frtps = eprosima::fastrtps::rtps;
+using core::Vec2;
 
 namespace {
 /// True when the command's curve is the one its shape compiles to (not a default or stale curve).
@@ -502,8 +504,13 @@ TEST_CASE("valid_state rejects non-finite and absurd samples", "[dds][convert]")
   s.has_arc(false);
   s.arc(0.0);
   CHECK(state_problem(s).empty());
-  CHECK(std::isnan(dds::neighbour_arc(s)));
-  CHECK(dds::neighbour_arc(good_state()) == 7.25);
+  dds::StateSample got;
+  std::string why;
+  REQUIRE(dds::from_msg(s, got, why));
+  CHECK_FALSE(got.arc.has_value());  // without has_arc the arc is unknown
+  CHECK_FALSE(got.prev_arc.has_value());
+  REQUIRE(dds::from_msg(good_state(), got, why));
+  CHECK(got.arc == std::optional<double>(7.25));
   s = good_state();
   s.model_time(kNaN);
   CHECK(state_problem(s) == "state.model_time: must be finite, got nan");
@@ -517,6 +524,143 @@ TEST_CASE("valid_state rejects non-finite and absurd samples", "[dds][convert]")
   s.vx(8e5);
   s.vy(8e5);  // each component fine, speed 1.13e6 is not
   CHECK(state_problem(s).find("state.v: speed must be <= 1e6") == 0);
+}
+
+TEST_CASE("AgentState converts both ways; a refused sample leaves the output untouched", "[dds][convert]") {
+  dds::StateSample s;
+  s.id = 7;
+  s.seq = 99;
+  s.stamp_ns = 123;
+  s.epoch = 3;
+  s.model_time = 12.5;
+  s.x = Vec2(1.0, -2.0);
+  s.v = Vec2(0.5, 0.25);
+  s.arc = 4.0;
+  s.prev_x = Vec2(0.75, -1.5);
+  s.prev_arc = 3.5;
+  const msg::AgentState m = dds::to_msg(s);
+  CHECK((m.id() == 7 && m.seq() == 99u && m.stamp_ns() == 123 && m.epoch() == 3u && m.model_time() == 12.5));
+  CHECK((m.x() == 1.0 && m.y() == -2.0 && m.vx() == 0.5 && m.vy() == 0.25));
+  CHECK((m.has_arc() && m.arc() == 4.0 && m.prev_arc() == 3.5 && m.prev_x() == 0.75 && m.prev_y() == -1.5));
+  dds::StateSample back;
+  std::string why;
+  REQUIRE(dds::from_msg(m, back, why));
+  CHECK((back.id == s.id && back.seq == s.seq && back.stamp_ns == s.stamp_ns && back.epoch == s.epoch));
+  CHECK((back.model_time == s.model_time && back.x == s.x && back.v == s.v && back.prev_x == s.prev_x));
+  CHECK((back.arc == s.arc && back.prev_arc == s.prev_arc));
+
+  s.prev_arc.reset();  // a first step: the previous arc is the current one
+  CHECK(dds::to_msg(s).prev_arc() == 4.0);
+  s.arc.reset();  // no arc shared: both travel as 0 and come back unknown
+  const msg::AgentState none = dds::to_msg(s);
+  CHECK((!none.has_arc() && none.arc() == 0.0 && none.prev_arc() == 0.0));
+  REQUIRE(dds::from_msg(none, back, why));
+  CHECK((!back.arc && !back.prev_arc));
+
+  msg::AgentState bad = m;
+  bad.x(kNaN);
+  dds::StateSample untouched;
+  CHECK_FALSE(dds::from_msg(bad, untouched, why));
+  CHECK(why == "state.x: must be finite, got nan");
+  CHECK(untouched.id == 0);
+}
+
+TEST_CASE("TrackingTarget converts both ways and refuses non-finite or absurd values", "[dds][convert]") {
+  const dds::TargetSample t{4, 20.0, Vec2(1.0, 2.0), Vec2(-0.5, 0.125), 777};
+  const msg::TrackingTarget m = dds::to_msg(t);
+  CHECK((m.epoch() == 4u && m.model_time() == 20.0 && m.cx() == 1.0 && m.cy() == 2.0));
+  CHECK((m.vx() == -0.5 && m.vy() == 0.125 && m.stamp_ns() == 777));
+  dds::TargetSample back;
+  std::string why;
+  REQUIRE(dds::from_msg(m, back, why));
+  CHECK((back.epoch == t.epoch && back.model_time == t.model_time && back.centre == t.centre &&
+         back.velocity == t.velocity && back.stamp_ns == t.stamp_ns));
+
+  const auto problem = [&](auto mutate) {
+    msg::TrackingTarget w = m;
+    mutate(w);
+    dds::TargetSample out;
+    std::string error;
+    const bool ok = dds::from_msg(w, out, error);
+    CHECK(ok == error.empty());
+    if (!ok) CHECK(out.epoch == 0u);  // untouched
+    return error;
+  };
+  CHECK(problem([](msg::TrackingTarget&) {}).empty());
+  CHECK(problem([](msg::TrackingTarget& w) { w.cx(kNaN); }) == "target.cx: must be finite, got nan");
+  CHECK(problem([](msg::TrackingTarget& w) { w.model_time(kInf); }) == "target.model_time: must be finite, got inf");
+  CHECK(problem([](msg::TrackingTarget& w) { w.vy(-2e6); }) == "target.vy: |vy| must be <= 1e6, got -2000000");
+  CHECK(problem([](msg::TrackingTarget& w) { w.cy(1e6); }).empty());  // the limit itself is accepted
+  CHECK(problem([](msg::TrackingTarget& w) {
+          w.cx(kNaN);
+          w.vx(kNaN);
+        }) == "target.cx: must be finite, got nan; target.vx: must be finite, got nan");
+}
+
+TEST_CASE("AgentStatus converts both ways; a negative id is refused", "[dds][convert]") {
+  dds::StatusSample s;
+  s.id = 5;
+  s.stamp_ns = 1;
+  s.ticks = 2;
+  s.overruns = 3;
+  s.lateness_max_us = 4.5;
+  s.lateness_p99_us = 5.5;
+  s.neighbours_heard = 6;
+  s.stale_dropped = 7;
+  s.samples_rejected = 8;
+  s.samples_received = 9;
+  s.samples_lost = 10;
+  s.age_p50_us = 11.5;
+  s.age_p99_us = 12.5;
+  s.cpu_percent = 13.5;
+  s.rss_mb = 14.5;
+  s.epoch = 15;
+  const msg::AgentStatus m = dds::to_msg(s);
+  CHECK((m.id() == 5 && m.stamp_ns() == 1 && m.ticks() == 2u && m.overruns() == 3u));
+  CHECK((m.lateness_max_us() == 4.5 && m.lateness_p99_us() == 5.5 && m.neighbours_heard() == 6));
+  CHECK((m.stale_dropped() == 7u && m.samples_rejected() == 8u && m.samples_received() == 9u && m.samples_lost() == 10u));
+  CHECK((m.age_p50_us() == 11.5 && m.age_p99_us() == 12.5 && m.cpu_percent() == 13.5 && m.rss_mb() == 14.5));
+  CHECK(m.epoch() == 15u);
+  dds::StatusSample back;
+  std::string why;
+  REQUIRE(dds::from_msg(m, back, why));
+  CHECK((back.id == 5 && back.stamp_ns == 1 && back.ticks == 2u && back.overruns == 3u));
+  CHECK((back.lateness_max_us == 4.5 && back.lateness_p99_us == 5.5 && back.neighbours_heard == 6));
+  CHECK((back.stale_dropped == 7u && back.samples_rejected == 8u && back.samples_received == 9u && back.samples_lost == 10u));
+  CHECK((back.age_p50_us == 11.5 && back.age_p99_us == 12.5 && back.cpu_percent == 13.5 && back.rss_mb == 14.5));
+  CHECK(back.epoch == 15u);
+
+  msg::AgentStatus bad = m;
+  bad.id(-2);
+  dds::StatusSample untouched;
+  CHECK_FALSE(dds::from_msg(bad, untouched, why));
+  CHECK(why == "status.id: must be >= 0, got -2");
+  CHECK(untouched.id == 0);
+}
+
+TEST_CASE("SwarmMetrics carries every metric of the table under its name", "[dds][convert]") {
+  // Each metric a distinct value: a field crossed with another would come back wrong.
+  core::Metrics m;
+  m.shape_error_mean = 0.5;
+  m.shape_error_max = 1.5;
+  m.gap_cv = 2.5;
+  m.nn_cv = 3.5;
+  m.min_separation = 4.5;
+  m.clusters = 6;
+  m.extent = 7.5;
+  m.centroid_error = 8.5;
+  m.ring_error = 9.5;
+  m.curve_error_mean = 10.5;
+  m.curve_error_max = 11.5;
+  m.arc_gap_cv = 12.5;
+  const msg::SwarmMetrics w = dds::to_msg(m, 1, 0.0, 0, false);
+  CHECK((w.shape_error_mean() == 0.5 && w.gap_cv() == 2.5 && w.clusters() == 6 && w.arc_gap_cv() == 12.5));
+  const core::Metrics back = dds::from_msg(w);
+  for (const core::MetricInfo& info : core::kMetricTable) {
+    INFO(info.name);
+    REQUIRE(info.get(m).has_value());  // the test sets every metric of the table
+    CHECK(info.get(back) == info.get(m));
+  }
 }
 
 TEST_CASE("SwarmMetrics carries undefined values as -1", "[dds][convert]") {

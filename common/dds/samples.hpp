@@ -1,0 +1,55 @@
+#pragma once
+/// What the messages carry, as plain structs the pure code (agent logic, supervisor monitor) takes:
+/// dds::to_msg / dds::from_msg (dds/convert.hpp) convert each both ways. No Fast DDS here.
+/// ShapeCommand <-> core::Command and SwarmMetrics <-> core::Metrics need no struct of their own.
+#include <cstdint>
+#include <optional>
+
+#include "core/types.hpp"
+
+namespace shapeform::dds {
+
+/// AgentState: one agent's state after a step (see idl/AgentState.idl).
+struct StateSample {
+  std::int32_t id = 0;
+  std::uint64_t seq = 0;       ///< +1 per publication
+  std::int64_t stamp_ns = 0;   ///< sender's steady clock at publication, ns
+  std::uint32_t epoch = 0;     ///< command followed; 0 = none yet
+  double model_time = 0.0;     ///< after the step
+  core::Vec2 x = core::Vec2::Zero();
+  core::Vec2 v = core::Vec2::Zero();  ///< velocity over the last step
+  std::optional<double> arc;          ///< arc length along the followed shape, when the sender shares it
+  core::Vec2 prev_x = core::Vec2::Zero();  ///< the state one step earlier
+  std::optional<double> prev_arc;          ///< travels only with arc (nullopt when arc is)
+};
+
+/// TrackingTarget: the tracked centre C and its velocity at the supervisor's model time.
+struct TargetSample {
+  std::uint32_t epoch = 0;
+  double model_time = 0.0;
+  core::Vec2 centre = core::Vec2::Zero();
+  core::Vec2 velocity = core::Vec2::Zero();
+  std::int64_t stamp_ns = 0;  ///< supervisor's steady clock at publication, ns
+};
+
+/// AgentStatus: an agent's health (see idl/AgentStatus.idl for each field's meaning).
+struct StatusSample {
+  std::int32_t id = 0;
+  std::int64_t stamp_ns = 0;
+  std::uint64_t ticks = 0;
+  std::uint64_t overruns = 0;
+  double lateness_max_us = 0.0;
+  double lateness_p99_us = 0.0;
+  int neighbours_heard = 0;
+  std::uint64_t stale_dropped = 0;
+  std::uint64_t samples_rejected = 0;
+  std::uint64_t samples_received = 0;
+  std::uint64_t samples_lost = 0;
+  double age_p50_us = -1.0;  ///< -1: no sample in the period
+  double age_p99_us = -1.0;
+  double cpu_percent = 0.0;
+  double rss_mb = 0.0;
+  std::uint32_t epoch = 0;
+};
+
+}  // namespace shapeform::dds

@@ -1,0 +1,58 @@
+#pragma once
+/// The preamble every program shares: CLI11 parsing with the project's exit codes, and the config
+/// file with its --set overrides (and --domain) loaded through the one loader.
+///   util::App app("shapeform_x", "what it does");
+///   app.add_config_options();
+///   app.cli().add_option(...);                      // the program's own flags
+///   if (const auto rc = app.parse(argc, argv)) return *rc;
+///   const auto cfg = app.load_config();
+///   if (!cfg) return util::kExitUsage;
+#include <CLI/CLI.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "config/config.hpp"
+
+namespace shapeform::util {
+
+/// Exit status of a bad command line or config.
+inline constexpr int kExitUsage = 2;
+
+class App {
+ public:
+  App(std::string prog, const std::string& description);
+
+  CLI::App& cli() { return cli_; }
+  const std::string& prog() const { return prog_; }
+
+  /// --config PATH (`config_help` describes it), --set key=value (repeatable) and, when
+  /// `with_domain`, --domain N (an override of transport.domain).
+  void add_config_options(const std::string& config_help = "YAML config (default: built-in defaults)",
+                          bool with_domain = true);
+
+  /// Parses argv. nullopt: go on. Otherwise the exit status to return at once: 0 after --help
+  /// (printed), 2 after a parse error (printed on stderr as "prog: message").
+  std::optional<int> parse(int argc, char** argv);
+
+  /// Loads the config: the --config file with the --set overrides, then --domain, then `extra`
+  /// (program flags that override keys, e.g. "swarm.seed=3"). Problems go to stderr, one per line,
+  /// as "prog: problem"; nullopt then (exit status kExitUsage).
+  std::optional<config::Config> load_config(const std::vector<std::string>& extra = {}) const;
+
+  /// Prints "prog: message" on stderr and returns kExitUsage.
+  int usage_error(const std::string& message) const;
+
+  /// Whether the flag (an option of this program) was given on the command line.
+  bool given(const std::string& flag) const { return cli_.count(flag) > 0; }
+
+ private:
+  std::string prog_;
+  CLI::App cli_;
+  std::string config_path_;
+  std::vector<std::string> sets_;
+  int domain_ = -1;
+  CLI::Option* domain_option_ = nullptr;  ///< --domain, when the program takes it
+};
+
+}  // namespace shapeform::util

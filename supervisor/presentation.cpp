@@ -1,0 +1,188 @@
+#include "presentation.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "util/metrics_json.hpp"
+
+namespace shapeform::supervisor {
+
+namespace {
+
+std::string fmt_opt(const std::optional<double>& v, const char* f = "%.4f") {
+  if (!v) return "-";
+  char b[32];
+  std::snprintf(b, sizeof b, f, *v);
+  return b;
+}
+
+std::string count_or_dash(const std::optional<int>& v) { return v ? std::to_string(*v) : "-"; }
+
+template <class T>
+nlohmann::json or_null(const std::optional<T>& v) {
+  return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
+}
+
+std::optional<long long> settle_step(const Summary& s) {
+  if (!s.settle_time) return std::nullopt;
+  return std::llround(*s.settle_time / s.command.dt);
+}
+
+}  // namespace
+
+std::string describe_command(const core::CompiledCommand& c) {
+  std::ostringstream o;
+  const auto& s = c.shape;
+  o << core::to_string(s.kind);
+  switch (s.kind) {
+    case core::ShapeKind::Line: o << " m=" << s.m << " c=" << s.c; break;
+    case core::ShapeKind::Circle: o << " r=" << s.r0; break;
+    case core::ShapeKind::Ellipse: o << " a=" << s.a << " b=" << s.b; break;
+    case core::ShapeKind::Square: o << " a=" << s.a; break;
+    case core::ShapeKind::Polar: o << " r=\"" << s.r_expr << '"'; break;
+    case core::ShapeKind::Parametric:
+      o << " x=\"" << s.x_expr << "\" y=\"" << s.y_expr << '"' << (s.closed ? " closed" : " open");
+      break;
+    case core::ShapeKind::Implicit: o << " f=\"" << s.f_expr << '"'; break;
+    case core::ShapeKind::Polygon: o << " with " << s.vertices.size() << (s.closed ? " vertices, closed" : " vertices, open"); break;
+  }
+  if (s.rotation != 0.0) o << " rotated " << s.rotation * 180.0 / 3.14159265358979323846 << " deg";
+  if (s.scale != 1.0) o << " scaled " << s.scale;
+  if (c.tracking.enabled)
+    o << ", tracking on a " << core::to_string(c.tracking.path.kind) << " path"
+      << (c.tracking.feedforward ? " with feed-forward" : "");
+  else if (c.curve().closed())
+    o << " centre (" << s.centre.x() << ", " << s.centre.y() << ")";
+  if (c.law == core::Law::Arc) {
+    o << "; law arc k_normal=" << c.arc.k_normal << " k_tangent=" << c.arc.k_tangent;
+    if (s.kind == core::ShapeKind::Line) o << " spacing=" << c.arc.spacing;
+  }
+  o << "; k1=" << c.gains.k1 << " k2=" << c.gains.k2 << " sigma=" << c.gains.sigma << " beta=" << c.gains.beta
+    << " r=" << c.gains.r << ", " << core::to_string(c.integrator) << " dt=" << c.dt;
+  if (c.max_speed > 0) o << ", max_speed=" << c.max_speed;
+  return o.str();
+}
+
+std::vector<AgentRow> agent_rows(const SwarmMonitor& monitor, std::int64_t now_ns, double model_time) {
+  const auto& cmd = monitor.command();
+  const std::optional<core::ShapeSpec> shape =
+      cmd ? std::optional<core::ShapeSpec>(core::shape_at(*cmd, model_time)) : std::nullopt;
+  std::vector<AgentRow> rows;
+  rows.reserve(monitor.agents().size());
+  for (const auto& [id, a] : monitor.agents()) {
+    AgentRow r;
+    r.id = id;
+    r.alive = monitor.alive(a, now_ns);
+    r.departed = a.departed;
+    r.last_seen_s = static_cast<double>(now_ns - a.last_seen_ns) * 1e-9;
+    r.x = a.x;
+    r.epoch = a.epoch;
+    if (shape && a.epoch == monitor.epoch()) r.shape_error = (a.x - core::target_point(*shape, cmd->curve(), a.x)).norm();
+    r.neighbours_heard = a.neighbours_heard;
+    rows.push_back(r);
+  }
+  return rows;
+}
+
+std::string status_table(const std::vector<AgentRow>& rows) {
+  std::ostringstream o;
+  char line[200];
+  std::snprintf(line, sizeof line, "%6s %-6s %10s %10s %10s %6s %11s %6s\n", "agent", "alive", "last_seen",
+                "x1", "x2", "epoch", "shape_error", "heard");
+  o << line;
+  for (const AgentRow& r : rows) {
+    std::snprintf(line, sizeof line, "%6d %-6s %9.2fs %10.4f %10.4f %6u %11s %6s\n", r.id,
+                  r.alive ? "yes" : (r.departed ? "left" : "DEAD"), r.last_seen_s, r.x.x(), r.x.y(), r.epoch,
+                  fmt_opt(r.shape_error).c_str(), count_or_dash(r.neighbours_heard).c_str());
+    o << line;
+  }
+  if (rows.empty()) o << "(no agent heard yet)\n";
+  return o.str();
+}
+
+nlohmann::json status_json(const std::vector<AgentRow>& rows, std::uint32_t epoch, double model_time) {
+  nlohmann::json agents = nlohmann::json::array();
+  for (const AgentRow& r : rows)
+    agents.push_back({{"id", r.id},
+                      {"alive", r.alive},
+                      {"last_seen_s", r.last_seen_s},
+                      {"x", r.x.x()},
+                      {"y", r.x.y()},
+                      {"epoch", r.epoch},
+                      {"shape_error", or_null(r.shape_error)},
+                      {"neighbours_heard", or_null(r.neighbours_heard)}});
+  return {{"event", "status"}, {"epoch", epoch}, {"model_time", model_time}, {"agents", std::move(agents)}};
+}
+
+std::string progress_line(const SwarmMonitor::Sample& s, const core::Command& current) {
+  const core::Metrics& m = s.metrics;
+  std::ostringstream o;
+  o << "t=" << fmt_opt(s.model_time, "%.0f") << " agents=" << s.alive << " following=" << s.following
+    << " shape_error=" << fmt_opt(m.shape_error_mean) << " max=" << fmt_opt(m.shape_error_max)
+    << " gap_cv=" << fmt_opt(m.gap_cv) << " min_sep=" << fmt_opt(m.min_separation)
+    << " clusters=" << count_or_dash(m.clusters);
+  if (m.centroid_error) o << " centroid_error=" << fmt_opt(m.centroid_error) << " ring_error=" << fmt_opt(m.ring_error);
+  if (current.law == core::Law::Arc || !m.shape_error_mean || m.curve_error_mean != m.shape_error_mean)
+    o << " curve_error=" << fmt_opt(m.curve_error_mean, "%.2e") << " arc_gap_cv=" << fmt_opt(m.arc_gap_cv, "%.2e");
+  o << (s.converged ? " converged" : "");
+  return o.str();
+}
+
+nlohmann::json metrics_answer(const SwarmMonitor::Sample& s, std::uint32_t epoch) {
+  nlohmann::json j = util::metrics_json(s.metrics);
+  j["epoch"] = epoch;
+  j["model_time"] = s.model_time;
+  j["converged"] = s.converged;
+  return j;
+}
+
+nlohmann::json summary_json(const Summary& s) {
+  const double t = s.sample.model_time;
+  nlohmann::json j = util::metrics_json(s.sample.metrics);
+  j["event"] = "summary";
+  j["name"] = s.name;
+  j["shape"] = std::string(core::to_string(s.command.shape.kind));
+  j["law"] = std::string(core::to_string(s.command.law));
+  j["tracking"] = s.command.tracking.enabled;
+  j["epoch"] = s.epoch;
+  j["model_time"] = t;
+  j["dt"] = s.command.dt;
+  j["steps"] = static_cast<long>(std::llround(t / s.command.dt));
+  j["agents_seen"] = s.agents_seen;
+  j["converged"] = s.sample.converged;
+  j["settle_step"] = or_null(settle_step(s));
+  if (!s.command.tracking.enabled) {
+    j.erase("centroid_error");
+    j.erase("ring_error");
+  }
+  auto& ids = j["final_ids"] = nlohmann::json::array();
+  auto& fp = j["final_positions"] = nlohmann::json::array();
+  for (const auto& [id, x] : s.final_positions) {
+    ids.push_back(id);
+    fp.push_back({x.x(), x.y()});
+  }
+  j["final_model_times"] = s.final_model_times;  // each agent's own model time
+  j["samples_rejected"] = s.samples_rejected;
+  j["recording"] = or_null(s.recording);
+  j["exit_status"] = s.exit_status;
+  return j;
+}
+
+std::string summary_text(const Summary& s) {
+  const core::Metrics& m = s.sample.metrics;
+  const auto settle = settle_step(s);
+  std::ostringstream o;
+  o << "summary: epoch " << s.epoch << ", " << s.sample.alive << " agents, t=" << fmt_opt(s.sample.model_time, "%.0f")
+    << (s.sample.converged ? ", converged" : ", not converged") << "\n  shape_error_mean=" << fmt_opt(m.shape_error_mean)
+    << " shape_error_max=" << fmt_opt(m.shape_error_max) << " gap_cv=" << fmt_opt(m.gap_cv)
+    << " min_separation=" << fmt_opt(m.min_separation) << " clusters=" << count_or_dash(m.clusters)
+    << " settle_step=" << (settle ? std::to_string(*settle) : "-");
+  o << " curve_error_mean=" << fmt_opt(m.curve_error_mean, "%.3g") << " arc_gap_cv=" << fmt_opt(m.arc_gap_cv, "%.3g");
+  if (m.centroid_error) o << " centroid_error=" << fmt_opt(m.centroid_error) << " ring_error=" << fmt_opt(m.ring_error);
+  o << '\n';
+  if (s.recording) o << "  recording: " << *s.recording << '\n';
+  return o.str();
+}
+
+}  // namespace shapeform::supervisor

@@ -1,0 +1,77 @@
+#pragma once
+/// What the supervisor prints, as pure functions of what it knows (no DDS, no clocks, no streams):
+/// the one-line description of a command, the `status` table and its JSON, the progress line, the
+/// `metrics` answer and the exit summary (text and JSON).
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/compiled_command.hpp"
+#include "swarm_monitor.hpp"
+
+namespace shapeform::supervisor {
+
+/// One line: the shape and its parameters, tracking, law, gains and integration,
+/// e.g. "circle r=4 centre (0, 0); k1=1 k2=1 sigma=1 beta=1 r=0, euler dt=1".
+std::string describe_command(const core::CompiledCommand& c);
+
+/// One agent as `status` shows it.
+struct AgentRow {
+  std::int32_t id = 0;
+  bool alive = false;
+  bool departed = false;      ///< not alive because it left cleanly (else: silent, "DEAD")
+  double last_seen_s = 0.0;   ///< seconds since its last state
+  core::Vec2 x = core::Vec2::Zero();
+  std::uint32_t epoch = 0;    ///< command epoch it follows
+  std::optional<double> shape_error;    ///< |x - x_T(x)| when it follows the current command
+  std::optional<int> neighbours_heard;  ///< from its latest AgentStatus
+};
+
+/// Every agent the monitor knows, ascending id, at now_ns; the shape error against the current
+/// command's shape at model_time.
+std::vector<AgentRow> agent_rows(const SwarmMonitor& monitor, std::int64_t now_ns, double model_time);
+
+/// The console's `status` table: agent, alive, last seen, position, epoch followed, shape error,
+/// neighbours heard; "(no agent heard yet)" without rows.
+std::string status_table(const std::vector<AgentRow>& rows);
+
+/// {"event":"status","epoch":E,"model_time":T,"agents":[{"id","alive","last_seen_s","x","y","epoch",
+/// "shape_error" (null when unknown),"neighbours_heard" (null when unknown)}, ...]}.
+nlohmann::json status_json(const std::vector<AgentRow>& rows, std::uint32_t epoch, double model_time);
+
+/// The progress line logged about once a second.
+std::string progress_line(const SwarmMonitor::Sample& s, const core::Command& current);
+
+/// The `metrics` answer: every metric (util::metrics_json), epoch, model_time, converged.
+nlohmann::json metrics_answer(const SwarmMonitor::Sample& s, std::uint32_t epoch);
+
+/// What the exit summary reports.
+struct Summary {
+  std::string name;             ///< the config's name
+  core::Command command;        ///< in force at the end
+  std::uint32_t epoch = 0;
+  SwarmMonitor::Sample sample;  ///< measured at the end (its model_time is the summary's)
+  std::size_t agents_seen = 0;
+  std::optional<double> settle_time;  ///< model time the current epoch settled at
+  /// Alive agents at the end, ascending id: position and own model time.
+  std::vector<std::pair<std::int32_t, core::Vec2>> final_positions;
+  std::vector<double> final_model_times;
+  std::uint64_t samples_rejected = 0;
+  std::optional<std::string> recording;  ///< the folder being recorded into
+  int exit_status = 0;
+};
+
+/// The summary as one JSON object: every metric (centroid_error and ring_error only when tracking),
+/// name, shape, law, tracking, epoch, model_time, dt, steps, agents_seen, converged, settle_step,
+/// final_ids, final_positions, final_model_times, samples_rejected, recording, exit_status, and
+/// "event":"summary".
+nlohmann::json summary_json(const Summary& s);
+
+/// The summary as text (two or three lines, each ending with a newline).
+std::string summary_text(const Summary& s);
+
+}  // namespace shapeform::supervisor

@@ -1,0 +1,167 @@
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <set>
+
+#include "core/metric_table.hpp"
+#include "presentation.hpp"
+#include "util/metrics_json.hpp"
+
+using namespace shapeform;
+using core::Vec2;
+using supervisor::SwarmMonitor;
+
+namespace {
+constexpr std::int64_t kS = 1'000'000'000;
+
+core::CompiledCommand circle() {
+  core::Command c;
+  c.shape.kind = core::ShapeKind::Circle;
+  c.shape.r0 = 4;
+  return core::compile(c);
+}
+
+/// Agent 0 on the circle following epoch 1 (with a status), agent 1 off it on epoch 1, agent 2 on an
+/// old epoch, agent 3 left, agent 4 silent for 2 s (dead); the command is epoch 1.
+SwarmMonitor swarm(std::int64_t now) {
+  SwarmMonitor m(kS, {});
+  m.set_command(circle(), 1, 0);
+  m.on_state(0, Vec2(4, 0), Vec2(4, 0), 1, 10.0, now);
+  m.on_status(0, 3, 0);
+  m.on_state(1, Vec2(0, 5), Vec2(0, 5), 1, 10.0, now - kS / 2);
+  m.on_state(2, Vec2(-4, 0), Vec2(-4, 0), 0, 0.0, now);
+  m.on_state(3, Vec2(0, -4), Vec2(0, -4), 1, 10.0, now);
+  m.on_departed(3);
+  m.on_state(4, Vec2(1, 1), Vec2(1, 1), 1, 10.0, now - 2 * kS);
+  return m;
+}
+}  // namespace
+
+TEST_CASE("status JSON and table carry the same facts for every agent", "[supervisor][presentation]") {
+  const std::int64_t now = 10 * kS;
+  const SwarmMonitor m = swarm(now);
+  const auto rows = supervisor::agent_rows(m, now, 10.0);
+  const nlohmann::json j = supervisor::status_json(rows, 1, 10.0);
+  CHECK(j["event"] == "status");
+  CHECK(j["epoch"] == 1);
+  CHECK(j["model_time"] == 10.0);
+  const auto& a = j["agents"];
+  REQUIRE(a.size() == 5);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    CHECK(a[i]["id"] == static_cast<int>(i));  // ascending id
+    const std::set<std::string> keys = {"id", "alive", "last_seen_s", "x", "y", "epoch", "shape_error", "neighbours_heard"};
+    std::set<std::string> got;
+    for (const auto& [k, v] : a[i].items()) got.insert(k);
+    CHECK(got == keys);
+  }
+  CHECK(a[0]["alive"] == true);
+  CHECK(a[0]["x"] == 4.0);
+  CHECK(a[0]["y"] == 0.0);
+  CHECK(a[0]["shape_error"].get<double>() == Approx(0.0).margin(1e-12));
+  CHECK(a[0]["neighbours_heard"] == 3);
+  CHECK(a[0]["last_seen_s"] == 0.0);
+  CHECK(a[1]["shape_error"].get<double>() == Approx(1.0));  // |(0, 5)| - 4
+  CHECK(a[1]["last_seen_s"] == 0.5);
+  CHECK(a[1]["neighbours_heard"].is_null());  // no status yet
+  CHECK(a[2]["epoch"] == 0);
+  CHECK(a[2]["shape_error"].is_null());  // not on the current command
+  CHECK(a[3]["alive"] == false);          // left
+  CHECK(a[4]["alive"] == false);          // dead
+  CHECK(a[4]["last_seen_s"] == 2.0);
+
+  const std::string table = supervisor::status_table(rows);
+  CHECK(table.find("     0 yes         0.00s     4.0000     0.0000      1      0.0000      3\n") != std::string::npos);
+  CHECK(table.find("     1 yes         0.50s     0.0000     5.0000      1      1.0000      -\n") != std::string::npos);
+  CHECK(table.find("     3 left") != std::string::npos);
+  CHECK(table.find("     4 DEAD") != std::string::npos);
+  CHECK(supervisor::status_table({}).find("(no agent heard yet)") != std::string::npos);
+  CHECK(supervisor::status_json({}, 0, 0.0)["agents"].empty());
+}
+
+TEST_CASE("metrics JSON has every metric of the table; undefined is null, counts are integers",
+          "[supervisor][presentation]") {
+  core::Metrics m;
+  m.agents = 7;
+  m.gap_cv = 0.25;
+  m.clusters = 2;
+  const nlohmann::json j = util::metrics_json(m);
+  CHECK(j.size() == std::size(core::kMetricTable) + 1);
+  CHECK(j["agents"] == 7);
+  for (const core::MetricInfo& info : core::kMetricTable) {
+    INFO(info.name);
+    REQUIRE(j.contains(std::string(info.name)));
+    CHECK(j[std::string(info.name)].is_null() == !info.get(m).has_value());
+  }
+  CHECK(j["gap_cv"] == 0.25);
+  CHECK(j["clusters"].is_number_integer());
+  CHECK(j.dump().find("\"clusters\":2,") != std::string::npos);
+
+  SwarmMonitor::Sample s;
+  s.model_time = 12.5;
+  s.metrics = m;
+  s.converged = true;
+  const nlohmann::json answer = supervisor::metrics_answer(s, 3);
+  CHECK(answer["epoch"] == 3);
+  CHECK(answer["model_time"] == 12.5);
+  CHECK(answer["converged"] == true);
+  CHECK(answer["gap_cv"] == 0.25);
+}
+
+TEST_CASE("summary JSON keeps every key, tracking errors only when tracking", "[supervisor][presentation]") {
+  supervisor::Summary s;
+  s.name = "circle";
+  s.command = circle();
+  s.command.dt = 0.5;
+  s.epoch = 2;
+  s.sample.model_time = 50.0;
+  s.sample.metrics.agents = 2;
+  s.sample.metrics.shape_error_mean = 0.01;
+  s.sample.converged = true;
+  s.sample.alive = 2;
+  s.agents_seen = 3;
+  s.settle_time = 20.0;
+  s.final_positions = {{0, Vec2(4, 0)}, {5, Vec2(-4, 0)}};
+  s.final_model_times = {50.0, 49.5};
+  s.samples_rejected = 4;
+  s.exit_status = 3;
+
+  nlohmann::json j = supervisor::summary_json(s);
+  std::set<std::string> keys;
+  for (const auto& [k, v] : j.items()) keys.insert(k);
+  std::set<std::string> want = {"event", "agents", "name", "shape", "law", "tracking", "epoch", "model_time", "dt",
+                                "steps", "agents_seen", "converged", "settle_step", "final_ids", "final_positions",
+                                "final_model_times", "samples_rejected", "recording", "exit_status"};
+  for (const core::MetricInfo& info : core::kMetricTable)
+    if (info.name != "centroid_error" && info.name != "ring_error") want.insert(std::string(info.name));
+  CHECK(keys == want);
+  CHECK(j["event"] == "summary");
+  CHECK(j["shape"] == "circle");
+  CHECK(j["law"] == "paper");
+  CHECK(j["steps"] == 100);
+  CHECK(j["settle_step"] == 40);
+  CHECK(j["final_ids"] == nlohmann::json({0, 5}));
+  CHECK(j["final_positions"] == nlohmann::json({{4.0, 0.0}, {-4.0, 0.0}}));
+  CHECK(j["final_model_times"] == nlohmann::json({50.0, 49.5}));
+  CHECK(j["recording"].is_null());
+  CHECK(j["exit_status"] == 3);
+  CHECK(j["shape_error_mean"] == 0.01);
+  CHECK(j["gap_cv"].is_null());
+
+  s.command.tracking.enabled = true;
+  s.recording = "/tmp/rec";
+  s.settle_time.reset();
+  j = supervisor::summary_json(s);
+  CHECK(j.contains("centroid_error"));
+  CHECK(j.contains("ring_error"));
+  CHECK(j["recording"] == "/tmp/rec");
+  CHECK(j["settle_step"].is_null());
+
+  const std::string text = supervisor::summary_text(s);
+  CHECK(text.rfind("summary: epoch 2, 2 agents, t=50, converged\n  shape_error_mean=0.0100 ", 0) == 0);
+  CHECK(text.find(" settle_step=- ") != std::string::npos);
+  CHECK(text.find("\n  recording: /tmp/rec\n") != std::string::npos);
+}
+
+TEST_CASE("a command is described on one line", "[supervisor][presentation]") {
+  CHECK(supervisor::describe_command(circle()) ==
+        "circle r=4 centre (0, 0); k1=0.1 k2=2 sigma=3.5 beta=1.2 r=0.1, euler dt=1");
+}
