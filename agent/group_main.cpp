@@ -8,7 +8,7 @@
 
 #include "agent_logic.hpp"
 #include "agent_node.hpp"
-#include "util/app.hpp"
+#include "app/app.hpp"
 
 namespace {
 
@@ -52,7 +52,7 @@ bool parse_ids(const std::string& text, std::vector<std::int32_t>& ids, std::str
 
 int main(int argc, char** argv) {
   using namespace shapeform;
-  util::App app("shapeform_agent_group",
+  app::App app("shapeform_agent_group",
                 "shapeform_agent_group: several agents in one process; each follows the supervisor's commands over DDS.");
   std::string ids_text, seed;
   agent::AgentOptions opt;
@@ -69,7 +69,7 @@ int main(int argc, char** argv) {
   if (!parse_ids(ids_text, ids, error)) return app.usage_error("--ids: " + error);
   const auto cfg = app.load_config(app.given("--seed") ? std::vector<std::string>{"swarm.seed=" + seed}
                                                         : std::vector<std::string>{});
-  if (!cfg) return util::kExitUsage;
+  if (!cfg) return app::kExitUsage;
   std::vector<core::Vec2> starts;
   for (const auto id : ids)
     starts.push_back(agent::seeded_start(id, cfg->swarm.agents, cfg->swarm.seed, cfg->swarm.init_half_width));

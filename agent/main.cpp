@@ -4,11 +4,11 @@
 
 #include "agent_logic.hpp"
 #include "agent_node.hpp"
-#include "util/app.hpp"
+#include "app/app.hpp"
 
 int main(int argc, char** argv) {
   using namespace shapeform;
-  util::App app("shapeform_agent", "shapeform_agent: one agent process; follows the supervisor's commands over DDS.");
+  app::App app("shapeform_agent", "shapeform_agent: one agent process; follows the supervisor's commands over DDS.");
   int id = -1;
   std::string start, seed;
   agent::AgentOptions opt;
@@ -24,7 +24,7 @@ int main(int argc, char** argv) {
   // The loader checks the seed (64-bit, >= 0).
   const auto cfg = app.load_config(app.given("--seed") ? std::vector<std::string>{"swarm.seed=" + seed}
                                                         : std::vector<std::string>{});
-  if (!cfg) return util::kExitUsage;
+  if (!cfg) return app::kExitUsage;
 
   core::Vec2 x0;
   if (!start.empty()) {

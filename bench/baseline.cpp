@@ -34,7 +34,7 @@
 #include "dds/topics.hpp"
 #include "shapeform/msg/AgentStatePubSubTypes.h"
 #include "shapeform/msg/AgentStatusPubSubTypes.h"
-#include "util/app.hpp"
+#include "app/app.hpp"
 #include "util/log.hpp"
 #include "util/proc_stats.hpp"
 #include "util/rate_loop.hpp"
@@ -197,7 +197,7 @@ int run(std::int32_t id, const config::Config& cfg) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  util::App app("shapeform_bench_baseline",
+  shapeform::app::App app("shapeform_bench_baseline",
                 "shapeform_bench_baseline: bare AgentState pub/sub at the agents' rate and transport (benchmark floor).");
   int id = -1;
   app.cli().add_option("--id", id, "process id, 0..9999 (unique in the run)")->required();
@@ -205,6 +205,6 @@ int main(int argc, char** argv) {
   if (const auto rc = app.parse(argc, argv)) return *rc;
   if (id < 0 || id > 9999) return app.usage_error("--id must be in 0..9999, got " + std::to_string(id));
   const auto cfg = app.load_config();
-  if (!cfg) return util::kExitUsage;
+  if (!cfg) return shapeform::app::kExitUsage;
   return run(id, *cfg);
 }

@@ -18,7 +18,7 @@
 #include "dds/node.hpp"
 #include "shapeform/msg/AgentStatus.h"
 #include "shapeform/msg/SwarmMetrics.h"
-#include "util/app.hpp"
+#include "app/app.hpp"
 #include "util/log.hpp"
 #include "util/proc_stats.hpp"
 #include "util/rate_loop.hpp"
@@ -102,14 +102,14 @@ int run(const config::Config& cfg, const std::filesystem::path& dir) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  util::App app("shapeform_bench_probe",
+  shapeform::app::App app("shapeform_bench_probe",
                 "shapeform_bench_probe: records AgentStatus and SwarmMetrics samples as CSV for benchmarks.");
   std::string out;
   app.cli().add_option("--out", out, "directory for status.csv and metrics.csv (created)")->required();
   app.add_config_options("YAML config (transport.*)");
   if (const auto rc = app.parse(argc, argv)) return *rc;
   const auto cfg = app.load_config();
-  if (!cfg) return util::kExitUsage;
+  if (!cfg) return shapeform::app::kExitUsage;
   std::error_code ec;
   std::filesystem::create_directories(out, ec);
   if (ec) return app.usage_error("--out: cannot create " + out + ": " + ec.message());

@@ -7,10 +7,13 @@
 #include <initializer_list>
 #include <map>
 #include <optional>
+#include <stdexcept>
 #include <utility>
 #include <vector>
 
+#include "core/params.hpp"
 #include "shapes/shapes.hpp"
+#include "util/text.hpp"
 
 namespace shapeform::supervisor {
 namespace {
@@ -92,18 +95,21 @@ std::optional<double> to_double(const std::string& s) {
   return v;  // ERANGE overflow gives +-HUGE_VAL (non-finite); underflow gives a finite value
 }
 
-enum class Bound { Any, Positive, NonNegative };
+namespace params = core::params;
+using params::Range;
+using util::trim;
 
-/// Degrees -> radians, as the config loader converts shape.rotation_deg (same bits for same input).
-constexpr double kRadPerDeg = 3.14159265358979323846 / 180.0;
-
-std::string trim(const std::string& s) {
-  std::size_t first = 0;
-  std::size_t last = s.size();
-  while (first < last && is_space(s[first])) ++first;
-  while (last > first && is_space(s[last - 1])) --last;
-  return s.substr(first, last - first);
+/// The range the command table declares for a config key of core::Command ("shape.r0"): the console's
+/// parameters are bounded exactly as the config file and the command topic.
+const Range& field(std::string_view key) {
+  const params::Param<core::Command>* p = params::find_key(key);
+  if (p == nullptr) throw std::logic_error("no command key '" + std::string(key) + "'");
+  return p->range;
 }
+
+/// Bounds of parameters that are not fields of the command (timeouts, durations, counts).
+constexpr Range kAnyNumber = params::any();
+constexpr Range kNonNegative = params::at_least(0);
 
 /// Arguments of one command after its command word(s): positionals and key=value pairs.
 class Args {
@@ -146,22 +152,22 @@ class Args {
   }
 
   /// A required number parameter.
-  double number(const std::string& key, Bound bound) const {
+  double number(const std::string& key, const Range& bound) const {
     return check_number(key, raw(key), bound);
   }
   /// An optional number parameter.
-  double number_or(const std::string& key, Bound bound, double fallback) const {
+  double number_or(const std::string& key, const Range& bound, double fallback) const {
     return has(key) ? number(key, bound) : fallback;
   }
 
   /// Parses `text` as a number named `label` (empty label: the value of the command itself).
-  double check_number(const std::string& label, const std::string& text, Bound bound) const {
+  /// The message names the bound broken, as written ("r must be > 0, got -2"; "dt must be <= 10").
+  double check_number(const std::string& label, const std::string& text, const Range& bound) const {
     const std::string owner = label.empty() ? name_ : name_ + ": " + label;
     const std::optional<double> v = to_double(text);
     if (!v) fail(owner + ": not a number: '" + text + "'");
     if (!std::isfinite(*v)) fail(owner + " must be finite, got " + text);
-    if (bound == Bound::Positive && !(*v > 0.0)) fail(owner + " must be > 0, got " + text);
-    if (bound == Bound::NonNegative && !(*v >= 0.0)) fail(owner + " must be >= 0, got " + text);
+    if (!bound.contains(*v)) fail(owner + " " + bound.text_for(*v) + ", got " + text);
     return *v;
   }
 
@@ -192,7 +198,7 @@ class Args {
 
   /// Optional centre cx, cy (default 0, 0).
   core::Vec2 centre() const {
-    return core::Vec2(number_or("cx", Bound::Any, 0.0), number_or("cy", Bound::Any, 0.0));
+    return core::Vec2(number_or("cx", kAnyNumber, 0.0), number_or("cy", kAnyNumber, 0.0));
   }
 
   /// A required `x,y;x,y;...` parameter (blanks around numbers allowed; empty text: no points).
@@ -221,10 +227,10 @@ class Args {
     return out;
   }
 
-  /// Optional rotation rot (degrees, default 0) and scale (> 0, default 1) of every shape.
+  /// Optional rotation rot (degrees, default 0) and scale (default 1) of every shape.
   void placement(core::ShapeSpec& s) const {
-    s.rotation = number_or("rot", Bound::Any, 0.0) * kRadPerDeg;
-    s.scale = number_or("scale", Bound::Positive, 1.0);
+    s.rotation = params::radians(number_or("rot", field("shape.rotation_deg"), 0.0));
+    s.scale = number_or("scale", field("shape.scale"), 1.0);
   }
 
  private:
@@ -244,8 +250,7 @@ const std::string& sub_word(const Tokens& t, const std::string& cmd, const std::
   return t[1].text;
 }
 
-constexpr const char* kShapeList =
-    "line, circle, ellipse, square, polar, parametric, implicit, polygon";
+const std::string kShapeList = params::join(params::names(params::kShapeKindNames), ", ");
 
 /// shapes::compile on a parsed shape: a ShapeError becomes the command's one-line error, named
 /// after the command ("shape polar: r(phi) = '4+foo': Unexpected token ...").
@@ -268,61 +273,70 @@ Action parse_shape(const Tokens& t, const core::CompiledCommand& current) {
   cmd.tracking = core::Tracking{};  // a fixed shape: tracking off, no stale path
   cmd.shape = core::ShapeSpec{};    // nothing of the previous shape (expressions) lingers
   core::ShapeSpec& s = cmd.shape;
-  if (kind == "line") {
-    const Args a(name, t, 2, {"m", "c", "rot", "scale"}, 0);
-    s.kind = core::ShapeKind::Line;
-    s.m = a.number("m", Bound::Any);
-    s.c = a.number("c", Bound::Any);
-    s.centre = core::Vec2::Zero();
-    a.placement(s);
-  } else if (kind == "circle") {
-    const Args a(name, t, 2, {"r", "cx", "cy", "rot", "scale"}, 0);
-    s.kind = core::ShapeKind::Circle;
-    s.r0 = a.number("r", Bound::Positive);
-    s.centre = a.centre();
-    a.placement(s);
-  } else if (kind == "ellipse") {
-    const Args a(name, t, 2, {"a", "b", "cx", "cy", "rot", "scale"}, 0);
-    s.kind = core::ShapeKind::Ellipse;
-    s.a = a.number("a", Bound::Positive);
-    s.b = a.number("b", Bound::Positive);
-    s.centre = a.centre();
-    a.placement(s);
-  } else if (kind == "square") {
-    const Args a(name, t, 2, {"a", "cx", "cy", "rot", "scale"}, 0);
-    s.kind = core::ShapeKind::Square;
-    s.a = a.number("a", Bound::Positive);
-    s.centre = a.centre();
-    a.placement(s);
-  } else if (kind == "polar") {
-    const Args a(name, t, 2, {"r", "cx", "cy", "rot", "scale"}, 0);
-    s.kind = core::ShapeKind::Polar;
-    s.r_expr = a.raw("r");
-    s.centre = a.centre();
-    a.placement(s);
-  } else if (kind == "parametric") {
-    const Args a(name, t, 2, {"x", "y", "closed", "cx", "cy", "rot", "scale"}, 0);
-    s.kind = core::ShapeKind::Parametric;
-    s.x_expr = a.raw("x");
-    s.y_expr = a.raw("y");
-    s.closed = a.on_off_or("closed", true);
-    s.centre = a.centre();
-    a.placement(s);
-  } else if (kind == "implicit") {
-    const Args a(name, t, 2, {"f", "cx", "cy", "rot", "scale"}, 0);
-    s.kind = core::ShapeKind::Implicit;
-    s.f_expr = a.raw("f");
-    s.centre = a.centre();
-    a.placement(s);
-  } else if (kind == "polygon") {
-    const Args a(name, t, 2, {"points", "closed", "cx", "cy", "rot", "scale"}, 0);
-    s.kind = core::ShapeKind::Polygon;
-    s.vertices = a.points("points");
-    s.closed = a.on_off_or("closed", true);
-    s.centre = a.centre();
-    a.placement(s);
-  } else {
+  if (!params::parse_name(params::kShapeKindNames, kind, s.kind))
     fail("shape: unknown shape '" + kind + "' (expected " + kShapeList + ")");
+  switch (s.kind) {
+    case core::ShapeKind::Line: {
+      const Args a(name, t, 2, {"m", "c", "rot", "scale"}, 0);
+      s.m = a.number("m", field("shape.m"));
+      s.c = a.number("c", field("shape.c"));
+      s.centre = core::Vec2::Zero();
+      a.placement(s);
+      break;
+    }
+    case core::ShapeKind::Circle: {
+      const Args a(name, t, 2, {"r", "cx", "cy", "rot", "scale"}, 0);
+      s.r0 = a.number("r", field("shape.r0"));
+      s.centre = a.centre();
+      a.placement(s);
+      break;
+    }
+    case core::ShapeKind::Ellipse: {
+      const Args a(name, t, 2, {"a", "b", "cx", "cy", "rot", "scale"}, 0);
+      s.a = a.number("a", field("shape.a"));
+      s.b = a.number("b", field("shape.b"));
+      s.centre = a.centre();
+      a.placement(s);
+      break;
+    }
+    case core::ShapeKind::Square: {
+      const Args a(name, t, 2, {"a", "cx", "cy", "rot", "scale"}, 0);
+      s.a = a.number("a", field("shape.a"));
+      s.centre = a.centre();
+      a.placement(s);
+      break;
+    }
+    case core::ShapeKind::Polar: {
+      const Args a(name, t, 2, {"r", "cx", "cy", "rot", "scale"}, 0);
+      s.r_expr = a.raw("r");
+      s.centre = a.centre();
+      a.placement(s);
+      break;
+    }
+    case core::ShapeKind::Parametric: {
+      const Args a(name, t, 2, {"x", "y", "closed", "cx", "cy", "rot", "scale"}, 0);
+      s.x_expr = a.raw("x");
+      s.y_expr = a.raw("y");
+      s.closed = a.on_off_or("closed", true);
+      s.centre = a.centre();
+      a.placement(s);
+      break;
+    }
+    case core::ShapeKind::Implicit: {
+      const Args a(name, t, 2, {"f", "cx", "cy", "rot", "scale"}, 0);
+      s.f_expr = a.raw("f");
+      s.centre = a.centre();
+      a.placement(s);
+      break;
+    }
+    case core::ShapeKind::Polygon: {
+      const Args a(name, t, 2, {"points", "closed", "cx", "cy", "rot", "scale"}, 0);
+      s.vertices = a.points("points");
+      s.closed = a.on_off_or("closed", true);
+      s.centre = a.centre();
+      a.placement(s);
+      break;
+    }
   }
   compile_or_fail(name, cmd);
   return SetCommand{SetCommand::What::Shape, cmd};
@@ -343,22 +357,25 @@ Action parse_track(const Tokens& t, const core::CompiledCommand& current) {
     path.kind = core::CentrePath::Kind::Line;
     path.point = a.vec2("from");
     path.velocity = a.vec2("vel");
-    r0 = a.number("r", Bound::Positive);
+    r0 = a.number("r", field("shape.r0"));
     ff = a.on_off_or("ff", false);
   } else if (kind == "circle") {
     const Args a(name, t, 2, {"radius", "period", "r", "cx", "cy", "phase", "ff"}, 0);
     path.kind = core::CentrePath::Kind::Circle;
-    path.radius = a.number("radius", Bound::Positive);
-    path.period = a.number("period", Bound::Positive);
-    r0 = a.number("r", Bound::Positive);
+    path.radius = a.number("radius", field("tracking.radius"));
+    // A circle of radius 0 is `track point`: this command wants a real circle (the config and the
+    // topic accept 0).
+    if (path.radius == 0.0) fail(name + ": radius must be > 0, got " + a.raw("radius"));
+    path.period = a.number("period", field("tracking.period"));
+    r0 = a.number("r", field("shape.r0"));
     path.origin = a.centre();
-    path.phase = a.number_or("phase", Bound::Any, 0.0);
+    path.phase = a.number_or("phase", field("tracking.phase"), 0.0);
     ff = a.on_off_or("ff", false);
   } else if (kind == "point") {
     const Args a(name, t, 2, {"at", "r", "ff"}, 0);
     path.kind = core::CentrePath::Kind::Fixed;
     path.point = a.vec2("at");
-    r0 = a.number("r", Bound::Positive);
+    r0 = a.number("r", field("shape.r0"));
     ff = a.on_off_or("ff", false);
   } else {
     fail("track: unknown path '" + kind + "' (expected line, circle, point, stop)");
@@ -386,34 +403,23 @@ Action parse_gains(const Tokens& t, const core::CompiledCommand& current) {
   if (a.empty()) fail("gains: expected at least one of k1, k2, sigma, beta, r");
   core::CompiledCommand cmd = current;
   core::Gains& g = cmd.gains;
-  g.k1 = a.number_or("k1", Bound::NonNegative, g.k1);
-  g.k2 = a.number_or("k2", Bound::NonNegative, g.k2);
-  g.sigma = a.number_or("sigma", Bound::Positive, g.sigma);
-  g.beta = a.number_or("beta", Bound::NonNegative, g.beta);
-  g.r = a.number_or("r", Bound::NonNegative, g.r);
+  g.k1 = a.number_or("k1", field("dynamics.k1"), g.k1);
+  g.k2 = a.number_or("k2", field("dynamics.k2"), g.k2);
+  g.sigma = a.number_or("sigma", field("dynamics.sigma"), g.sigma);
+  g.beta = a.number_or("beta", field("dynamics.beta"), g.beta);
+  g.r = a.number_or("r", field("dynamics.r"), g.r);
   return SetCommand{SetCommand::What::Gains, cmd};
 }
-
-constexpr double kMaxDt = 10.0;  ///< model time units; larger steps make the law meaningless
 
 Action parse_integrator(const Tokens& t, const core::CompiledCommand& current) {
   const Args a("integrator", t, 1, {"dt"}, 1);
   if (a.positionals() == 0) fail("integrator: missing method (euler or rk4)");
   core::CompiledCommand cmd = current;
   const std::string& method = a.positional(0);
-  // Own mapping rather than core::parse_integrator so the parser needs no core object code.
-  if (method == "euler") {
-    cmd.integrator = core::Integrator::Euler;
-  } else if (method == "rk4") {
-    cmd.integrator = core::Integrator::RK4;
-  } else {
-    fail("integrator: unknown method '" + method + "' (expected euler or rk4)");
-  }
-  if (a.has("dt")) {
-    const double dt = a.number("dt", Bound::Positive);
-    if (dt > kMaxDt) fail("integrator: dt must be <= 10, got " + a.raw("dt"));
-    cmd.dt = dt;
-  }
+  if (!params::parse_name(params::kIntegratorNames, method, cmd.integrator))
+    fail("integrator: unknown method '" + method + "' (expected " +
+         params::join(params::names(params::kIntegratorNames), " or ") + ")");
+  cmd.dt = a.number_or("dt", field("integration.dt"), cmd.dt);
   return SetCommand{SetCommand::What::Integrator, cmd};
 }
 
@@ -421,32 +427,26 @@ Action parse_max_speed(const Tokens& t, const core::CompiledCommand& current) {
   const Args a("max_speed", t, 1, {}, 1);
   if (a.positionals() == 0) fail("max_speed: missing value (units per model time, 0 = off)");
   core::CompiledCommand cmd = current;
-  cmd.max_speed = a.check_number("", a.positional(0), Bound::NonNegative);
+  cmd.max_speed = a.check_number("", a.positional(0), field("dynamics.max_speed"));
   return SetCommand{SetCommand::What::MaxSpeed, cmd};
 }
-
-constexpr double kMaxNormalRate = 10.0;  ///< arc law k_normal bound (1/model time), as in config
 
 Action parse_law(const Tokens& t, const core::CompiledCommand& current) {
   const Args a("law", t, 1, {"k_normal", "k_tangent", "spacing"}, 1);
   if (a.positionals() == 0) fail("law: missing law (paper or arc)");
   core::CompiledCommand cmd = current;  // the shape (and its curve) is kept
   const std::string& law = a.positional(0);
-  if (law == "paper") {
+  if (!params::parse_name(params::kLawNames, law, cmd.law))
+    fail("law: unknown law '" + law + "' (expected " + params::join(params::names(params::kLawNames), " or ") + ")");
+  if (cmd.law == core::Law::Paper) {
     for (const char* key : {"k_normal", "k_tangent", "spacing"}) {
       if (a.has(key)) fail(std::string("law paper: ") + key + " is a parameter of the arc law");
     }
-    cmd.law = core::Law::Paper;
-  } else if (law == "arc") {
-    cmd.law = core::Law::Arc;
-    core::ArcParams& p = cmd.arc;
-    p.k_normal = a.number_or("k_normal", Bound::Positive, p.k_normal);
-    if (p.k_normal > kMaxNormalRate) fail("law: k_normal must be <= 10, got " + a.raw("k_normal"));
-    p.k_tangent = a.number_or("k_tangent", Bound::Positive, p.k_tangent);
-    if (p.k_tangent > 1.0) fail("law: k_tangent must be <= 1, got " + a.raw("k_tangent"));
-    p.spacing = a.number_or("spacing", Bound::Positive, p.spacing);
   } else {
-    fail("law: unknown law '" + law + "' (expected paper or arc)");
+    core::ArcParams& p = cmd.arc;
+    p.k_normal = a.number_or("k_normal", field("dynamics.k_normal"), p.k_normal);
+    p.k_tangent = a.number_or("k_tangent", field("dynamics.k_tangent"), p.k_tangent);
+    p.spacing = a.number_or("spacing", field("dynamics.spacing"), p.spacing);
   }
   return SetCommand{SetCommand::What::Law, cmd};
 }
@@ -456,23 +456,23 @@ Action parse_wait(const Tokens& t) {
   const std::string name = "wait " + what;
   if (what == "converged") {
     const Args a(name, t, 2, {"timeout"}, 0);
-    return WaitConverged{a.number_or("timeout", Bound::NonNegative, 60.0)};
+    return WaitConverged{a.number_or("timeout", kNonNegative, 60.0)};
   }
   if (what == "agents") {
     const Args a(name, t, 2, {"timeout"}, 1);
     if (a.positionals() == 0) fail(name + ": missing agent count N");
     const std::string& text = a.positional(0);
-    const double n = a.check_number("N", text, Bound::Any);
+    const double n = a.check_number("N", text, kAnyNumber);
     if (!(n >= 1.0) || n != std::floor(n) || n > static_cast<double>(INT_MAX)) {
       fail(name + ": N must be an integer >= 1, got " + text);
     }
-    return WaitAgents{static_cast<int>(n), a.number_or("timeout", Bound::NonNegative, 30.0)};
+    return WaitAgents{static_cast<int>(n), a.number_or("timeout", kNonNegative, 30.0)};
   }
   if (what == "time") {
     const Args a(name, t, 2, {"timeout"}, 1);
     if (a.positionals() == 0) fail(name + ": missing model time T");
-    const double when = a.check_number("T", a.positional(0), Bound::NonNegative);
-    return WaitTime{when, a.number_or("timeout", Bound::NonNegative, 600.0)};
+    const double when = a.check_number("T", a.positional(0), kNonNegative);
+    return WaitTime{when, a.number_or("timeout", kNonNegative, 600.0)};
   }
   fail("wait: unknown condition '" + what + "' (expected converged, agents, time)");
 }
@@ -513,7 +513,7 @@ Action parse_tokens(const Tokens& t, const core::CompiledCommand& current) {
   if (word == "sleep") {
     const Args a(word, t, 1, {}, 1);
     if (a.positionals() == 0) fail("sleep: missing duration (seconds)");
-    return Sleep{a.check_number("", a.positional(0), Bound::NonNegative)};
+    return Sleep{a.check_number("", a.positional(0), kNonNegative)};
   }
   if (word == "help") {
     const Args a(word, t, 1, {}, 1);
@@ -531,11 +531,15 @@ Action parse_tokens(const Tokens& t, const core::CompiledCommand& current) {
 struct HelpEntry {
   const char* word;
   const char* overview;  ///< one line per syntax variant
-  const char* details;
+  std::string details;
 };
 
+/// "(> 0)": the bounds of a command field as the command table declares them.
+std::string in(std::string_view key) { return "(" + field(key).bounds() + ")"; }
+
 // clang-format off
-const HelpEntry kHelp[] = {
+const std::vector<HelpEntry>& help_entries() {
+  static const std::vector<HelpEntry> entries = {
   {"shape",
    "shape line m=M c=C                                          line x2 = m x1 + c\n"
    "shape circle r=R [cx=X cy=Y]                                circle of radius R\n"
@@ -559,15 +563,16 @@ const HelpEntry kHelp[] = {
    "  closed, rot and scale. The shape is checked (expressions parsed, curve built) before\n"
    "  anything is sent: a bad one is refused and the swarm keeps its shape.\n"
    "  m, c    line slope and intercept (any finite value)\n"
-   "  r       circle radius (> 0); polar: the expression r(phi), phi in [0, 2 pi), r > 0\n"
-   "  a, b    ellipse semi-axes along x1 and x2 (> 0); for the square, a is the half side (> 0)\n"
+   "  r       circle radius " + in("shape.r0") + "; polar: the expression r(phi), phi in [0, 2 pi), r > 0\n"
+   "  a, b    ellipse semi-axes along x1 and x2 " + in("shape.a") + "; for the square, a is the half side " +
+   in("shape.a") + "\n"
    "  x, y    parametric: the expressions x(s), y(s), s in [0, 1]\n"
    "  f       implicit: the expression f(x, y); the curve is f = 0 (traced in [-20, 20]^2)\n"
    "  points  polygon vertices x,y separated by ';' (closed: >= 3, open: >= 2)\n"
    "  closed  parametric, polygon: join the last point to the first (default on)\n"
    "  cx, cy  centre: where the shape's origin is placed (default 0, 0)\n"
    "  rot     counter-clockwise rotation about the centre, degrees (default 0)\n"
-   "  scale   uniform scale about the centre (> 0, default 1)\n"
+   "  scale   uniform scale about the centre (" + field("shape.scale").bounds() + ", default 1)\n"
    "  Expressions use muparser syntax (+ - * / ^, sin cos exp sqrt abs min max ..., pi);\n"
    "  quote them when they contain spaces: r=\"4 + cos(5*phi)\".\n"},
   {"track",
@@ -579,9 +584,9 @@ const HelpEntry kHelp[] = {
    "track circle radius=RP period=T r=R [cx=X cy=Y] [phase=P] [ff=on|off]\n"
    "track point at=X,Y r=R [ff=on|off]\n"
    "track stop\n"
-   "  The swarm forms a circle of radius r (> 0) around a moving centre C(t).\n"
+   "  The swarm forms a circle of radius r " + in("shape.r0") + " around a moving centre C(t).\n"
    "  from     C(0) of the line path; vel: velocity in units per model time\n"
-   "  radius   radius of the circular path (> 0); period: model time per revolution (> 0)\n"
+   "  radius   radius of the circular path (> 0); period: model time per revolution " + in("tracking.period") + "\n"
    "  cx, cy   centre of the circular path (default 0, 0); phase: angle at t = 0, rad (default 0)\n"
    "  at       the fixed centre\n"
    "  ff       feed-forward: add dC/dt to every agent's velocity (default off)\n"
@@ -590,19 +595,19 @@ const HelpEntry kHelp[] = {
    "gains [k1=] [k2=] [sigma=] [beta=] [r=]                     change control gains\n",
    "gains [k1=K1] [k2=K2] [sigma=S] [beta=B] [r=R]\n"
    "  At least one; the others keep their current values.\n"
-   "  k1     cohesion gain (>= 0)\n"
-   "  k2     attraction-to-shape gain (>= 0)\n"
-   "  sigma  softening length (> 0)\n"
-   "  beta   decay exponent (>= 0)\n"
-   "  r      nearest-neighbour repulsion magnitude (>= 0)\n"},
+   "  k1     cohesion gain " + in("dynamics.k1") + "\n"
+   "  k2     attraction-to-shape gain " + in("dynamics.k2") + "\n"
+   "  sigma  softening length " + in("dynamics.sigma") + "\n"
+   "  beta   decay exponent " + in("dynamics.beta") + "\n"
+   "  r      nearest-neighbour repulsion magnitude " + in("dynamics.r") + "\n"},
   {"integrator",
    "integrator euler|rk4 [dt=DT]                                integration method and step\n",
    "integrator euler|rk4 [dt=DT]\n"
-   "  dt  model time per step, 0 < dt <= 10 (default: keep the current step)\n"},
+   "  dt  model time per step, in " + field("integration.dt").bounds() + " (default: keep the current step)\n"},
   {"max_speed",
    "max_speed V                                                 speed limit (0 = off)\n",
    "max_speed V\n"
-   "  V  speed limit in units per model time (>= 0; 0 = no limit), both laws\n"},
+   "  V  speed limit in units per model time (" + field("dynamics.max_speed").bounds() + "; 0 = no limit), both laws\n"},
   {"law",
    "law paper | law arc [k_normal=] [k_tangent=] [spacing=]     control law\n",
    "law paper\n"
@@ -610,9 +615,11 @@ const HelpEntry kHelp[] = {
    "  Selects the control law; the shape is kept. paper: eq. 2 with the gains (see 'gains').\n"
    "  arc: arc-length slots, exact and evenly spaced (docs/LAW.md). Parameters not given keep\n"
    "  their current values.\n"
-   "  k_normal   rate toward the curve, 1/model time (> 0, <= 10; keep k_normal * dt <= 1)\n"
-   "  k_tangent  fraction of the slot error taken per step along the curve (> 0, <= 1)\n"
-   "  spacing    gap between agents on an unbounded curve such as the line (> 0)\n"},
+   "  k_normal   rate toward the curve, 1/model time (in " + field("dynamics.k_normal").bounds() +
+   "; keep k_normal * dt <= 1)\n"
+   "  k_tangent  fraction of the slot error taken per step along the curve (in " +
+   field("dynamics.k_tangent").bounds() + ")\n"
+   "  spacing    gap between agents on an unbounded curve such as the line " + in("dynamics.spacing") + "\n"},
   {"start",
    "start                                                       publish the scenario of --config\n",
    "start\n"
@@ -657,12 +664,14 @@ const HelpEntry kHelp[] = {
    "quit\n"
    "exit\n"
    "  Stops the supervisor.\n"},
-};
+  };
+  return entries;
+}
 // clang-format on
 
 const HelpEntry* find_help(std::string_view word) {
   if (word == "exit") word = "quit";
-  for (const HelpEntry& e : kHelp) {
+  for (const HelpEntry& e : help_entries()) {
     if (word == e.word) return &e;
   }
   return nullptr;
@@ -690,7 +699,7 @@ std::string help_text(std::string_view command) {
   if (command.empty()) {
     std::string text =
         "Commands (key=value parameters in any order; `help COMMAND` for details):\n";
-    for (const HelpEntry& e : kHelp) text += e.overview;
+    for (const HelpEntry& e : help_entries()) text += e.overview;
     text += "Lines starting with # are comments. Quote values containing spaces: dir=\"a b\".\n";
     return text;
   }

@@ -1,11 +1,11 @@
 // shapeform_supervisor: publishes shape commands and tracking targets, takes console commands,
 // computes, publishes and records the swarm's convergence metrics.
 #include "supervisor_node.hpp"
-#include "util/app.hpp"
+#include "app/app.hpp"
 
 int main(int argc, char** argv) {
   using namespace shapeform;
-  util::App app("shapeform_supervisor",
+  app::App app("shapeform_supervisor",
                 "shapeform_supervisor: commands the swarm and records its convergence. Type 'help' at the console.");
   supervisor::SupervisorOptions opt;
   app.add_config_options("YAML config; its command is what `start` publishes");

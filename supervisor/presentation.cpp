@@ -4,7 +4,8 @@
 #include <cstdio>
 #include <sstream>
 
-#include "util/metrics_json.hpp"
+#include "app/metrics_json.hpp"
+#include "core/params.hpp"
 
 namespace shapeform::supervisor {
 
@@ -47,7 +48,7 @@ std::string describe_command(const core::CompiledCommand& c) {
     case core::ShapeKind::Implicit: o << " f=\"" << s.f_expr << '"'; break;
     case core::ShapeKind::Polygon: o << " with " << s.vertices.size() << (s.closed ? " vertices, closed" : " vertices, open"); break;
   }
-  if (s.rotation != 0.0) o << " rotated " << s.rotation * 180.0 / 3.14159265358979323846 << " deg";
+  if (s.rotation != 0.0) o << " rotated " << s.rotation / core::params::kRadPerDeg << " deg";
   if (s.scale != 1.0) o << " scaled " << s.scale;
   if (c.tracking.enabled)
     o << ", tracking on a " << core::to_string(c.tracking.path.kind) << " path"
@@ -130,7 +131,7 @@ std::string progress_line(const SwarmMonitor::Sample& s, const core::Command& cu
 }
 
 nlohmann::json metrics_answer(const SwarmMonitor::Sample& s, std::uint32_t epoch) {
-  nlohmann::json j = util::metrics_json(s.metrics);
+  nlohmann::json j = app::metrics_json(s.metrics);
   j["epoch"] = epoch;
   j["model_time"] = s.model_time;
   j["converged"] = s.converged;
@@ -139,7 +140,7 @@ nlohmann::json metrics_answer(const SwarmMonitor::Sample& s, std::uint32_t epoch
 
 nlohmann::json summary_json(const Summary& s) {
   const double t = s.sample.model_time;
-  nlohmann::json j = util::metrics_json(s.sample.metrics);
+  nlohmann::json j = app::metrics_json(s.sample.metrics);
   j["event"] = "summary";
   j["name"] = s.name;
   j["shape"] = std::string(core::to_string(s.command.shape.kind));

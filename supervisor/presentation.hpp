@@ -46,7 +46,7 @@ nlohmann::json status_json(const std::vector<AgentRow>& rows, std::uint32_t epoc
 /// The progress line logged about once a second.
 std::string progress_line(const SwarmMonitor::Sample& s, const core::Command& current);
 
-/// The `metrics` answer: every metric (util::metrics_json), epoch, model_time, converged.
+/// The `metrics` answer: every metric (app::metrics_json), epoch, model_time, converged.
 nlohmann::json metrics_answer(const SwarmMonitor::Sample& s, std::uint32_t epoch);
 
 /// What the exit summary reports.

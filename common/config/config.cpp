@@ -10,14 +10,18 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <map>
 #include <optional>
+#include <set>
 #include <sstream>
+#include <stdexcept>
 #include <string_view>
 #include <system_error>
 
 #include "shapes/shapes.hpp"
+#include "util/text.hpp"
 
 namespace shapeform::config {
 
@@ -27,83 +31,39 @@ using Problems = std::vector<std::string>;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// ---------------------------------------------------------------------------------------------
-// Names of enumerations. The spellings are those of core's to_string/parse helpers; the mapping
-// is kept here so the loader depends on core's types only, not on its function bodies.
-
-template <class E>
-struct Name {
-  E value;
-  std::string_view name;
-};
-
-constexpr Name<core::ShapeKind> kShapeNames[] = {{core::ShapeKind::Line, "line"},
-                                                 {core::ShapeKind::Circle, "circle"},
-                                                 {core::ShapeKind::Ellipse, "ellipse"},
-                                                 {core::ShapeKind::Square, "square"},
-                                                 {core::ShapeKind::Polar, "polar"},
-                                                 {core::ShapeKind::Parametric, "parametric"},
-                                                 {core::ShapeKind::Implicit, "implicit"},
-                                                 {core::ShapeKind::Polygon, "polygon"}};
-constexpr Name<core::Law> kLawNames[] = {{core::Law::Paper, "paper"}, {core::Law::Arc, "arc"}};
-constexpr Name<bool> kSyncNames[] = {{false, "free"}, {true, "lockstep"}};
-constexpr Name<core::CentrePath::Kind> kPathNames[] = {{core::CentrePath::Kind::Fixed, "fixed"},
-                                                       {core::CentrePath::Kind::Line, "line"},
-                                                       {core::CentrePath::Kind::Circle, "circle"}};
-constexpr Name<core::Integrator> kIntegratorNames[] = {{core::Integrator::Euler, "euler"},
-                                                       {core::Integrator::RK4, "rk4"}};
-constexpr Name<std::string_view> kProfileNames[] = {
-    {"loopback", "loopback"}, {"lan", "lan"}, {"discovery-server", "discovery-server"}};
-
-template <class E, std::size_t N>
-std::optional<E> parse_name(const Name<E> (&table)[N], std::string_view s) {
-  for (const auto& entry : table)
-    if (entry.name == s) return entry.value;
-  return std::nullopt;
-}
-
-template <class E, std::size_t N>
-std::string name_of(const Name<E> (&table)[N], E v) {
-  for (const auto& entry : table)
-    if (entry.value == v) return std::string(entry.name);
-  return "?";
-}
-
-template <class E, std::size_t N>
-std::string names_list(const Name<E> (&table)[N]) {
-  std::string out;
-  for (const auto& entry : table) out += (out.empty() ? "" : ", ") + std::string(entry.name);
-  return out;
-}
+namespace params = core::params;
+using params::Type;
+using Param = params::Param<Config>;
 
 // ---------------------------------------------------------------------------------------------
-// The schema's key names per section ("" = top level). Used for unknown-key checks and to check
-// --set paths before they touch the tree.
+// The schema's key names per section ("" = top level), from the config table. Used for unknown-key
+// checks and to check --set paths before they touch the tree.
+
+std::pair<std::string, std::string> split_key(const std::string& dotted) {
+  const auto dot = dotted.rfind('.');
+  if (dot == std::string::npos) return {"", dotted};
+  return {dotted.substr(0, dot), dotted.substr(dot + 1)};
+}
 
 const std::map<std::string, std::vector<std::string>>& schema_sections() {
-  static const std::map<std::string, std::vector<std::string>> sections = {
-      {"",
-       {"schema_version", "name", "swarm", "shape", "tracking", "dynamics", "integration", "sim",
-        "agent", "supervisor", "transport"}},
-      {"swarm", {"agents", "seed", "init_half_width"}},
-      {"shape",
-       {"kind", "m", "c", "r0", "a", "b", "centre", "rotation_deg", "scale", "r_expr", "x_expr",
-        "y_expr", "f_expr", "vertices", "closed"}},
-      {"tracking",
-       {"enabled", "path", "point", "velocity", "origin", "radius", "period", "phase",
-        "feedforward"}},
-      {"dynamics",
-       {"k1", "k2", "sigma", "beta", "r", "max_speed", "law", "k_normal", "k_tangent", "spacing"}},
-      {"integration", {"integrator", "dt"}},
-      {"sim", {"steps"}},
-      {"agent", {"rate_hz", "neighbour_timeout_periods", "status_rate_hz", "sync"}},
-      {"supervisor",
-       {"metrics_rate_hz", "target_rate_hz", "agent_timeout_s", "flush_s", "converge"}},
-      {"supervisor.converge", {"band_abs", "band_rel", "gap_cv_max", "hold"}},
-      {"transport",
-       {"profile", "domain", "max_participants", "interfaces", "peers", "discovery_server",
-        "lease_s", "announce_s", "socket_buffer_bytes", "multicast_data"}},
-  };
+  static const std::map<std::string, std::vector<std::string>> sections = [] {
+    std::map<std::string, std::vector<std::string>> out;
+    auto add = [&out](const std::string& section, const std::string& name) {
+      auto& names = out[section];
+      if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
+    };
+    for (const Param& p : config_table()) {
+      // Every ancestor section is a key of its parent: "supervisor.converge.hold" gives
+      // "" -> supervisor, supervisor -> converge, supervisor.converge -> hold.
+      for (std::string path = p.key;;) {
+        const auto [parent, leaf] = split_key(path);
+        add(parent, leaf);
+        if (parent.empty()) break;
+        path = parent;
+      }
+    }
+    return out;
+  }();
   return sections;
 }
 
@@ -112,9 +72,7 @@ std::string join_path(const std::string& section, std::string_view key) {
 }
 
 bool schema_has(const std::string& dotted) {
-  const auto dot = dotted.rfind('.');
-  const std::string parent = dot == std::string::npos ? "" : dotted.substr(0, dot);
-  const std::string leaf = dot == std::string::npos ? dotted : dotted.substr(dot + 1);
+  const auto [parent, leaf] = split_key(dotted);
   const auto it = schema_sections().find(parent);
   if (it == schema_sections().end()) return false;
   return std::find(it->second.begin(), it->second.end(), leaf) != it->second.end();
@@ -190,14 +148,7 @@ IntParse parse_integer(std::string_view s, long long& out) {
                                                                : IntParse::NotInteger;
 }
 
-/// Shortest text that reads back to exactly v (no forced decimal point): for messages.
-std::string format_number(double v) {
-  if (std::isnan(v)) return ".nan";
-  if (std::isinf(v)) return v > 0 ? ".inf" : "-.inf";
-  char buf[64];
-  const auto res = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, res.ptr);
-}
+using params::format_number;
 
 /// As format_number, but always reads back as a YAML float ("1.0", not "1").
 std::string format_real(double v) {
@@ -206,9 +157,8 @@ std::string format_real(double v) {
   return s;
 }
 
-constexpr double kRadPerDeg = 3.14159265358979323846 / 180.0;
-
-double radians(double degrees) { return degrees * kRadPerDeg; }
+using params::kRadPerDeg;
+using params::radians;
 
 /// The degrees d that read back (radians(d)) as exactly `rad`, in the shortest spelling found near
 /// rad / kRadPerDeg; so to_yaml's rotation_deg round-trips the stored radians bit for bit.
@@ -260,32 +210,6 @@ std::string describe(const YAML::Node& n) {
   if (!is_quoted(n) && (parse_real(s, ignored) || is_bool_word(s))) return s;
   return quote(s);
 }
-
-// ---------------------------------------------------------------------------------------------
-// Ranges.
-
-struct Bound {
-  double lo = -kInf;
-  bool lo_open = false;
-  double hi = kInf;
-  bool hi_open = false;
-
-  bool contains(double v) const {
-    return (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi);
-  }
-  std::string text() const {
-    if (std::isinf(hi))
-      return std::string("must be ") + (lo_open ? "> " : ">= ") + format_number(lo);
-    if (std::isinf(lo))
-      return std::string("must be ") + (hi_open ? "< " : "<= ") + format_number(hi);
-    return std::string("must be in ") + (lo_open ? "(" : "[") + format_number(lo) + ", " +
-           format_number(hi) + (hi_open ? ")" : "]");
-  }
-};
-
-Bound above(double lo) { return {lo, true, kInf, false}; }
-Bound at_least(double lo) { return {lo, false, kInf, false}; }
-Bound above_up_to(double lo, double hi) { return {lo, true, hi, false}; }
 
 // ---------------------------------------------------------------------------------------------
 // The walk.
@@ -370,7 +294,7 @@ class Reader {
   }
 
   std::optional<double> real(const std::string& path, const YAML::Node& v, const YAML::Node& at,
-                             const Bound& bound) {
+                             const params::Range& bound) {
     double x = 0.0;
     if (!v.IsScalar() || is_quoted(v) || !parse_real(v.Scalar(), x)) {
       bad(path, "expected a number", v, at);
@@ -386,7 +310,7 @@ class Reader {
     }
     return x;
   }
-  std::optional<double> real(const Entry& e, const Bound& bound) {
+  std::optional<double> real(const Entry& e, const params::Range& bound) {
     if (!e.present) return std::nullopt;
     return real(e.path, e.value, e.anchor(), bound);
   }
@@ -403,7 +327,8 @@ class Reader {
       return std::nullopt;
     }
     if (parsed == IntParse::OutOfRange || x < lo || x > hi) {
-      bad(e, "must be in " + std::to_string(lo) + ".." + std::to_string(hi));
+      bad(e, lo == hi ? "must be " + std::to_string(lo)
+                      : "must be in " + std::to_string(lo) + ".." + std::to_string(hi));
       return std::nullopt;
     }
     return x;
@@ -457,13 +382,13 @@ class Reader {
     return e.value.Scalar();
   }
 
-  template <class E, std::size_t N>
-  std::optional<E> choice(const Entry& e, const Name<E> (&table)[N]) {
+  /// One of `names`, as text.
+  std::optional<std::string> choice(const Entry& e, const std::vector<std::string>& names) {
     const auto s = text(e);
     if (!s) return std::nullopt;
-    const auto v = parse_name(table, *s);
-    if (!v) bad(e, "must be one of " + names_list(table));
-    return v;
+    if (std::find(names.begin(), names.end(), *s) != names.end()) return s;
+    bad(e, "must be one of " + params::join(names, ", "));
+    return std::nullopt;
   }
 
   /// [x1, x2], both finite numbers.
@@ -481,7 +406,7 @@ class Reader {
     for (std::size_t i = 0; i < 2; ++i) {
       const YAML::Node item = e.value[i];
       const auto x = real(e.path + "[" + std::to_string(i) + "]", item,
-                          item.IsNull() ? e.anchor() : item, Bound{});
+                          item.IsNull() ? e.anchor() : item, params::any());
       if (x) out[static_cast<Eigen::Index>(i)] = *x;
       ok = ok && x.has_value();
     }
@@ -538,6 +463,29 @@ class Reader {
     return ok ? std::optional<std::vector<std::string>>(std::move(out)) : std::nullopt;
   }
 
+  /// The value of e as parameter p declares it (type, then range), or nullopt (problem reported,
+  /// or e absent).
+  std::optional<params::Value> value(const Entry& e, const Param& p) {
+    auto wrap = [](auto v) { return v ? std::optional<params::Value>(std::move(*v)) : std::nullopt; };
+    switch (p.type) {
+      case Type::Real: {
+        const auto v = real(e, p.range);
+        if (v && p.degrees) return params::Value(radians(*v));
+        return wrap(v);
+      }
+      case Type::Integer:
+        return wrap(integer(e, static_cast<long long>(p.range.lo), static_cast<long long>(p.range.hi)));
+      case Type::UInt64: return wrap(unsigned64(e));
+      case Type::Bool: return wrap(boolean(e));
+      case Type::Choice: return wrap(choice(e, p.choices));
+      case Type::Text: return wrap(text(e));
+      case Type::Vec2: return wrap(vec2(e));
+      case Type::Vec2List: return wrap(vec2_list(e));
+      case Type::TextList: return wrap(text_list(e));
+    }
+    return std::nullopt;
+  }
+
  private:
   bool from_override(const std::string& path) const {
     for (const auto& o : overridden_) {
@@ -552,45 +500,6 @@ class Reader {
   std::vector<std::string> overridden_;
 };
 
-template <class T, class U>
-void assign(const std::optional<U>& v, T& out) {
-  if (v) out = static_cast<T>(*v);
-}
-
-/// "a.b.c.d" with each part 0..255 (the transport takes IPv4 literals only).
-bool valid_ipv4(const std::string& s) {
-  int parts = 0;
-  std::size_t pos = 0;
-  while (pos <= s.size()) {
-    const std::size_t dot = std::min(s.find('.', pos), s.size());
-    const std::string part = s.substr(pos, dot - pos);
-    if (part.empty() || part.size() > 3 || part.find_first_not_of("0123456789") != std::string::npos ||
-        std::stoi(part) > 255)
-      return false;
-    ++parts;
-    pos = dot + 1;
-  }
-  return parts == 4;
-}
-
-/// "host:port" with host an IPv4 literal or localhost and port 1..65535.
-bool valid_host_port(const std::string& s) {
-  const auto colon = s.rfind(':');
-  if (colon == std::string::npos || colon == 0) return false;
-  const std::string host = s.substr(0, colon);
-  if (host != "localhost" && !valid_ipv4(host)) return false;
-  long long port = 0;
-  return parse_integer(s.substr(colon + 1), port) == IntParse::Ok && s[colon + 1] != '+' &&
-         s[colon + 1] != '-' && port >= 1 && port <= 65535;
-}
-
-std::string trim(const std::string& s) {
-  const auto first = s.find_first_not_of(" \t");
-  if (first == std::string::npos) return "";
-  const auto last = s.find_last_not_of(" \t");
-  return s.substr(first, last - first + 1);
-}
-
 /// Applies "dotted.key=value" overrides to root in order. Returns the paths set; bad overrides
 /// are reported in problems and skipped.
 std::vector<std::string> apply_overrides(YAML::Node& root,
@@ -599,7 +508,7 @@ std::vector<std::string> apply_overrides(YAML::Node& root,
   std::vector<std::string> applied;
   for (const auto& item : overrides) {
     const auto eq = item.find('=');
-    const std::string key = eq == std::string::npos ? "" : trim(item.substr(0, eq));
+    const std::string key = eq == std::string::npos ? "" : util::trim(item.substr(0, eq));
     if (key.empty()) {
       problems.push_back("--set " + item + ": expected dotted.key=value");
       continue;
@@ -672,178 +581,76 @@ void compile_shape(core::CompiledCommand& cmd, const ShapeKeys& keys, Reader& rd
   }
 }
 
-/// The checked conversion of a (map) tree.
+/// The transport's problems (dds::transport_problems, the one validator) at the keys and lines they
+/// came from; a problem of a key already reported, or about one, is not repeated.
+void check_transport(const dds::TransportConfig& tr, const std::map<std::string, Entry>& found,
+                     const std::set<std::string>& reported, Reader& rd) {
+  for (const dds::TransportProblem& p : dds::transport_problems(tr)) {
+    if (reported.count(p.key) != 0 || (!p.related.empty() && reported.count(p.related) != 0)) continue;
+    const Entry& e = found.at(p.key);
+    if (p.key == "transport.announce_s" && !e.present) {
+      // Only the lease was given: it is the key that is wrong.
+      rd.bad(found.at("transport.lease_s"),
+             "must be > transport.announce_s (" + format_number(tr.announce_s) + ")");
+    } else if (e.present) {
+      rd.bad(e, p.what);
+    } else {
+      rd.problems.push_back(p.key + ": " + p.what + ", got " + p.got);
+    }
+  }
+}
+
+/// The checked conversion of a (map) tree: every key of the config table, in order.
 Config convert(const YAML::Node& root, bool version_required, Reader& rd) {
   Config c;
   rd.check_keys(root, "");
 
-  const Entry version = rd.find(root, "", "schema_version");
-  if (!version.present) {
-    if (version_required)
-      rd.problems.push_back("schema_version: missing (required, must be " +
-                            std::to_string(kSchemaVersion) + ")");
-  } else if (const auto v = rd.integer(version, std::numeric_limits<long long>::min(),
-                                       std::numeric_limits<long long>::max())) {
-    if (*v != kSchemaVersion)
-      rd.bad(version, "must be " + std::to_string(kSchemaVersion));
-    else
-      c.schema_version = kSchemaVersion;
-  }
-  assign(rd.text(rd.find(root, "", "name")), c.name);
-
-  const auto get = [&rd](const YAML::Node& map, const std::string& section, const char* key) {
-    return rd.find(map, section, key);
+  // The map of each section, its keys checked once, when its first key is read.
+  std::map<std::string, YAML::Node> maps{{"", root}};
+  std::function<YAML::Node(const std::string&)> section_map = [&](const std::string& path) {
+    if (const auto it = maps.find(path); it != maps.end()) return it->second;
+    const auto [parent, leaf] = split_key(path);
+    const YAML::Node parent_map = section_map(parent);
+    const YAML::Node m = rd.section(rd.find(parent_map, parent, leaf));
+    maps.emplace(path, m);
+    return m;
   };
 
-  {
-    const std::string s = "swarm";
-    const YAML::Node m = rd.section(get(root, "", "swarm"));
-    assign(rd.integer(get(m, s, "agents"), 1, 1000), c.swarm.agents);
-    assign(rd.unsigned64(get(m, s, "seed")), c.swarm.seed);
-    assign(rd.real(get(m, s, "init_half_width"), above(0)), c.swarm.init_half_width);
-  }
-  // The shape is compiled (expressions parsed, curve built) once every key is read; its problems
-  // name the key that holds the faulty expression or vertices.
-  ShapeKeys shape_keys;
-  bool shape_ok = false;
-  const std::size_t problems_before_shape = rd.problems.size();
-  {
-    const std::string s = "shape";
-    auto& shape = c.command.shape;
-    const YAML::Node m = rd.section(get(root, "", "shape"));
-    assign(rd.choice(get(m, s, "kind"), kShapeNames), shape.kind);
-    assign(rd.real(get(m, s, "m"), Bound{}), shape.m);
-    assign(rd.real(get(m, s, "c"), Bound{}), shape.c);
-    assign(rd.real(get(m, s, "r0"), above(0)), shape.r0);
-    assign(rd.real(get(m, s, "a"), above(0)), shape.a);
-    assign(rd.real(get(m, s, "b"), above(0)), shape.b);
-    assign(rd.vec2(get(m, s, "centre")), shape.centre);
-    if (const auto deg = rd.real(get(m, s, "rotation_deg"), Bound{})) shape.rotation = radians(*deg);
-    assign(rd.real(get(m, s, "scale"), above(0)), shape.scale);
-    shape_keys.r_expr = get(m, s, "r_expr");
-    shape_keys.x_expr = get(m, s, "x_expr");
-    shape_keys.y_expr = get(m, s, "y_expr");
-    shape_keys.f_expr = get(m, s, "f_expr");
-    shape_keys.vertices = get(m, s, "vertices");
-    assign(rd.text(shape_keys.r_expr), shape.r_expr);
-    assign(rd.text(shape_keys.x_expr), shape.x_expr);
-    assign(rd.text(shape_keys.y_expr), shape.y_expr);
-    assign(rd.text(shape_keys.f_expr), shape.f_expr);
-    assign(rd.vec2_list(shape_keys.vertices), shape.vertices);
-    assign(rd.boolean(get(m, s, "closed")), shape.closed);
-    shape_ok = rd.problems.size() == problems_before_shape;
-  }
-  {
-    const std::string s = "tracking";
-    auto& tracking = c.command.tracking;
-    const YAML::Node m = rd.section(get(root, "", "tracking"));
-    assign(rd.boolean(get(m, s, "enabled")), tracking.enabled);
-    assign(rd.choice(get(m, s, "path"), kPathNames), tracking.path.kind);
-    assign(rd.vec2(get(m, s, "point")), tracking.path.point);
-    assign(rd.vec2(get(m, s, "velocity")), tracking.path.velocity);
-    assign(rd.vec2(get(m, s, "origin")), tracking.path.origin);
-    assign(rd.real(get(m, s, "radius"), at_least(0)), tracking.path.radius);
-    assign(rd.real(get(m, s, "period"), above(0)), tracking.path.period);
-    assign(rd.real(get(m, s, "phase"), Bound{}), tracking.path.phase);
-    assign(rd.boolean(get(m, s, "feedforward")), tracking.feedforward);
-  }
-  {
-    const std::string s = "dynamics";
-    auto& gains = c.command.gains;
-    const YAML::Node m = rd.section(get(root, "", "dynamics"));
-    assign(rd.real(get(m, s, "k1"), at_least(0)), gains.k1);
-    assign(rd.real(get(m, s, "k2"), at_least(0)), gains.k2);
-    assign(rd.real(get(m, s, "sigma"), above(0)), gains.sigma);
-    assign(rd.real(get(m, s, "beta"), at_least(0)), gains.beta);
-    assign(rd.real(get(m, s, "r"), at_least(0)), gains.r);
-    assign(rd.real(get(m, s, "max_speed"), at_least(0)), c.command.max_speed);
-    assign(rd.choice(get(m, s, "law"), kLawNames), c.command.law);
-    assign(rd.real(get(m, s, "k_normal"), above_up_to(0, 10)), c.command.arc.k_normal);
-    assign(rd.real(get(m, s, "k_tangent"), above_up_to(0, 1)), c.command.arc.k_tangent);
-    assign(rd.real(get(m, s, "spacing"), above(0)), c.command.arc.spacing);
-  }
-  {
-    const std::string s = "integration";
-    const YAML::Node m = rd.section(get(root, "", "integration"));
-    assign(rd.choice(get(m, s, "integrator"), kIntegratorNames), c.command.integrator);
-    assign(rd.real(get(m, s, "dt"), above_up_to(0, 10)), c.command.dt);
-  }
-  {
-    const YAML::Node m = rd.section(get(root, "", "sim"));
-    assign(rd.integer(get(m, "sim", "steps"), 0, 10'000'000), c.sim.steps);
-  }
-  {
-    const std::string s = "agent";
-    const YAML::Node m = rd.section(get(root, "", "agent"));
-    assign(rd.real(get(m, s, "rate_hz"), above_up_to(0, 1000)), c.agent.rate_hz);
-    assign(rd.real(get(m, s, "neighbour_timeout_periods"), at_least(1)),
-           c.agent.neighbour_timeout_periods);
-    assign(rd.real(get(m, s, "status_rate_hz"), above(0)), c.agent.status_rate_hz);
-    assign(rd.choice(get(m, s, "sync"), kSyncNames), c.agent.lockstep);
-  }
-  {
-    const std::string s = "supervisor";
-    auto& sup = c.supervisor;
-    const YAML::Node m = rd.section(get(root, "", "supervisor"));
-    assign(rd.real(get(m, s, "metrics_rate_hz"), above(0)), sup.metrics_rate_hz);
-    assign(rd.real(get(m, s, "target_rate_hz"), above(0)), sup.target_rate_hz);
-    assign(rd.real(get(m, s, "agent_timeout_s"), above(0)), sup.agent_timeout_s);
-    assign(rd.real(get(m, s, "flush_s"), above(0)), sup.flush_s);
-    const std::string cs = "supervisor.converge";
-    const YAML::Node cm = rd.section(get(m, s, "converge"));
-    assign(rd.real(get(cm, cs, "band_abs"), at_least(0)), sup.converge.band_abs);
-    assign(rd.real(get(cm, cs, "band_rel"), at_least(0)), sup.converge.band_rel);
-    assign(rd.real(get(cm, cs, "gap_cv_max"), above(0)), sup.converge.gap_cv_max);
-    assign(rd.real(get(cm, cs, "hold"), at_least(0)), sup.converge.hold);
-  }
-  {
-    const std::string s = "transport";
-    auto& tr = c.transport;
-    const YAML::Node m = rd.section(get(root, "", "transport"));
-    const Entry profile = get(m, s, "profile");
-    assign(rd.choice(profile, kProfileNames), tr.profile);
-    assign(rd.integer(get(m, s, "domain"), 0, 232), tr.domain);
-    assign(rd.integer(get(m, s, "max_participants"), 1, 230), tr.max_participants);
-    for (auto [key, field] : {std::pair{"interfaces", &tr.interfaces}, std::pair{"peers", &tr.peers}}) {
-      const Entry e = get(m, s, key);
-      if (const auto v = rd.text_list(e)) {
-        const auto bad = std::find_if(v->begin(), v->end(), [](const std::string& a) { return !valid_ipv4(a); });
-        if (bad == v->end())
-          *field = *v;
-        else
-          rd.bad(e, "must be a list of IPv4 addresses (\"" + *bad + "\" is not one)");
+  std::map<std::string, Entry> found;  // every key, present or not (cross-key checks)
+  std::set<std::string> reported;      // keys with a problem
+  // The shape is compiled (expressions parsed, curve built) once every key is read, and only when
+  // the shape section itself had no problem; compile problems name the key that holds the faulty
+  // expression or vertices.
+  std::optional<std::size_t> problems_before_shape;
+  std::optional<bool> shape_ok;
+  for (const Param& p : config_table()) {
+    const bool in_shape = p.key.rfind("shape.", 0) == 0;
+    if (in_shape && !problems_before_shape) problems_before_shape = rd.problems.size();
+    if (!in_shape && problems_before_shape && !shape_ok) shape_ok = rd.problems.size() == *problems_before_shape;
+    const auto [section, leaf] = split_key(p.key);
+    const Entry e = rd.find(section_map(section), section, leaf);
+    found.emplace(p.key, e);
+    const std::size_t before = rd.problems.size();
+    if (p.key == "schema_version") {
+      if (!e.present) {
+        if (version_required)
+          rd.problems.push_back("schema_version: missing (required, must be " + std::to_string(kSchemaVersion) +
+                                ")");
+      } else if (const auto v = rd.integer(e, std::numeric_limits<long long>::min(),
+                                           std::numeric_limits<long long>::max())) {
+        if (*v != kSchemaVersion) rd.bad(e, "must be " + std::to_string(kSchemaVersion));
       }
+    } else if (const auto v = rd.value(e, p)) {
+      p.set(c, *v);
     }
-    const Entry server = get(m, s, "discovery_server");
-    if (const auto v = rd.text(server)) {
-      if (valid_host_port(*v))
-        tr.discovery_server = *v;
-      else
-        rd.bad(server, "must be host:port with host an IPv4 address or localhost and port 1..65535");
-    }
-    const Entry lease = get(m, s, "lease_s");
-    const Entry announce = get(m, s, "announce_s");
-    const auto lease_v = rd.real(lease, above(0));
-    const auto announce_v = rd.real(announce, above(0));
-    assign(lease_v, tr.lease_s);
-    assign(announce_v, tr.announce_s);
-    const bool lease_ok = lease_v || !lease.present;
-    const bool announce_ok = announce_v || !announce.present;
-    if (lease_ok && announce_ok && !(tr.announce_s < tr.lease_s)) {
-      if (announce.present)
-        rd.bad(announce, "must be < transport.lease_s (" + format_number(tr.lease_s) + ")");
-      else
-        rd.bad(lease, "must be > transport.announce_s (" + format_number(tr.announce_s) + ")");
-    }
-    assign(rd.integer(get(m, s, "socket_buffer_bytes"), 0, std::numeric_limits<int>::max()),
-           tr.socket_buffer_bytes);
-    const Entry multicast = get(m, s, "multicast_data");
-    assign(rd.boolean(multicast), tr.multicast_data);
-    if (tr.multicast_data && !tr.on_loopback())
-      rd.bad(multicast, "needs transport.profile loopback, or discovery-server with a server on 127.x (profile is " +
-                            tr.profile + ")");
+    if (rd.problems.size() != before) reported.insert(p.key);
   }
-  if (shape_ok) compile_shape(c.command, shape_keys, rd);
+  check_transport(c.transport, found, reported, rd);
+  if (shape_ok.value_or(false)) {
+    ShapeKeys keys{found.at("shape.r_expr"), found.at("shape.x_expr"), found.at("shape.y_expr"),
+                   found.at("shape.f_expr"), found.at("shape.vertices")};
+    compile_shape(c.command, keys, rd);
+  }
   return c;
 }
 
@@ -868,7 +675,7 @@ std::string file_problem(const std::string& source, const std::string& what) {
 void put_text(YAML::Emitter& e, const std::string& s) {
   double ignored_real = 0.0;
   const bool ambiguous = s.empty() || s == "~" || s == "null" || s == "Null" || s == "NULL" ||
-                         is_bool_word(s) || parse_real(s, ignored_real) || trim(s) != s;
+                         is_bool_word(s) || parse_real(s, ignored_real) || util::trim(s) != s;
   if (ambiguous) e << YAML::DoubleQuoted;
   e << s;
 }
@@ -886,6 +693,35 @@ void put_list(YAML::Emitter& e, const char* key, const std::vector<std::string>&
   e << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq;
   for (const auto& s : items) put_text(e, s);
   e << YAML::EndSeq;
+}
+
+/// One key of the table with its value, spelled so that it reads back the same.
+void put_value(YAML::Emitter& e, const char* key, const Param& p, const params::Value& v) {
+  switch (p.type) {
+    case Type::Real: {
+      const double x = std::get<double>(v);
+      put_real(e, key, p.degrees ? degrees_for(x) : x);
+      return;
+    }
+    case Type::Integer: e << YAML::Key << key << YAML::Value << std::get<long long>(v); return;
+    case Type::UInt64:
+      e << YAML::Key << key << YAML::Value << static_cast<unsigned long long>(std::get<std::uint64_t>(v));
+      return;
+    case Type::Bool: e << YAML::Key << key << YAML::Value << std::get<bool>(v); return;
+    case Type::Choice: e << YAML::Key << key << YAML::Value << std::get<std::string>(v); return;
+    case Type::Text:
+      e << YAML::Key << key << YAML::Value;
+      put_text(e, std::get<std::string>(v));
+      return;
+    case Type::Vec2: put_vec2(e, key, std::get<core::Vec2>(v)); return;
+    case Type::Vec2List:
+      e << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq;
+      for (const auto& x : std::get<std::vector<core::Vec2>>(v))
+        e << YAML::Flow << YAML::BeginSeq << format_real(x.x()) << format_real(x.y()) << YAML::EndSeq;
+      e << YAML::EndSeq;
+      return;
+    case Type::TextList: put_list(e, key, std::get<std::vector<std::string>>(v)); return;
+  }
 }
 
 std::string join_lines(const std::vector<std::string>& lines) {
@@ -933,116 +769,116 @@ Config load(const std::string& path, const std::vector<std::string>& overrides) 
 std::string to_yaml(const Config& c) {
   YAML::Emitter e;
   e << YAML::BeginMap;
-  e << YAML::Key << "schema_version" << YAML::Value << c.schema_version;
-  e << YAML::Key << "name" << YAML::Value;
-  put_text(e, c.name);
-
-  e << YAML::Key << "swarm" << YAML::Value << YAML::BeginMap;
-  e << YAML::Key << "agents" << YAML::Value << c.swarm.agents;
-  e << YAML::Key << "seed" << YAML::Value << static_cast<unsigned long long>(c.swarm.seed);
-  put_real(e, "init_half_width", c.swarm.init_half_width);
-  e << YAML::EndMap;
-
-  const auto& shape = c.command.shape;
-  e << YAML::Key << "shape" << YAML::Value << YAML::BeginMap;
-  e << YAML::Key << "kind" << YAML::Value << name_of(kShapeNames, shape.kind);
-  put_real(e, "m", shape.m);
-  put_real(e, "c", shape.c);
-  put_real(e, "r0", shape.r0);
-  put_real(e, "a", shape.a);
-  put_real(e, "b", shape.b);
-  put_vec2(e, "centre", shape.centre);
-  put_real(e, "rotation_deg", degrees_for(shape.rotation));
-  put_real(e, "scale", shape.scale);
-  e << YAML::Key << "r_expr" << YAML::Value;
-  put_text(e, shape.r_expr);
-  e << YAML::Key << "x_expr" << YAML::Value;
-  put_text(e, shape.x_expr);
-  e << YAML::Key << "y_expr" << YAML::Value;
-  put_text(e, shape.y_expr);
-  e << YAML::Key << "f_expr" << YAML::Value;
-  put_text(e, shape.f_expr);
-  e << YAML::Key << "vertices" << YAML::Value << YAML::Flow << YAML::BeginSeq;
-  for (const auto& v : shape.vertices)
-    e << YAML::Flow << YAML::BeginSeq << format_real(v.x()) << format_real(v.y()) << YAML::EndSeq;
-  e << YAML::EndSeq;
-  e << YAML::Key << "closed" << YAML::Value << shape.closed;
-  e << YAML::EndMap;
-
-  const auto& tracking = c.command.tracking;
-  e << YAML::Key << "tracking" << YAML::Value << YAML::BeginMap;
-  e << YAML::Key << "enabled" << YAML::Value << tracking.enabled;
-  e << YAML::Key << "path" << YAML::Value << name_of(kPathNames, tracking.path.kind);
-  put_vec2(e, "point", tracking.path.point);
-  put_vec2(e, "velocity", tracking.path.velocity);
-  put_vec2(e, "origin", tracking.path.origin);
-  put_real(e, "radius", tracking.path.radius);
-  put_real(e, "period", tracking.path.period);
-  put_real(e, "phase", tracking.path.phase);
-  e << YAML::Key << "feedforward" << YAML::Value << tracking.feedforward;
-  e << YAML::EndMap;
-
-  const auto& gains = c.command.gains;
-  e << YAML::Key << "dynamics" << YAML::Value << YAML::BeginMap;
-  put_real(e, "k1", gains.k1);
-  put_real(e, "k2", gains.k2);
-  put_real(e, "sigma", gains.sigma);
-  put_real(e, "beta", gains.beta);
-  put_real(e, "r", gains.r);
-  put_real(e, "max_speed", c.command.max_speed);
-  e << YAML::Key << "law" << YAML::Value << name_of(kLawNames, c.command.law);
-  put_real(e, "k_normal", c.command.arc.k_normal);
-  put_real(e, "k_tangent", c.command.arc.k_tangent);
-  put_real(e, "spacing", c.command.arc.spacing);
-  e << YAML::EndMap;
-
-  e << YAML::Key << "integration" << YAML::Value << YAML::BeginMap;
-  e << YAML::Key << "integrator" << YAML::Value << name_of(kIntegratorNames, c.command.integrator);
-  put_real(e, "dt", c.command.dt);
-  e << YAML::EndMap;
-
-  e << YAML::Key << "sim" << YAML::Value << YAML::BeginMap;
-  e << YAML::Key << "steps" << YAML::Value << c.sim.steps;
-  e << YAML::EndMap;
-
-  e << YAML::Key << "agent" << YAML::Value << YAML::BeginMap;
-  put_real(e, "rate_hz", c.agent.rate_hz);
-  put_real(e, "neighbour_timeout_periods", c.agent.neighbour_timeout_periods);
-  put_real(e, "status_rate_hz", c.agent.status_rate_hz);
-  e << YAML::Key << "sync" << YAML::Value << name_of(kSyncNames, c.agent.lockstep);
-  e << YAML::EndMap;
-
-  const auto& sup = c.supervisor;
-  e << YAML::Key << "supervisor" << YAML::Value << YAML::BeginMap;
-  put_real(e, "metrics_rate_hz", sup.metrics_rate_hz);
-  put_real(e, "target_rate_hz", sup.target_rate_hz);
-  put_real(e, "agent_timeout_s", sup.agent_timeout_s);
-  put_real(e, "flush_s", sup.flush_s);
-  e << YAML::Key << "converge" << YAML::Value << YAML::BeginMap;
-  put_real(e, "band_abs", sup.converge.band_abs);
-  put_real(e, "band_rel", sup.converge.band_rel);
-  put_real(e, "gap_cv_max", sup.converge.gap_cv_max);
-  put_real(e, "hold", sup.converge.hold);
-  e << YAML::EndMap;
-  e << YAML::EndMap;
-
-  const auto& tr = c.transport;
-  e << YAML::Key << "transport" << YAML::Value << YAML::BeginMap;
-  e << YAML::Key << "profile" << YAML::Value << tr.profile;
-  e << YAML::Key << "domain" << YAML::Value << tr.domain;
-  e << YAML::Key << "max_participants" << YAML::Value << tr.max_participants;
-  put_list(e, "interfaces", tr.interfaces);
-  put_list(e, "peers", tr.peers);
-  e << YAML::Key << "discovery_server" << YAML::Value;
-  put_text(e, tr.discovery_server);
-  put_real(e, "lease_s", tr.lease_s);
-  put_real(e, "announce_s", tr.announce_s);
-  e << YAML::Key << "socket_buffer_bytes" << YAML::Value << tr.socket_buffer_bytes;
-  e << YAML::Key << "multicast_data" << YAML::Value << tr.multicast_data;
-  e << YAML::EndMap;
-
+  std::vector<std::string> open;  // the sections whose maps are open, outermost first
+  for (const Param& p : config_table()) {
+    std::vector<std::string> parts;
+    for (std::size_t begin = 0;;) {
+      const auto dot = p.key.find('.', begin);
+      parts.push_back(p.key.substr(begin, dot == std::string::npos ? std::string::npos : dot - begin));
+      if (dot == std::string::npos) break;
+      begin = dot + 1;
+    }
+    const std::vector<std::string> sections(parts.begin(), parts.end() - 1);
+    std::size_t common = 0;
+    while (common < open.size() && common < sections.size() && open[common] == sections[common]) ++common;
+    for (; open.size() > common; open.pop_back()) e << YAML::EndMap;
+    for (; open.size() < sections.size(); open.push_back(sections[open.size()]))
+      e << YAML::Key << sections[open.size()] << YAML::Value << YAML::BeginMap;
+    put_value(e, parts.back().c_str(), p, p.get(c));
+  }
+  for (; !open.empty(); open.pop_back()) e << YAML::EndMap;
   e << YAML::EndMap;
   return std::string(e.c_str()) + "\n";
+}
+
+// ---------------------------------------------------------------------------------------------
+// Documentation: config/README.md's key tables.
+
+namespace {
+
+/// The value as to_yaml writes it (one line).
+std::string yaml_text(const Param& p, const params::Value& v) {
+  YAML::Emitter e;
+  e << YAML::BeginMap;
+  put_value(e, "k", p, v);
+  e << YAML::EndMap;
+  return std::string(e.c_str()).substr(3);  // after "k: "
+}
+
+std::string code(const std::string& s) { return "`" + s + "`"; }
+
+/// Markdown cell text: '|' would end the cell.
+std::string cell(const std::string& s) {
+  std::string out;
+  for (const char ch : s) out += ch == '|' ? std::string("\\|") : std::string(1, ch);
+  return out;
+}
+
+std::string range_doc(const Param& p) {
+  std::string base;
+  switch (p.type) {
+    case Type::Real:
+    case Type::Integer: base = p.range.doc(); break;
+    case Type::UInt64: base = "`>= 0`"; break;
+    case Type::Bool: base = "`true`, `false`"; break;
+    case Type::Choice: {
+      std::vector<std::string> quoted;
+      for (const auto& name : p.choices) quoted.push_back(code(name));
+      base = params::join(quoted, ", ");
+      break;
+    }
+    case Type::Vec2: base = "2 finite numbers"; break;
+    case Type::Text:
+    case Type::Vec2List:
+    case Type::TextList: break;
+  }
+  return base + p.range_note;
+}
+
+std::string top_section(const std::string& key) {
+  const auto dot = key.find('.');
+  return dot == std::string::npos ? "" : key.substr(0, dot);
+}
+
+}  // namespace
+
+std::string markdown_table(const std::string& section) {
+  static const Config defaults;
+  std::string out =
+      "| key | type | unit | default | range | description |\n|---|---|---|---|---|---|\n";
+  bool any = false;
+  for (const Param& p : config_table()) {
+    if (top_section(p.key) != section) continue;
+    any = true;
+    const std::string def = p.key == "schema_version" ? "(required)" : code(yaml_text(p, p.get(defaults)));
+    out += "| " + code(p.key) + " | " + std::string(params::type_name(p.type)) + " | " +
+           cell(p.unit.empty() ? "-" : p.unit) + " | " + cell(def) + " | " + cell(range_doc(p)) + " | " +
+           cell(p.doc) + " |\n";
+  }
+  if (!any) throw std::invalid_argument("no config keys in section '" + section + "'");
+  return out;
+}
+
+std::string regenerate_doc(const std::string& text) {
+  static const std::string kBegin = "<!-- BEGIN GENERATED keys: ";
+  static const std::string kEnd = "<!-- END GENERATED -->";
+  std::string out;
+  std::size_t pos = 0;
+  for (;;) {
+    const std::size_t begin = text.find(kBegin, pos);
+    if (begin == std::string::npos) break;
+    const std::size_t close = text.find("-->", begin);
+    const std::size_t line_end = text.find('\n', begin);
+    if (close == std::string::npos || line_end == std::string::npos || close > line_end)
+      throw std::invalid_argument("malformed marker: " + text.substr(begin, 60));
+    std::string section = util::trim(text.substr(begin + kBegin.size(), close - begin - kBegin.size()));
+    const std::size_t end = text.find(kEnd, line_end);
+    if (end == std::string::npos) throw std::invalid_argument("no " + kEnd + " after the block of " + section);
+    out += text.substr(pos, line_end + 1 - pos);
+    out += markdown_table(section == "top" ? "" : section);
+    pos = end;
+  }
+  return out + text.substr(pos);
 }
 
 }  // namespace shapeform::config

@@ -1,5 +1,7 @@
 #pragma once
 /// shapeform configuration: YAML -> these plain structs. The one config loader of the project.
+/// Each field's default is its initialiser here (or in core / dds); its key, type, unit, range and
+/// description are declared once in the config table (config_table(), common/config/table.cpp).
 #include <cstdint>
 #include <stdexcept>
 #include <string>
@@ -8,6 +10,8 @@
 
 #include "core/compiled_command.hpp"
 #include "core/metrics.hpp"
+#include "core/params.hpp"
+#include "dds/transport.hpp"
 
 namespace shapeform::config {
 
@@ -15,7 +19,7 @@ inline constexpr int kSchemaVersion = 1;
 
 /// How agents start when no explicit start is given.
 struct SwarmConfig {
-  int agents = 12;              ///< swarm size (1..1000)
+  int agents = 12;              ///< swarm size
   std::uint64_t seed = 1;       ///< seed of the uniform start
   double init_half_width = 5.0; ///< start uniform in [-w, w]^2
 };
@@ -23,31 +27,6 @@ struct SwarmConfig {
 /// Simulator-only settings.
 struct SimConfig {
   long steps = 500;  ///< number of integration steps
-};
-
-/// DDS transport profile; every participant is built from this by the one participant factory.
-struct TransportConfig {
-  std::string profile = "loopback";  ///< loopback | lan | discovery-server
-  int domain = 0;                    ///< DDS domain id, 0..232
-  int max_participants = 120;        ///< participant ids probed by loopback initial peers
-  std::vector<std::string> interfaces;  ///< lan: IPv4 addresses to bind (empty = all)
-  std::vector<std::string> peers;       ///< lan: unicast peer addresses (empty = multicast discovery)
-  std::string discovery_server = "127.0.0.1:11811";  ///< discovery-server: host:port
-  double lease_s = 2.0;     ///< participant lease duration
-  double announce_s = 0.5;  ///< participant announcement period
-  int socket_buffer_bytes = 0;  ///< UDP send/receive buffer size; 0 = OS default
-  /// State-topic readers listen on the multicast group 239.255.0.1 (the domain's user multicast port)
-  /// instead of a unicast port: a writer sends one datagram per sample instead of one per reader.
-  /// Loopback profile, or discovery-server with a server on 127.x / localhost (whitelist 127.0.0.1,
-  /// so the group stays on lo). Off by default.
-  bool multicast_data = false;
-
-  /// Whether every participant's traffic stays on lo: the loopback profile, or a discovery server on
-  /// 127.x / localhost. multicast_data needs it (the loader and the participant factory both check).
-  bool on_loopback() const {
-    return profile == "loopback" || (profile == "discovery-server" && (discovery_server.rfind("127.", 0) == 0 ||
-                                                                       discovery_server.rfind("localhost:", 0) == 0));
-  }
 };
 
 /// Agent process settings.
@@ -77,8 +56,13 @@ struct Config {
   SimConfig sim;
   AgentConfig agent;
   SupervisorConfig supervisor;
-  TransportConfig transport;
+  dds::TransportConfig transport;  ///< filled and checked by dds::transport_problems
 };
+
+/// The config table: every key of the schema, in file order, with type, unit, range, description and
+/// an accessor (defaults read from Config{}). The loader, --set, to_yaml and the key tables of
+/// config/README.md are driven by it.
+const std::vector<core::params::Param<Config>>& config_table();
 
 /// Every problem found while loading or validating, one line each, e.g.
 /// "dynamics.sigma: must be > 0, got -1 (line 7)".
@@ -101,5 +85,16 @@ Config load_string(const std::string& yaml_text, const std::vector<std::string>&
 
 /// The effective configuration as YAML (printed once at start-up by every executable).
 std::string to_yaml(const Config& c);
+
+/// The markdown key table of one top-level section ("" = the top-level keys, "swarm", ...,
+/// "supervisor" with supervisor.converge): key, type, unit, default, range, description.
+/// Throws std::invalid_argument for a section without keys.
+std::string markdown_table(const std::string& section);
+
+/// `text` (config/README.md) with the body of every block between
+/// "<!-- BEGIN GENERATED keys: SECTION -->" and "<!-- END GENERATED -->" replaced by
+/// markdown_table(SECTION) ("top" names the top-level keys). Everything else is kept as it is.
+/// Throws std::invalid_argument for an unknown section or an unterminated block.
+std::string regenerate_doc(const std::string& text);
 
 }  // namespace shapeform::config

@@ -1,5 +1,7 @@
 #include "command.hpp"
 
+#include "params.hpp"
+
 namespace shapeform::core {
 
 ShapeSpec shape_at(const Command& cmd, double t) {
@@ -8,13 +10,8 @@ ShapeSpec shape_at(const Command& cmd, double t) {
   return s;
 }
 
-std::string_view to_string(Law l) { return l == Law::Paper ? "paper" : "arc"; }
+std::string_view to_string(Law l) { return params::name_of(params::kLawNames, l); }
 
-bool parse_law(std::string_view name, Law& out) {
-  if (name == "paper") out = Law::Paper;
-  else if (name == "arc") out = Law::Arc;
-  else return false;
-  return true;
-}
+bool parse_law(std::string_view name, Law& out) { return params::parse_name(params::kLawNames, name, out); }
 
 }  // namespace shapeform::core

@@ -1,19 +1,13 @@
 #include "integrator.hpp"
 
+#include "params.hpp"
+
 namespace shapeform::core {
 
-std::string_view to_string(Integrator i) { return i == Integrator::Euler ? "euler" : "rk4"; }
+std::string_view to_string(Integrator i) { return params::name_of(params::kIntegratorNames, i); }
 
 bool parse_integrator(std::string_view name, Integrator& out) {
-  if (name == "euler") {
-    out = Integrator::Euler;
-    return true;
-  }
-  if (name == "rk4") {
-    out = Integrator::RK4;
-    return true;
-  }
-  return false;
+  return params::parse_name(params::kIntegratorNames, name, out);
 }
 
 }  // namespace shapeform::core

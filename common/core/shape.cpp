@@ -3,35 +3,18 @@
 #include <algorithm>
 #include <cmath>
 
+#include "params.hpp"
+
 namespace shapeform::core {
 
 namespace {
 constexpr double kTwoPi = 6.283185307179586476925286766559;
 }  // namespace
 
-std::string_view to_string(ShapeKind kind) {
-  switch (kind) {
-    case ShapeKind::Line: return "line";
-    case ShapeKind::Circle: return "circle";
-    case ShapeKind::Ellipse: return "ellipse";
-    case ShapeKind::Square: return "square";
-    case ShapeKind::Polar: return "polar";
-    case ShapeKind::Parametric: return "parametric";
-    case ShapeKind::Implicit: return "implicit";
-    case ShapeKind::Polygon: return "polygon";
-  }
-  return "?";
-}
+std::string_view to_string(ShapeKind kind) { return params::name_of(params::kShapeKindNames, kind); }
 
 bool parse_shape_kind(std::string_view name, ShapeKind& out) {
-  for (ShapeKind k : {ShapeKind::Line, ShapeKind::Circle, ShapeKind::Ellipse, ShapeKind::Square, ShapeKind::Polar,
-                      ShapeKind::Parametric, ShapeKind::Implicit, ShapeKind::Polygon}) {
-    if (name == to_string(k)) {
-      out = k;
-      return true;
-    }
-  }
-  return false;
+  return params::parse_name(params::kShapeKindNames, name, out);
 }
 
 std::shared_ptr<const Curve> make_curve(const ShapeSpec& s) {
@@ -87,23 +70,10 @@ Vec2 target_point(const ShapeSpec& s, const Curve& curve, const Vec2& x) {
   return to_world(s, curve.target(to_local(s, x)));
 }
 
-std::string_view to_string(CentrePath::Kind kind) {
-  switch (kind) {
-    case CentrePath::Kind::Fixed: return "fixed";
-    case CentrePath::Kind::Line: return "line";
-    case CentrePath::Kind::Circle: return "circle";
-  }
-  return "?";
-}
+std::string_view to_string(CentrePath::Kind kind) { return params::name_of(params::kPathKindNames, kind); }
 
 bool parse_path_kind(std::string_view name, CentrePath::Kind& out) {
-  for (auto k : {CentrePath::Kind::Fixed, CentrePath::Kind::Line, CentrePath::Kind::Circle}) {
-    if (name == to_string(k)) {
-      out = k;
-      return true;
-    }
-  }
-  return false;
+  return params::parse_name(params::kPathKindNames, name, out);
 }
 
 Vec2 centre_at(const CentrePath& p, double t) {

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/metric_table.hpp"
+#include "core/params.hpp"
 #include "shapes/shapes.hpp"
 
 namespace shapeform::dds {
@@ -30,16 +31,11 @@ class Problems {
     add(field, "must be finite, got " + num(v));
     return false;
   }
-  void positive(const char* field, double v) {
-    if (finite(field, v) && !(v > 0.0)) add(field, "must be > 0, got " + num(v));
-  }
-  void non_negative(const char* field, double v) {
-    if (finite(field, v) && !(v >= 0.0)) add(field, "must be >= 0, got " + num(v));
-  }
-  /// In (0, hi].
-  void positive_up_to(const char* field, double v, double hi) {
-    if (finite(field, v) && !(v > 0.0 && v <= hi))
-      add(field, "must be in (0, " + num(hi) + "], got " + num(v));
+  /// A ShapeCommand number: finite and within the range the command table declares for `field`.
+  void ranged(const char* field, double v) {
+    if (!finite(field, v)) return;
+    const core::params::Range& range = core::params::wire_range(field);
+    if (!range.contains(v)) add(field, range.text() + ", got " + num(v));
   }
   void add(const std::string& field, const std::string& problem) {
     list_.push_back(std::string(prefix_) + "." + field + ": " + problem);
@@ -57,6 +53,12 @@ class Problems {
 };
 
 std::string quoted(const std::string& s) { return "\"" + s + "\""; }
+
+/// " (line|circle|...)": the names a ShapeCommand enumeration field accepts.
+template <class E, std::size_t N>
+std::string accepted(const core::params::Name<E> (&table)[N]) {
+  return " (" + core::params::join(core::params::names(table), "|") + ")";
+}
 
 /// A received metric: negative (-1) or non-finite values are undefined.
 template <class Optional, class T>
@@ -130,23 +132,23 @@ bool from_msg(const msg::ShapeCommand& m, core::CompiledCommand& out, std::strin
 
   if (!core::parse_shape_kind(m.shape_kind(), c.shape.kind)) {
     p.add("shape_kind", "unknown shape " + quoted(m.shape_kind()) +
-                            " (line|circle|ellipse|square|polar|parametric|implicit|polygon)");
+                            accepted(core::params::kShapeKindNames));
   }
-  p.finite("m", m.m());
-  p.finite("c", m.c());
-  p.positive("r0", m.r0());
-  p.positive("a", m.a());
-  p.positive("b", m.b());
-  p.finite("cx", m.cx());
-  p.finite("cy", m.cy());
+  p.ranged("m", m.m());
+  p.ranged("c", m.c());
+  p.ranged("r0", m.r0());
+  p.ranged("a", m.a());
+  p.ranged("b", m.b());
+  p.ranged("cx", m.cx());
+  p.ranged("cy", m.cy());
   c.shape.m = m.m();
   c.shape.c = m.c();
   c.shape.r0 = m.r0();
   c.shape.a = m.a();
   c.shape.b = m.b();
   c.shape.centre = core::Vec2(m.cx(), m.cy());
-  p.finite("rotation", m.rotation());
-  p.positive("scale", m.scale());
+  p.ranged("rotation", m.rotation());
+  p.ranged("scale", m.scale());
   c.shape.rotation = m.rotation();
   c.shape.scale = m.scale();
   c.shape.r_expr = m.r_expr();
@@ -167,17 +169,17 @@ bool from_msg(const msg::ShapeCommand& m, core::CompiledCommand& out, std::strin
 
   c.tracking.enabled = m.tracking();
   if (!core::parse_path_kind(m.path_kind(), c.tracking.path.kind)) {
-    p.add("path_kind", "unknown path " + quoted(m.path_kind()) + " (fixed|line|circle)");
+    p.add("path_kind", "unknown path " + quoted(m.path_kind()) + accepted(core::params::kPathKindNames));
   }
-  p.finite("path_px", m.path_px());
-  p.finite("path_py", m.path_py());
-  p.finite("path_vx", m.path_vx());
-  p.finite("path_vy", m.path_vy());
-  p.finite("path_ox", m.path_ox());
-  p.finite("path_oy", m.path_oy());
-  p.non_negative("path_radius", m.path_radius());
-  p.positive("path_period", m.path_period());
-  p.finite("path_phase", m.path_phase());
+  p.ranged("path_px", m.path_px());
+  p.ranged("path_py", m.path_py());
+  p.ranged("path_vx", m.path_vx());
+  p.ranged("path_vy", m.path_vy());
+  p.ranged("path_ox", m.path_ox());
+  p.ranged("path_oy", m.path_oy());
+  p.ranged("path_radius", m.path_radius());
+  p.ranged("path_period", m.path_period());
+  p.ranged("path_phase", m.path_phase());
   c.tracking.path.point = core::Vec2(m.path_px(), m.path_py());
   c.tracking.path.velocity = core::Vec2(m.path_vx(), m.path_vy());
   c.tracking.path.origin = core::Vec2(m.path_ox(), m.path_oy());
@@ -186,12 +188,12 @@ bool from_msg(const msg::ShapeCommand& m, core::CompiledCommand& out, std::strin
   c.tracking.path.phase = m.path_phase();
   c.tracking.feedforward = m.feedforward();
 
-  p.non_negative("k1", m.k1());
-  p.non_negative("k2", m.k2());
-  p.positive("sigma", m.sigma());
-  p.non_negative("beta", m.beta());
-  p.non_negative("r", m.r());
-  p.non_negative("max_speed", m.max_speed());
+  p.ranged("k1", m.k1());
+  p.ranged("k2", m.k2());
+  p.ranged("sigma", m.sigma());
+  p.ranged("beta", m.beta());
+  p.ranged("r", m.r());
+  p.ranged("max_speed", m.max_speed());
   c.gains.k1 = m.k1();
   c.gains.k2 = m.k2();
   c.gains.sigma = m.sigma();
@@ -200,14 +202,14 @@ bool from_msg(const msg::ShapeCommand& m, core::CompiledCommand& out, std::strin
   c.max_speed = m.max_speed();
 
   if (!core::parse_integrator(m.integrator(), c.integrator)) {
-    p.add("integrator", "unknown integrator " + quoted(m.integrator()) + " (euler|rk4)");
+    p.add("integrator", "unknown integrator " + quoted(m.integrator()) + accepted(core::params::kIntegratorNames));
   }
-  p.positive("dt", m.dt());
+  p.ranged("dt", m.dt());
   c.dt = m.dt();
-  if (!core::parse_law(m.law(), c.law)) p.add("law", "unknown law " + quoted(m.law()) + " (paper|arc)");
-  p.positive_up_to("k_normal", m.k_normal(), kMaxNormalRate);
-  p.positive_up_to("k_tangent", m.k_tangent(), 1.0);
-  p.positive("spacing", m.spacing());
+  if (!core::parse_law(m.law(), c.law)) p.add("law", "unknown law " + quoted(m.law()) + accepted(core::params::kLawNames));
+  p.ranged("k_normal", m.k_normal());
+  p.ranged("k_tangent", m.k_tangent());
+  p.ranged("spacing", m.spacing());
   c.arc.k_normal = m.k_normal();
   c.arc.k_tangent = m.k_tangent();
   c.arc.spacing = m.spacing();

@@ -17,13 +17,6 @@
 
 namespace shapeform::dds {
 
-/// ShapeCommand.law spellings (core::to_string / core::parse_law).
-inline constexpr const char* kLawPaper = "paper";
-inline constexpr const char* kLawArc = "arc";
-
-/// Largest ShapeCommand.k_normal accepted (1/model time; the config's bound).
-inline constexpr double kMaxNormalRate = 10.0;
-
 /// Largest |x|, |y| and speed accepted in an AgentState.
 inline constexpr double kStateLimit = 1e6;
 
@@ -33,10 +26,12 @@ msg::ShapeCommand to_msg(const core::Command& cmd, std::uint32_t epoch);
 
 /// Wire message -> core::CompiledCommand, its shape compiled (shapes::compile).
 /// On failure returns false, leaves `out` untouched and sets `error` to every problem found,
-/// separated by "; ", each naming its field, e.g. "command.sigma: must be > 0, got -1". Checks:
-/// every number finite; shape_kind, path_kind, integrator, law known; r0, a, b, scale, sigma, dt,
-/// path_period, k_normal (<= kMaxNormalRate), k_tangent (<= 1), spacing > 0; k1, k2, beta, r,
-/// max_speed, path_radius >= 0; vertices of even length. When all of that passes, the shape is
+/// separated by "; ", each naming its field, e.g. "command.dt: must be in (0, 10], got 50". Checks:
+/// every number finite and within the range the command table (core/params.hpp) declares for its
+/// field, the same bounds as the config loader and the console (r0, a, b, scale, sigma, path_period,
+/// spacing > 0; dt, k_normal in (0, 10]; k_tangent in (0, 1]; k1, k2, beta, r, max_speed,
+/// path_radius >= 0); shape_kind, path_kind, integrator, law known; vertices of even length. When
+/// all of that passes, the shape is
 /// compiled; a core::ShapeError is reported as "command: <its message>", e.g.
 /// "command: polar: r(phi) = '4+foo': Unexpected token \"foo\" found at position 2.".
 /// The epoch is not part of core::Command: read m.epoch().

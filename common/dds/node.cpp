@@ -15,12 +15,6 @@ namespace shapeform::dds {
 namespace fdds = eprosima::fastdds::dds;
 using eprosima::fastrtps::types::ReturnCode_t;
 
-std::int64_t steady_now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
 namespace detail {
 
 Entities::~Entities() {
@@ -61,7 +55,7 @@ void register_type(fdds::DomainParticipant* p, const std::string& node) {
 
 }  // namespace
 
-Node::Node(const config::TransportConfig& cfg, const std::string& name)
+Node::Node(const TransportConfig& cfg, const std::string& name)
     : entities_(std::make_shared<detail::Entities>()) {
   // Any throw below destroys entities_, which deletes whatever was created so far.
   entities_->name = name;

@@ -28,14 +28,12 @@
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
 
-#include "config/config.hpp"
+#include "dds/transport.hpp"
 #include "dds/msg_traits.hpp"
 #include "dds/topics.hpp"
+#include "util/clock.hpp"
 
 namespace shapeform::dds {
-
-/// steady_clock now, ns (the clock of every *_stamp_ns in the project).
-std::int64_t steady_now_ns();
 
 /// Instance state of a keyed sample as the reader saw it.
 enum class InstanceState {
@@ -48,7 +46,7 @@ enum class InstanceState {
 template <class Msg>
 struct Received {
   Msg msg;                          ///< the data; default-constructed when !valid_data
-  std::int64_t receive_stamp_ns = 0;  ///< steady_now_ns() when taken in the listener
+  std::int64_t receive_stamp_ns = 0;  ///< util::steady_ns() when taken in the listener
   bool valid_data = false;          ///< false for instance-state-only samples (dispose, no writers)
   InstanceState instance = InstanceState::Alive;
   /// Keyed types: the instance's id (from msg when valid, else remembered from an earlier valid sample
@@ -69,7 +67,7 @@ struct Entities {
   eprosima::fastdds::dds::Subscriber* subscriber = nullptr;
   std::array<eprosima::fastdds::dds::Topic*, kAllTopics.size()> topics{};
   std::string name;
-  config::TransportConfig transport;  ///< the profile the participant was built from (reader locators)
+  TransportConfig transport;  ///< the profile the participant was built from (reader locators)
 
   Entities() = default;
   Entities(const Entities&) = delete;
@@ -96,7 +94,7 @@ class Mailbox final : public eprosima::fastdds::dds::DataReaderListener {
     Msg sample;
     fdds::SampleInfo info;
     while (is_ok(reader->take_next_sample(&sample, &info))) {
-      const std::int64_t now = steady_now_ns();
+      const std::int64_t now = util::steady_ns();
       InstanceState state = InstanceState::Alive;
       if (info.instance_state == fdds::NOT_ALIVE_DISPOSED_INSTANCE_STATE) {
         state = InstanceState::Disposed;
@@ -135,7 +133,7 @@ class Mailbox final : public eprosima::fastdds::dds::DataReaderListener {
                                const eprosima::fastdds::dds::SubscriptionMatchedStatus& status) override {
     if constexpr (MsgTraits<Msg>::keyed) {
       if (status.current_count_change >= 0) return;
-      const std::int64_t now = steady_now_ns();
+      const std::int64_t now = util::steady_ns();
       std::lock_guard<std::mutex> lock(mutex_);
       for (const auto& [handle, inst] : instances_) {
         if (inst.writer != status.last_publication_handle) continue;
@@ -305,7 +303,7 @@ class Reader {
 /// Throws std::runtime_error naming the entity (and topic) whose creation failed.
 class Node {
  public:
-  Node(const config::TransportConfig& cfg, const std::string& name);
+  Node(const TransportConfig& cfg, const std::string& name);
   ~Node();  ///< deletes contained entities (endpoints, publisher, subscriber, topics), then the participant
   Node(const Node&) = delete;
   Node& operator=(const Node&) = delete;

@@ -15,15 +15,13 @@
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastrtps/utils/IPLocator.h>
 
+#include "util/ipv4.hpp"
+
 namespace shapeform::dds {
 namespace {
 
 namespace fdds = eprosima::fastdds::dds;
 namespace frtps = eprosima::fastrtps::rtps;
-
-/// Largest max_participants accepted, the config loader's limit (ids probed per initial peer; about 100
-/// participants per host is the practical limit, and ids from 120 up use ports of the next domain's block).
-constexpr int kMaxParticipantsLimit = 230;
 
 [[noreturn]] void fail(const std::string& what) { throw std::runtime_error(what); }
 
@@ -34,35 +32,6 @@ std::string str(const T& v) {
   std::ostringstream os;
   os << v;
   return os.str();
-}
-
-struct HostPort {
-  std::string host;
-  std::array<std::uint8_t, 4> ip{};
-  std::uint32_t port = 0;
-};
-
-/// "host:port" with host an IPv4 literal or "localhost" and port 1..65535.
-HostPort parse_host_port(const std::string& text, const std::string& field) {
-  const auto colon = text.rfind(':');
-  if (colon == std::string::npos || colon == 0 || colon + 1 == text.size()) {
-    fail(field + ": expected \"host:port\", got " + quoted(text));
-  }
-  HostPort hp;
-  hp.host = text.substr(0, colon);
-  if (hp.host == "localhost") hp.host = "127.0.0.1";
-  if (!parse_ipv4(hp.host, hp.ip)) {
-    fail(field + ": host must be an IPv4 address or localhost, got " + quoted(text));
-  }
-  const std::string port_text = text.substr(colon + 1);
-  unsigned long port = 0;
-  for (char ch : port_text) {
-    if (ch < '0' || ch > '9' || port > 65535) fail(field + ": bad port in " + quoted(text));
-    port = port * 10 + static_cast<unsigned long>(ch - '0');
-  }
-  if (port < 1 || port > 65535) fail(field + ": port must be in 1..65535, got " + quoted(text));
-  hp.port = static_cast<std::uint32_t>(port);
-  return hp;
 }
 
 frtps::Locator_t udp_locator(const std::array<std::uint8_t, 4>& ip, std::uint32_t port) {
@@ -128,55 +97,10 @@ bool gained_unicast_ports(int domain, const std::set<std::uint32_t>& before, con
   return metatraffic && user;
 }
 
-void validate_common(const config::TransportConfig& cfg) {
-  if (cfg.domain < 0 || cfg.domain > kMaxDomainId) {
-    fail("transport.domain: must be in 0.." + str(kMaxDomainId) + ", got " + str(cfg.domain));
-  }
-  if (cfg.max_participants < 1 || cfg.max_participants > kMaxParticipantsLimit) {
-    fail("transport.max_participants: must be in 1.." + str(kMaxParticipantsLimit) + ", got " +
-         str(cfg.max_participants));
-  }
-  if (!std::isfinite(cfg.lease_s) || cfg.lease_s <= 0.0) {
-    fail("transport.lease_s: must be > 0, got " + str(cfg.lease_s));
-  }
-  if (!std::isfinite(cfg.announce_s) || cfg.announce_s <= 0.0 || cfg.announce_s >= cfg.lease_s) {
-    fail("transport.announce_s: must be > 0 and < lease_s (" + str(cfg.lease_s) + "), got " +
-         str(cfg.announce_s));
-  }
-  if (cfg.socket_buffer_bytes < 0) {
-    fail("transport.socket_buffer_bytes: must be >= 0, got " + str(cfg.socket_buffer_bytes));
-  }
-  if (cfg.multicast_data && !cfg.on_loopback()) {
-    fail("transport.multicast_data: needs the loopback profile or a discovery server on 127.x (traffic on lo "
-         "only), got profile " + quoted(cfg.profile) +
-         (cfg.profile == "discovery-server" ? " with server " + quoted(cfg.discovery_server) : ""));
-  }
-}
-
 }  // namespace
 
-bool parse_ipv4(const std::string& text, std::array<std::uint8_t, 4>& octets) {
-  std::size_t pos = 0;
-  for (std::size_t i = 0; i < 4; ++i) {
-    if (i > 0) {
-      if (pos >= text.size() || text[pos] != '.') return false;
-      ++pos;
-    }
-    const std::size_t start = pos;
-    unsigned value = 0;
-    while (pos < text.size() && text[pos] >= '0' && text[pos] <= '9' && pos - start < 3) {
-      value = value * 10 + static_cast<unsigned>(text[pos] - '0');
-      ++pos;
-    }
-    if (pos == start || value > 255) return false;
-    if (pos - start > 1 && text[start] == '0') return false;  // no leading zeros (octal ambiguity)
-    octets[i] = static_cast<std::uint8_t>(value);
-  }
-  return pos == text.size();
-}
-
-fdds::DomainParticipantQos participant_qos(const config::TransportConfig& cfg, const std::string& name) {
-  validate_common(cfg);
+fdds::DomainParticipantQos participant_qos(const TransportConfig& cfg, const std::string& name) {
+  validate(cfg);
 
   // Built by hand: the library's default participant QoS would pick up XML profiles
   // and builtin transports (UDPv4 on every interface + SHM).
@@ -208,25 +132,19 @@ fdds::DomainParticipantQos participant_qos(const config::TransportConfig& cfg, c
     builtin.metatrafficUnicastLocatorList.push_back(loopback_locator(0));
     pq.wire_protocol().default_unicast_locator_list.push_back(loopback_locator(0));
   } else if (cfg.profile == "lan") {
-    for (std::size_t i = 0; i < cfg.interfaces.size(); ++i) {
+    // validate() checked every address.
+    for (const std::string& address : cfg.interfaces) udp->interfaceWhiteList.push_back(address);
+    for (const std::string& peer : cfg.peers) {
       std::array<std::uint8_t, 4> ip{};
-      if (!parse_ipv4(cfg.interfaces[i], ip)) {
-        fail("transport.interfaces[" + str(i) + "]: must be an IPv4 address, got " +
-             quoted(cfg.interfaces[i]));
-      }
-      udp->interfaceWhiteList.push_back(cfg.interfaces[i]);
-    }
-    for (std::size_t i = 0; i < cfg.peers.size(); ++i) {
-      std::array<std::uint8_t, 4> ip{};
-      if (!parse_ipv4(cfg.peers[i], ip)) {
-        fail("transport.peers[" + str(i) + "]: must be an IPv4 address, got " + quoted(cfg.peers[i]));
-      }
+      util::parse_ipv4(peer, ip);
       builtin.initialPeersList.push_back(udp_locator(ip, 0));
     }
     // No peers: Fast DDS uses the default multicast discovery locator as the initial peer.
   } else if (cfg.profile == "discovery-server") {
-    const HostPort server = parse_host_port(cfg.discovery_server, "transport.discovery_server");
-    if (server.ip[0] == 127) udp->interfaceWhiteList.push_back("127.0.0.1");
+    std::array<std::uint8_t, 4> server_ip{};
+    std::uint16_t server_port = 0;
+    parse_host_port(cfg.discovery_server, server_ip, server_port);  // validate() checked it
+    if (server_ip[0] == 127) udp->interfaceWhiteList.push_back("127.0.0.1");
     builtin.discovery_config.discoveryProtocol = frtps::DiscoveryProtocol_t::CLIENT;
     builtin.discovery_config.discoveryServer_client_syncperiod =
         eprosima::fastrtps::Duration_t(kDiscoveryServerSyncPeriod_s);
@@ -234,22 +152,20 @@ fdds::DomainParticipantQos participant_qos(const config::TransportConfig& cfg, c
     if (!remote.ReadguidPrefix(kDiscoveryServerPrefix)) {
       fail(std::string("discovery server guid prefix does not parse: ") + kDiscoveryServerPrefix);
     }
-    remote.metatrafficUnicastLocatorList.push_back(udp_locator(server.ip, server.port));
+    remote.metatrafficUnicastLocatorList.push_back(udp_locator(server_ip, server_port));
     builtin.discovery_config.m_DiscoveryServers.push_back(remote);
-  } else {
-    fail("transport.profile: must be loopback, lan or discovery-server, got " + quoted(cfg.profile));
   }
 
   pq.transport().user_transports.push_back(udp);
   return pq;
 }
 
-frtps::Locator_t data_multicast_locator(const config::TransportConfig& cfg) {
-  validate_common(cfg);
+frtps::Locator_t data_multicast_locator(const TransportConfig& cfg) {
+  validate(cfg);
   return udp_locator(kDataMulticastGroup, user_multicast_port(cfg.domain));
 }
 
-fdds::DomainParticipant* create_participant(const config::TransportConfig& cfg, const std::string& name) {
+fdds::DomainParticipant* create_participant(const TransportConfig& cfg, const std::string& name) {
   const fdds::DomainParticipantQos pq = participant_qos(cfg, name);
   // Invariant of the project: never builtin transports (they open every interface and SHM).
   if (pq.transport().use_builtin_transports || pq.transport().user_transports.empty()) {
@@ -282,7 +198,7 @@ void delete_participant(fdds::DomainParticipant* participant) {
   fdds::DomainParticipantFactory::get_instance()->delete_participant(participant);
 }
 
-std::string describe(const config::TransportConfig& cfg) {
+std::string describe(const TransportConfig& cfg) {
   std::ostringstream os;
   if (cfg.profile == "loopback") {
     os << "loopback (UDPv4 127.0.0.1 only, unicast discovery of ids 0.." << (cfg.max_participants - 1)

@@ -1,6 +1,6 @@
 #pragma once
 /// The ONE place DDS participants are made. Every participant of the project is built from a
-/// config::TransportConfig profile by create_participant(); builtin transports are never used, so
+/// TransportConfig profile by create_participant(); builtin transports are never used, so
 /// traffic stays on loopback unless a profile explicitly asks for more.
 #include <array>
 #include <cstdint>
@@ -9,7 +9,7 @@
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
 
-#include "config/config.hpp"
+#include "dds/transport.hpp"
 
 namespace shapeform::dds {
 
@@ -20,8 +20,6 @@ inline constexpr double kDiscoveryServerSyncPeriod_s = 0.1;
 /// Multicast group of State samples when transport.multicast_data is on (administratively scoped,
 /// Fast DDS's default group; with the loopback profile it is joined and sent on lo only).
 inline constexpr std::array<std::uint8_t, 4> kDataMulticastGroup = {239, 255, 0, 1};
-/// Largest valid DDS domain id (ports 7400 + 250 d must stay below 65536).
-inline constexpr int kMaxDomainId = 232;
 
 /// The participant QoS of a transport profile, built by hand (never the factory default, which an XML
 /// file could change): builtin transports off, one UDPv4 descriptor, no shared memory.
@@ -39,8 +37,9 @@ inline constexpr int kMaxDomainId = 232;
 /// UDP send and receive buffer sizes (the kernel caps them at net.core.rmem_max / wmem_max).
 /// multicast_data (loopback only) changes no participant setting: see data_multicast_locator().
 /// Pure: creates nothing.
-/// Throws std::runtime_error naming the offending field ("transport.domain: must be in 0..232, got 300").
-eprosima::fastdds::dds::DomainParticipantQos participant_qos(const config::TransportConfig& cfg,
+/// Throws std::runtime_error naming the offending field (validate(): "transport.domain: must be in 0..232,
+/// got 300").
+eprosima::fastdds::dds::DomainParticipantQos participant_qos(const TransportConfig& cfg,
                                                              const std::string& name);
 
 /// The multicast locator readers of the State topic listen on when cfg.multicast_data is set:
@@ -50,13 +49,13 @@ eprosima::fastdds::dds::DomainParticipantQos participant_qos(const config::Trans
 /// advertise no unicast locator: a writer switching from the group to the unicast locator of its last
 /// reader would send to a locator Fast DDS 2.9 never registered and abort on an assert
 /// (statistics/rtps/messages/OutputTrafficManager.hpp:87). Throws like participant_qos().
-eprosima::fastrtps::rtps::Locator_t data_multicast_locator(const config::TransportConfig& cfg);
+eprosima::fastrtps::rtps::Locator_t data_multicast_locator(const TransportConfig& cfg);
 
 /// Creates a participant on cfg.domain from participant_qos(cfg, name). Never returns null:
 /// throws std::runtime_error naming the problem, including a participant that got no unicast port
 /// (every participant slot it may take, max_participants of them, is in use on this host: Fast DDS
 /// itself would create it deaf). Free it with delete_participant().
-eprosima::fastdds::dds::DomainParticipant* create_participant(const config::TransportConfig& cfg,
+eprosima::fastdds::dds::DomainParticipant* create_participant(const TransportConfig& cfg,
                                                               const std::string& name);
 
 /// delete_contained_entities() then deletes the participant. Null is a no-op. Never throws.
@@ -64,9 +63,6 @@ void delete_participant(eprosima::fastdds::dds::DomainParticipant* participant);
 
 /// One line for logs, e.g. "loopback (UDPv4 127.0.0.1 only, unicast discovery of ids 0..119),
 /// domain 0, lease 2 s, announce 0.5 s". Never throws, even for an invalid config.
-std::string describe(const config::TransportConfig& cfg);
-
-/// Strict dotted-quad IPv4 parser ("127.0.0.1"); false for anything else. Exposed for tests.
-bool parse_ipv4(const std::string& text, std::array<std::uint8_t, 4>& octets);
+std::string describe(const TransportConfig& cfg);
 
 }  // namespace shapeform::dds

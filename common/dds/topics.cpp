@@ -81,7 +81,7 @@ fdds::DataReaderQos reader_qos(TopicId id) {
   return q;
 }
 
-fdds::DataReaderQos reader_qos(TopicId id, const config::TransportConfig& transport) {
+fdds::DataReaderQos reader_qos(TopicId id, const TransportConfig& transport) {
   fdds::DataReaderQos q = reader_qos(id);
   if (transport.multicast_data && id == TopicId::State) {
     // Only the high-rate all-to-all topic: low-rate reliable topics stay unicast, so their heartbeats

@@ -6,7 +6,7 @@
 #include <fastdds/dds/publisher/qos/DataWriterQos.hpp>
 #include <fastdds/dds/subscriber/qos/DataReaderQos.hpp>
 
-#include "config/config.hpp"
+#include "dds/transport.hpp"
 
 namespace shapeform::dds {
 
@@ -41,7 +41,7 @@ eprosima::fastdds::dds::DataReaderQos reader_qos(TopicId id);
 
 /// reader_qos(id), plus, when transport.multicast_data is set and id is State, the State multicast
 /// locator (data_multicast_locator) as the reader's only locator.
-eprosima::fastdds::dds::DataReaderQos reader_qos(TopicId id, const config::TransportConfig& transport);
+eprosima::fastdds::dds::DataReaderQos reader_qos(TopicId id, const TransportConfig& transport);
 
 /// Heartbeat period of reliable writers, seconds (Fast DDS default 3 s).
 inline constexpr double kHeartbeatPeriod_s = 0.5;

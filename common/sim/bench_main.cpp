@@ -8,7 +8,7 @@
 #include <string>
 
 #include "core/swarm.hpp"
-#include "util/app.hpp"
+#include "app/app.hpp"
 
 namespace {
 double rss_mb() {
@@ -22,7 +22,7 @@ double rss_mb() {
 
 int main(int argc, char** argv) {
   using namespace shapeform;
-  util::App app("shapeform_bench_sim", "shapeform_bench_sim: simulator throughput (paper law, Euler dt = 1, circle r0 = 4)");
+  app::App app("shapeform_bench_sim", "shapeform_bench_sim: simulator throughput (paper law, Euler dt = 1, circle r0 = 4)");
   int agents = 1000;
   long steps = 100;
   std::string impl = "fast";

@@ -6,12 +6,12 @@
 #include <iostream>
 
 #include "simulation.hpp"
-#include "util/app.hpp"
-#include "util/metrics_json.hpp"
+#include "app/app.hpp"
+#include "app/metrics_json.hpp"
 
 int main(int argc, char** argv) {
   using namespace shapeform;
-  util::App app("shapeform_sim",
+  app::App app("shapeform_sim",
                 "shapeform_sim: N agents of the configured law (paper or arc) in one process, no DDS. Prints one JSON object.");
   CLI::App& cli = app.cli();
   std::string init_path, csv_path, positions_path, integrator;
@@ -51,7 +51,7 @@ int main(int argc, char** argv) {
   }
   if (app.given("--integrator")) sets.push_back("integration.integrator=" + integrator);
   const auto loaded = app.load_config(sets);
-  if (!loaded) return util::kExitUsage;
+  if (!loaded) return app::kExitUsage;
   const config::Config& cfg = *loaded;
   const auto fail = [&](const std::string& msg) { return app.usage_error(msg); };
   if (verbose) std::cerr << config::to_yaml(cfg);
@@ -89,14 +89,9 @@ int main(int argc, char** argv) {
                                    : sim::auto_kernel(static_cast<int>(start.size()));
 
   const core::CompiledCommand& cmd = cfg.command;
-  sim::SimResult r;
-  try {
-    r = sim::run_simulation(cmd, start, cfg.sim.steps, opt);
-  } catch (const core::ShapeError& e) {
-    return fail(e.what());
-  }
+  const sim::SimResult r = sim::run_simulation(cmd, start, cfg.sim.steps, opt);
 
-  nlohmann::json j = util::metrics_json(r.metrics);
+  nlohmann::json j = app::metrics_json(r.metrics);
   j["name"] = cfg.name;
   j["shape"] = std::string(core::to_string(cmd.shape.kind));
   j["tracking"] = cmd.tracking.enabled;

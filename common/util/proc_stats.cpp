@@ -20,12 +20,6 @@ std::int64_t process_cpu_ns() {
 
 }  // namespace
 
-std::int64_t steady_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
 double rss_mb() {
   // statm: size resident shared text lib data dt, in pages.
   std::ifstream in("/proc/self/statm");

@@ -3,12 +3,9 @@
 #include <chrono>
 #include <cstdint>
 
-namespace shapeform::util {
+#include "util/clock.hpp"  // steady_ns(), which status lines stamp with
 
-/// steady_clock now in nanoseconds since that clock's epoch. On Linux this is CLOCK_MONOTONIC,
-/// which is system-wide, so stamps from different processes on the same host are comparable
-/// (e.g. data age = receiver steady_ns() - sender stamp_ns).
-std::int64_t steady_ns();
+namespace shapeform::util {
 
 /// Resident set size of this process in MiB (from /proc/self/statm); -1 if it cannot be read.
 double rss_mb();

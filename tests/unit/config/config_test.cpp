@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -139,6 +140,11 @@ void require_equal(const Config& a, const Config& b) {
   CHECK(a.transport.announce_s == b.transport.announce_s);
   CHECK(a.transport.socket_buffer_bytes == b.transport.socket_buffer_bytes);
   CHECK(a.transport.multicast_data == b.transport.multicast_data);
+  // And every key the table declares, so a key added to the table is compared too.
+  for (const auto& p : shapeform::config::config_table()) {
+    INFO(p.key);
+    CHECK(p.get(a) == p.get(b));
+  }
 }
 
 /// The paper's dynamics and step, shared by every scenario.
@@ -778,6 +784,40 @@ TEST_CASE("discovery_server must be host and port") {
             .transport.discovery_server == "10.1.2.3:65535");
   CHECK(load_string("schema_version: 1\ntransport: {discovery_server: \"localhost:11811\"}\n")
             .transport.discovery_server == "localhost:11811");
+}
+
+TEST_CASE("every bounded key is checked against the range the table declares") {
+  namespace params = core::params;
+  int checked = 0;
+  for (const auto& p : shapeform::config::config_table()) {
+    if ((p.type != params::Type::Real && p.type != params::Type::Integer) || !p.range.bounded() ||
+        p.key == "schema_version")
+      continue;
+    INFO(p.key);
+    const params::Range& r = p.range;
+    // Just outside the lower end (or the upper one when the range has no lower end).
+    const double outside = r.lo != -params::kInf ? (r.lo_open ? r.lo : r.lo - 1) : (r.hi_open ? r.hi : r.hi + 1);
+    const std::string text = p.type == params::Type::Integer ? std::to_string(static_cast<long long>(outside))
+                                                             : params::format_number(outside);
+    CHECK(problem_of("schema_version: 1\n", {p.key + "=" + text}) == p.key + ": " + r.text() + ", got " + text + " (--set)");
+    ++checked;
+  }
+  CHECK(checked >= 30);
+  // integration.dt is bounded (0, 10] in the file, as on the command topic and in the console.
+  CHECK(problem_of("schema_version: 1\nintegration:\n  dt: 50\n") ==
+        "integration.dt: must be in (0, 10], got 50 (line 3)");
+}
+
+TEST_CASE("config/default.yaml lists every key of the table") {
+  std::ifstream in(kSourceDir + "/config/default.yaml");
+  std::stringstream text;
+  text << in.rdbuf();
+  for (const auto& p : shapeform::config::config_table()) {
+    const auto dot = p.key.rfind('.');
+    const std::string leaf = dot == std::string::npos ? p.key : p.key.substr(dot + 1);
+    INFO(p.key);
+    CHECK(text.str().find(leaf + ":") != std::string::npos);
+  }
 }
 
 TEST_CASE("non-finite numbers are rejected") {

@@ -17,12 +17,16 @@
 #include <fastrtps/xmlparser/XMLProfileManager.h>
 
 #include "core/metric_table.hpp"
+#include "core/params.hpp"
 #include "dds/convert.hpp"
 #include "dds/node.hpp"
 #include "dds/participant.hpp"
 #include "dds/topics.hpp"
+#include "dds/transport.hpp"
 #include "shapeform/msg/ShapeCommandPubSubTypes.h"
 #include "shapes/shapes.hpp"
+#include "util/clock.hpp"
+#include "util/ipv4.hpp"
 
 // Everything lives in namespace shapeform: Fast DDS's Topic.hpp declares a global ::dds namespace, so
 // `using namespace shapeform; dds::...` would be ambiguous.
@@ -54,9 +58,9 @@ void force_transport() {
   eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings(settings);
 }
 
-config::TransportConfig loopback(int domain) {
+dds::TransportConfig loopback(int domain) {
   force_transport();
-  config::TransportConfig t;
+  dds::TransportConfig t;
   t.profile = "loopback";
   t.domain = domain;
   t.max_participants = 16;
@@ -342,7 +346,10 @@ TEST_CASE("ShapeCommand rejections name the field", "[dds][convert]") {
   CHECK(reject([](M& m) { m.r0(0); }) == "command.r0: must be > 0, got 0");
   CHECK(reject([](M& m) { m.a(-2); }) == "command.a: must be > 0, got -2");
   CHECK(reject([](M& m) { m.b(0); }) == "command.b: must be > 0, got 0");
-  CHECK(reject([](M& m) { m.dt(0); }) == "command.dt: must be > 0, got 0");
+  CHECK(reject([](M& m) { m.dt(0); }) == "command.dt: must be in (0, 10], got 0");
+  // The command table's bound, the same as the config's and the console's.
+  CHECK(reject([](M& m) { m.dt(50); }) == "command.dt: must be in (0, 10], got 50");
+  CHECK(reject([](M& m) { m.dt(10); }).empty());
   CHECK(reject([](M& m) { m.path_period(-5); }) == "command.path_period: must be > 0, got -5");
   // Negative where >= 0 is required.
   CHECK(reject([](M& m) { m.beta(-0.5); }) == "command.beta: must be >= 0, got -0.5");
@@ -392,6 +399,28 @@ TEST_CASE("ShapeCommand rejections name the field", "[dds][convert]") {
     CHECK(e.find("command.sigma: must be > 0, got -1") != std::string::npos);
     CHECK(e.find("command.dt: must be finite, got nan") != std::string::npos);
   }
+}
+
+TEST_CASE("every bounded command field is refused on the wire by the command table's range", "[dds][convert]") {
+  namespace params = core::params;
+  int checked = 0;
+  for (const auto& p : params::command_table()) {
+    if (p.type != params::Type::Real || !p.range.bounded()) continue;
+    INFO(p.key);
+    REQUIRE(p.wire.size() == 1);
+    const params::Range& r = p.range;
+    for (const double outside : {r.lo_open ? r.lo : r.lo - 1, r.hi_open ? r.hi : r.hi + 1}) {
+      if (!std::isfinite(outside)) continue;
+      core::Command c = sample_command();
+      p.set(c, params::Value(outside));
+      core::CompiledCommand out;
+      std::string error;
+      CHECK_FALSE(dds::from_msg(dds::to_msg(c, 1), out, error));
+      CHECK(error == "command." + p.wire[0] + ": " + r.text() + ", got " + params::format_number(outside));
+      ++checked;
+    }
+  }
+  CHECK(checked >= 15);
 }
 
 TEST_CASE("a shape that does not compile is rejected whole", "[dds][convert]") {
@@ -684,7 +713,7 @@ TEST_CASE("SwarmMetrics carries undefined values as -1", "[dds][convert]") {
 // Transport profiles
 
 TEST_CASE("loopback profile has no builtin transports and only unicast UDPv4 on 127.0.0.1", "[dds][qos]") {
-  config::TransportConfig cfg;  // defaults: loopback
+  dds::TransportConfig cfg;  // defaults: loopback
   REQUIRE(cfg.profile == "loopback");
   cfg.max_participants = 40;
   cfg.lease_s = 2.0;
@@ -724,7 +753,7 @@ TEST_CASE("loopback profile has no builtin transports and only unicast UDPv4 on 
 }
 
 TEST_CASE("multicast_data: State readers listen on one group on lo, nothing else changes", "[dds][qos]") {
-  config::TransportConfig cfg;
+  dds::TransportConfig cfg;
   cfg.domain = 7;
   const fdds::DomainParticipantQos plain = dds::participant_qos(cfg, "agent-1");
   cfg.multicast_data = true;
@@ -758,7 +787,7 @@ TEST_CASE("multicast_data: State readers listen on one group on lo, nothing else
   cfg.multicast_data = true;
   CHECK(dds::describe(cfg).find("multicast 239.255.0.1:9151") != std::string::npos);
 
-  SECTION("off by default") { CHECK_FALSE(config::TransportConfig{}.multicast_data); }
+  SECTION("off by default") { CHECK_FALSE(dds::TransportConfig{}.multicast_data); }
   SECTION("a discovery server on loopback may use it") {
     cfg.profile = "discovery-server";
     cfg.discovery_server = "127.0.0.1:11811";
@@ -768,7 +797,7 @@ TEST_CASE("multicast_data: State readers listen on one group on lo, nothing else
     CHECK_NOTHROW(dds::participant_qos(cfg, "x"));
   }
   SECTION("profiles that may leave loopback refuse it") {
-    auto refused = [&](const config::TransportConfig& c) {
+    auto refused = [&](const dds::TransportConfig& c) {
       try {
         dds::participant_qos(c, "x");
       } catch (const std::runtime_error& e) {
@@ -786,7 +815,7 @@ TEST_CASE("multicast_data: State readers listen on one group on lo, nothing else
 }
 
 TEST_CASE("lan profile: interfaces and peers", "[dds][qos]") {
-  config::TransportConfig cfg;
+  dds::TransportConfig cfg;
   cfg.profile = "lan";
   SECTION("no peers: multicast discovery on all interfaces") {
     const auto q = dds::participant_qos(cfg, "sup");
@@ -814,7 +843,7 @@ TEST_CASE("lan profile: interfaces and peers", "[dds][qos]") {
 }
 
 TEST_CASE("discovery-server profile: client of server id 0", "[dds][qos]") {
-  config::TransportConfig cfg;
+  dds::TransportConfig cfg;
   cfg.profile = "discovery-server";
   cfg.discovery_server = "127.0.0.1:11811";
   auto q = dds::participant_qos(cfg, "agent-0");
@@ -842,7 +871,7 @@ TEST_CASE("discovery-server profile: client of server id 0", "[dds][qos]") {
 }
 
 TEST_CASE("bad transport configs are refused with the field named", "[dds][qos]") {
-  auto problem = [](config::TransportConfig cfg) {
+  auto problem = [](dds::TransportConfig cfg) {
     try {
       dds::participant_qos(cfg, "x");
     } catch (const std::runtime_error& e) {
@@ -850,7 +879,7 @@ TEST_CASE("bad transport configs are refused with the field named", "[dds][qos]"
     }
     return std::string();
   };
-  config::TransportConfig cfg;
+  dds::TransportConfig cfg;
   auto c = cfg;
   c.domain = 233;
   CHECK(problem(c) == "transport.domain: must be in 0..232, got 233");
@@ -877,11 +906,13 @@ TEST_CASE("bad transport configs are refused with the field named", "[dds][qos]"
   c = cfg;
   c.profile = "lan";
   c.peers = {"10.0.0.1", "host.example"};
-  CHECK(problem(c).find("transport.peers[1]:") == 0);
+  CHECK(problem(c) ==
+        "transport.peers: must be a list of IPv4 addresses (\"host.example\" is not one), got [\"10.0.0.1\", "
+        "\"host.example\"]");
   c = cfg;
   c.profile = "lan";
   c.interfaces = {"eth0"};
-  CHECK(problem(c).find("transport.interfaces[0]:") == 0);
+  CHECK(problem(c).find("transport.interfaces: must be a list of IPv4 addresses (\"eth0\" is not one)") == 0);
   for (const char* bad : {"127.0.0.1", "127.0.0.1:", ":11811", "127.0.0.1:0", "127.0.0.1:70000", "h:1"}) {
     c = cfg;
     c.profile = "discovery-server";
@@ -895,19 +926,55 @@ TEST_CASE("bad transport configs are refused with the field named", "[dds][qos]"
   CHECK_THROWS_AS(dds::create_participant(c, "x"), std::runtime_error);
 }
 
-TEST_CASE("parse_ipv4 is strict", "[dds][qos]") {
+TEST_CASE("the transport's one validator reports every problem by key", "[dds][qos]") {
+  CHECK(dds::transport_problems(dds::TransportConfig{}).empty());
+  dds::TransportConfig c;
+  c.domain = 300;
+  c.peers = {"10.0.0.1", "01.2.3.4"};  // leading zeros: refused (octal ambiguity)
+  c.lease_s = 1;
+  c.announce_s = 1;
+  c.profile = "lan";
+  c.multicast_data = true;
+  std::vector<std::string> keys;
+  for (const auto& p : dds::transport_problems(c)) keys.push_back(p.key + ": " + p.what + ", got " + p.got);
+  CHECK(keys == std::vector<std::string>{
+                    "transport.domain: must be in 0..232, got 300",
+                    "transport.peers: must be a list of IPv4 addresses (\"01.2.3.4\" is not one), got [\"10.0.0.1\", "
+                    "\"01.2.3.4\"]",
+                    "transport.announce_s: must be < transport.lease_s (1), got 1",
+                    "transport.multicast_data: needs transport.profile loopback, or discovery-server with a server on "
+                    "127.x (profile is lan), got true"});
+  std::string thrown;
+  try {
+    dds::validate(c);
+  } catch (const std::runtime_error& e) {
+    thrown = e.what();
+  }
+  CHECK(thrown == "transport.domain: must be in 0..232, got 300");  // the first problem
   std::array<std::uint8_t, 4> ip{};
-  CHECK(dds::parse_ipv4("127.0.0.1", ip));
+  std::uint16_t port = 0;
+  REQUIRE(dds::parse_host_port("localhost:11811", ip, port));
   CHECK(ip == std::array<std::uint8_t, 4>{127, 0, 0, 1});
-  CHECK(dds::parse_ipv4("255.255.255.255", ip));
+  CHECK(port == 11811);
+  for (const char* bad : {"localhost", ":1", "1.2.3.4:0", "1.2.3.4:65536", "1.2.3.4:+1", "host:1", "1.2.3.4:"}) {
+    INFO(bad);
+    CHECK_FALSE(dds::parse_host_port(bad, ip, port));
+  }
+}
+
+TEST_CASE("parse_ipv4 is strict", "[dds][qos][util]") {
+  std::array<std::uint8_t, 4> ip{};
+  CHECK(util::parse_ipv4("127.0.0.1", ip));
+  CHECK(ip == std::array<std::uint8_t, 4>{127, 0, 0, 1});
+  CHECK(util::parse_ipv4("255.255.255.255", ip));
   for (const char* bad : {"", "1.2.3", "1.2.3.4.5", "256.1.1.1", "1.2.3.x", "01.2.3.4", " 1.2.3.4", "1..2.3"}) {
     INFO(bad);
-    CHECK_FALSE(dds::parse_ipv4(bad, ip));
+    CHECK_FALSE(util::parse_ipv4(bad, ip));
   }
 }
 
 TEST_CASE("describe gives a one-line summary", "[dds][qos]") {
-  config::TransportConfig cfg;
+  dds::TransportConfig cfg;
   const std::string d = dds::describe(cfg);
   CHECK(d.find("loopback") == 0);
   CHECK(d.find("127.0.0.1") != std::string::npos);
@@ -992,7 +1059,7 @@ TEST_CASE("loopback pub-sub delivers 12 keyed instances and a dispose", "[dds][n
       s.id(id);
       s.seq(seq);
       s.x(id);
-      s.stamp_ns(dds::steady_now_ns());
+      s.stamp_ns(util::steady_ns());
       write_ok = writer.write(s) && write_ok;
     }
     reader.drain(batch);
@@ -1062,7 +1129,7 @@ TEST_CASE("multicast_data pub-sub: keyed state and a reliable topic between thre
       msg::AgentState s = good_state();
       s.id(id);
       s.seq(seq);
-      s.stamp_ns(dds::steady_now_ns());
+      s.stamp_ns(util::steady_ns());
       writer.write(s);
     }
     msg::AgentStatus st;
@@ -1120,7 +1187,7 @@ TEST_CASE("command is reliable and transient local so a late reader gets the new
   require_same(cmd, out);
 }
 
-TEST_CASE("a large polygon command crosses the wire; a bad shape is refused on receipt", "[dds][node][pubsub]") {
+TEST_CASE("a large polygon command crosses the wire; a bad shape or step is refused on receipt", "[dds][node][pubsub]") {
   const auto cfg = loopback(test_domain(3));
   dds::Node sup(cfg, "test-supervisor");
   dds::Node agent(cfg, "test-agent");
@@ -1169,6 +1236,16 @@ TEST_CASE("a large polygon command crosses the wire; a bad shape is refused on r
   CHECK(epoch == 1);
   CHECK(last_error == "command: polar: r(phi) = '4+foo': Unexpected token \"foo\" found at position 2.");
   require_same(big, in_force);  // the refused command changed nothing
+
+  // A step the config and the console refuse is refused on the topic too (the command table's bound).
+  msg::ShapeCommand too_long = dds::to_msg(sample_command(), 3);
+  too_long.dt(50);
+  too_long.k_tangent(2);
+  REQUIRE(writer.write(too_long));
+  REQUIRE(wait_for([&] { receive(); return refused == 2; }, 20.0));
+  CHECK(epoch == 1);
+  CHECK(last_error == "command.dt: must be in (0, 10], got 50; command.k_tangent: must be in (0, 1], got 2");
+  require_same(big, in_force);
   REQUIRE(compiled_from_shape(in_force));
   CHECK(in_force.curve().closed());
 }

@@ -4,7 +4,7 @@
 
 #include "core/metric_table.hpp"
 #include "presentation.hpp"
-#include "util/metrics_json.hpp"
+#include "app/metrics_json.hpp"
 
 using namespace shapeform;
 using core::Vec2;
@@ -83,7 +83,7 @@ TEST_CASE("metrics JSON has every metric of the table; undefined is null, counts
   m.agents = 7;
   m.gap_cv = 0.25;
   m.clusters = 2;
-  const nlohmann::json j = util::metrics_json(m);
+  const nlohmann::json j = app::metrics_json(m);
   CHECK(j.size() == std::size(core::kMetricTable) + 1);
   CHECK(j["agents"] == 7);
   for (const core::MetricInfo& info : core::kMetricTable) {

@@ -1,8 +1,8 @@
-#include "util/app.hpp"
+#include "app/app.hpp"
 
 #include <iostream>
 
-namespace shapeform::util {
+namespace shapeform::app {
 
 App::App(std::string prog, const std::string& description) : prog_(std::move(prog)), cli_(description) {}
 
@@ -40,4 +40,4 @@ int App::usage_error(const std::string& message) const {
   return kExitUsage;
 }
 
-}  // namespace shapeform::util
+}  // namespace shapeform::app

@@ -1,10 +1,10 @@
-#include "util/metrics_json.hpp"
+#include "app/metrics_json.hpp"
 
 #include <cmath>
 
 #include "core/metric_table.hpp"
 
-namespace shapeform::util {
+namespace shapeform::app {
 
 nlohmann::json metrics_json(const core::Metrics& m) {
   nlohmann::json j;
@@ -19,4 +19,4 @@ nlohmann::json metrics_json(const core::Metrics& m) {
   return j;
 }
 
-}  // namespace shapeform::util
+}  // namespace shapeform::app

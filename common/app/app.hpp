@@ -1,12 +1,12 @@
 #pragma once
 /// The preamble every program shares: CLI11 parsing with the project's exit codes, and the config
 /// file with its --set overrides (and --domain) loaded through the one loader.
-///   util::App app("shapeform_x", "what it does");
+///   app::App app("shapeform_x", "what it does");
 ///   app.add_config_options();
 ///   app.cli().add_option(...);                      // the program's own flags
 ///   if (const auto rc = app.parse(argc, argv)) return *rc;
 ///   const auto cfg = app.load_config();
-///   if (!cfg) return util::kExitUsage;
+///   if (!cfg) return app::kExitUsage;
 #include <CLI/CLI.hpp>
 #include <optional>
 #include <string>
@@ -14,7 +14,7 @@
 
 #include "config/config.hpp"
 
-namespace shapeform::util {
+namespace shapeform::app {
 
 /// Exit status of a bad command line or config.
 inline constexpr int kExitUsage = 2;
@@ -55,4 +55,4 @@ class App {
   CLI::Option* domain_option_ = nullptr;  ///< --domain, when the program takes it
 };
 
-}  // namespace shapeform::util
+}  // namespace shapeform::app

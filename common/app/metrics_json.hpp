@@ -5,10 +5,10 @@
 
 #include "core/metrics.hpp"
 
-namespace shapeform::util {
+namespace shapeform::app {
 
 /// {"agents": N, <every metric of core::kMetricTable>: value or null when undefined}; counts are
 /// JSON integers.
 nlohmann::json metrics_json(const core::Metrics& m);
 
-}  // namespace shapeform::util
+}  // namespace shapeform::app

@@ -1,0 +1,132 @@
+/// The config table: every key of the schema with its type, unit, range and description, in the
+/// order of the file (and of to_yaml and config/README.md). The command's keys come from the command
+/// table (core/params.hpp), the transport's from the transport table (dds/transport.hpp); the rest
+/// are declared here. Defaults are read from Config{}.
+#include "config/config.hpp"
+
+namespace shapeform::config {
+namespace {
+
+namespace params = core::params;
+using params::Type;
+using P = params::Param<Config>;
+
+/// agent.sync spellings.
+constexpr params::Name<bool> kSyncNames[] = {{false, "free"}, {true, "lockstep"}};
+
+template <class V, class Field>
+P param(Type type, std::string key, std::string unit, params::Range range, std::string doc, Field field,
+        std::string range_note = "") {
+  P p;
+  p.key = std::move(key);
+  p.type = type;
+  p.unit = std::move(unit);
+  p.range = range;
+  p.doc = std::move(doc);
+  p.range_note = std::move(range_note);
+  params::bind<Config, V>(p, field);
+  return p;
+}
+
+template <class Field>
+P real(std::string key, std::string unit, params::Range range, std::string doc, Field field) {
+  return param<double>(Type::Real, std::move(key), std::move(unit), range, std::move(doc), field);
+}
+
+std::vector<P> build() {
+  std::vector<P> t;
+  t.push_back(param<long long>(
+      Type::Integer, "schema_version", "", params::integers(kSchemaVersion, kSchemaVersion),
+      "version of this schema", [](auto& c) -> auto& { return c.schema_version; }));
+  t.push_back(param<std::string>(
+      Type::Text, "name", "", {}, "scenario name, free text", [](auto& c) -> auto& { return c.name; },
+      "any string"));
+  t.push_back(param<long long>(
+      Type::Integer, "swarm.agents", "agents", params::integers(1, 1000), "swarm size",
+      [](auto& c) -> auto& { return c.swarm.agents; }));
+  t.push_back(param<std::uint64_t>(
+      Type::UInt64, "swarm.seed", "", {}, "seed of the uniform random start",
+      [](auto& c) -> auto& { return c.swarm.seed; }));
+  t.push_back(real(
+      "swarm.init_half_width", "shape units", params::above(0), "agents start uniform in `[-w, w]^2`",
+      [](auto& c) -> auto& { return c.swarm.init_half_width; }));
+  for (const auto& p : params::command_table())
+    t.push_back(params::lift<Config>(
+        p, [](auto& c) -> auto& { return c.command; }));
+  t.push_back(param<long long>(
+      Type::Integer, "sim.steps", "steps", params::integers(0, 10'000'000), "number of integration steps",
+      [](auto& c) -> auto& { return c.sim.steps; }));
+  t.push_back(real(
+      "agent.rate_hz", "Hz", params::above_up_to(0, 1000), "control loop rate",
+      [](auto& c) -> auto& { return c.agent.rate_hz; }));
+  t.push_back(real(
+      "agent.neighbour_timeout_periods", "periods", params::at_least(1),
+      "drop a neighbour unheard for this many loop periods",
+      [](auto& c) -> auto& { return c.agent.neighbour_timeout_periods; }));
+  t.push_back(real(
+      "agent.status_rate_hz", "Hz", params::above(0), "agent status publication rate",
+      [](auto& c) -> auto& { return c.agent.status_rate_hz; }));
+  {
+    P sync;
+    sync.key = "agent.sync";
+    sync.type = Type::Choice;
+    sync.doc =
+        "`free`: each agent steps on its own clock with the newest neighbour states (asynchronous, like real "
+        "vehicles); `lockstep`: step k+1 waits until every neighbour on the same command has published step "
+        "k and "
+        "uses exactly those states, which is the simulator's synchronous update, so agent processes compute "
+        "the "
+        "simulator's numbers. An agent waits at most 5 s for a neighbour that is alive but does not advance, "
+        "then "
+        "runs free until it catches up. Tracking: free-running agents follow the supervisor's "
+        "`TrackingTarget` "
+        "(centre and velocity, extrapolated between samples; after 1 s without one, the command's own path "
+        "on the "
+        "agent's clock); in lockstep every agent computes C(t) from the command's path at its own step, as "
+        "the "
+        "simulator does";
+    params::bind_choice(
+        sync, kSyncNames, [](auto& c) -> auto& { return c.agent.lockstep; });
+    t.push_back(std::move(sync));
+  }
+  t.push_back(real(
+      "supervisor.metrics_rate_hz", "Hz", params::above(0),
+      "metrics computation / publication / recording rate (computed every round(target_rate_hz / "
+      "metrics_rate_hz) ticks of the target loop, so at most `target_rate_hz`)",
+      [](auto& c) -> auto& { return c.supervisor.metrics_rate_hz; }));
+  t.push_back(real(
+      "supervisor.target_rate_hz", "Hz", params::above(0), "tracking target publication rate",
+      [](auto& c) -> auto& { return c.supervisor.target_rate_hz; }));
+  t.push_back(real(
+      "supervisor.agent_timeout_s", "s", params::above(0),
+      "an agent unheard this long is shown dead (at least 3 periods of `agent.rate_hz`)",
+      [](auto& c) -> auto& { return c.supervisor.agent_timeout_s; }));
+  t.push_back(real(
+      "supervisor.flush_s", "s", params::above(0), "recorder flush period",
+      [](auto& c) -> auto& { return c.supervisor.flush_s; }));
+  t.push_back(real(
+      "supervisor.converge.band_abs", "shape units", params::at_least(0), "shape error band, absolute",
+      [](auto& c) -> auto& { return c.supervisor.converge.band_abs; }));
+  t.push_back(real(
+      "supervisor.converge.band_rel", "", params::at_least(0), "shape error band, relative to its mean",
+      [](auto& c) -> auto& { return c.supervisor.converge.band_rel; }));
+  t.push_back(real(
+      "supervisor.converge.gap_cv_max", "", params::above(0), "largest coefficient of variation of the gaps",
+      [](auto& c) -> auto& { return c.supervisor.converge.gap_cv_max; }));
+  t.push_back(real(
+      "supervisor.converge.hold", "model time", params::at_least(0), "time the conditions must hold",
+      [](auto& c) -> auto& { return c.supervisor.converge.hold; }));
+  for (const auto& p : dds::transport_table())
+    t.push_back(params::lift<Config>(
+        p, [](auto& c) -> auto& { return c.transport; }));
+  return t;
+}
+
+}  // namespace
+
+const std::vector<core::params::Param<Config>>& config_table() {
+  static const std::vector<P> table = build();
+  return table;
+}
+
+}  // namespace shapeform::config

@@ -1,0 +1,190 @@
+#include "dds/transport.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "util/ipv4.hpp"
+
+namespace shapeform::dds {
+namespace {
+
+namespace params = core::params;
+using P = params::Param<TransportConfig>;
+
+/// Largest max_participants accepted (ids probed per initial peer; about 100 participants per host is
+/// the practical limit, and ids from 120 up use ports of the next domain's block).
+constexpr int kMaxParticipantsLimit = 230;
+
+template <class V, class Field>
+P param(params::Type type, std::string key, std::string unit, params::Range range, std::string doc,
+        std::string range_note, Field field) {
+  P p;
+  p.key = std::move(key);
+  p.type = type;
+  p.unit = std::move(unit);
+  p.range = range;
+  p.doc = std::move(doc);
+  p.range_note = std::move(range_note);
+  params::bind<TransportConfig, V>(p, field);
+  return p;
+}
+
+std::vector<P> build_table() {
+  using params::Type;
+  const std::string ipv4_list = "list of IPv4 addresses (dotted quads)";
+  std::vector<P> t;
+  {
+    P profile = param<std::string>(
+        Type::Choice, "transport.profile", "", {}, "transport profile", "",
+        [](auto& c) -> auto& { return c.profile; });
+    for (const char* name : kProfiles) profile.choices.emplace_back(name);
+    t.push_back(std::move(profile));
+  }
+  t.push_back(param<long long>(
+      Type::Integer, "transport.domain", "", params::integers(0, kMaxDomainId), "DDS domain id", "",
+      [](auto& c) -> auto& { return c.domain; }));
+  t.push_back(param<long long>(
+      Type::Integer, "transport.max_participants", "participants", params::integers(1, kMaxParticipantsLimit),
+      "participant port slots of the domain on one host: a participant takes the first free one of slots "
+      "0..max-1 (another process's participant holds each taken one), and with loopback or lan peers the "
+      "initial peers probe exactly these; a participant that finds all taken is refused with an error (Fast "
+      "DDS "
+      "alone would create it deaf). At most this many processes (agents, supervisor, tools) per domain and "
+      "host. "
+      "Slots from 120 up use ports of the next domain's block",
+      "", [](auto& c) -> auto& { return c.max_participants; }));
+  t.push_back(param<std::vector<std::string>>(
+      Type::TextList, "transport.interfaces", "", {}, "lan: IPv4 addresses to bind (empty = all)", ipv4_list,
+      [](auto& c) -> auto& { return c.interfaces; }));
+  t.push_back(param<std::vector<std::string>>(
+      Type::TextList, "transport.peers", "", {}, "lan: unicast peer addresses (empty = multicast discovery)",
+      ipv4_list, [](auto& c) -> auto& { return c.peers; }));
+  t.push_back(param<std::string>(
+      Type::Text, "transport.discovery_server", "", {}, "discovery-server: address of the server",
+      "`host:port`, host an IPv4 address or `localhost`, port `1..65535`",
+      [](auto& c) -> auto& { return c.discovery_server; }));
+  t.push_back(param<double>(
+      Type::Real, "transport.lease_s", "s", params::above(0), "participant lease duration", "",
+      [](auto& c) -> auto& { return c.lease_s; }));
+  t.push_back(param<double>(
+      Type::Real, "transport.announce_s", "s", params::above(0), "participant announcement period",
+      " and `< lease_s`", [](auto& c) -> auto& { return c.announce_s; }));
+  t.push_back(param<long long>(
+      Type::Integer, "transport.socket_buffer_bytes", "bytes", params::integers(0, 2147483647),
+      "UDP send/receive buffer size (0 = OS default); the kernel silently caps it at `net.core.rmem_max` / "
+      "`wmem_max`",
+      "", [](auto& c) -> auto& { return c.socket_buffer_bytes; }));
+  t.push_back(param<bool>(
+      Type::Bool, "transport.multicast_data", "", {},
+      "readers of the state topic listen on the multicast group 239.255.0.1, port 7400 + 250 domain + 1, "
+      "instead "
+      "of a unicast port, so a writer sends one datagram per sample instead of one per reader (the kernel "
+      "fans it "
+      "out); with the 127.0.0.1 whitelist the group is joined and sent on `lo` only. Every other topic and "
+      "discovery stay unicast",
+      "; needs `profile: loopback`, or `discovery-server` with a server on `127.x`/`localhost`",
+      [](auto& c) -> auto& { return c.multicast_data; }));
+  return t;
+}
+
+std::string quoted(const std::string& s) { return "\"" + s + "\""; }
+
+std::string list_text(const std::vector<std::string>& items) {
+  std::string out = "[";
+  for (std::size_t i = 0; i < items.size(); ++i) out += (i ? ", " : "") + quoted(items[i]);
+  return out + "]";
+}
+
+}  // namespace
+
+const std::vector<params::Param<TransportConfig>>& transport_table() {
+  static const std::vector<P> table = build_table();
+  return table;
+}
+
+bool parse_host_port(const std::string& text, std::array<std::uint8_t, 4>& ip, std::uint16_t& port) {
+  const auto colon = text.rfind(':');
+  if (colon == std::string::npos || colon == 0 || colon + 1 == text.size()) return false;
+  const std::string host = text.substr(0, colon);
+  if (!util::parse_ipv4(host == "localhost" ? "127.0.0.1" : host, ip)) return false;
+  unsigned long value = 0;
+  for (std::size_t i = colon + 1; i < text.size(); ++i) {
+    const char ch = text[i];
+    if (ch < '0' || ch > '9' || value > 65535) return false;
+    value = value * 10 + static_cast<unsigned long>(ch - '0');
+  }
+  if (value < 1 || value > 65535) return false;
+  port = static_cast<std::uint16_t>(value);
+  return true;
+}
+
+std::vector<TransportProblem> transport_problems(const TransportConfig& cfg) {
+  std::vector<TransportProblem> out;
+  // Numbers against their declared ranges (finite first).
+  for (const P& p : transport_table()) {
+    const params::Value v = p.get(cfg);
+    double x = 0.0;
+    std::string got;
+    if (p.type == params::Type::Real) {
+      x = std::get<double>(v);
+      got = params::format_number(x);
+      if (!std::isfinite(x)) {
+        out.push_back({p.key, "must be finite", got, ""});
+        continue;
+      }
+    } else if (p.type == params::Type::Integer) {
+      x = static_cast<double>(std::get<long long>(v));
+      got = std::to_string(std::get<long long>(v));
+    } else {
+      continue;
+    }
+    if (!p.range.contains(x)) out.push_back({p.key, p.range.text(), got, ""});
+  }
+  bool known_profile = false;
+  for (const char* name : kProfiles) known_profile = known_profile || cfg.profile == name;
+  if (!known_profile) {
+    out.push_back(
+        {"transport.profile", "must be one of loopback, lan, discovery-server", quoted(cfg.profile), ""});
+  }
+  for (const auto& [key, list] :
+       {std::pair{"transport.interfaces", &cfg.interfaces}, std::pair{"transport.peers", &cfg.peers}}) {
+    for (const std::string& a : *list) {
+      if (!util::is_ipv4(a)) {
+        out.push_back(
+            {key, "must be a list of IPv4 addresses (" + quoted(a) + " is not one)", list_text(*list), ""});
+        break;
+      }
+    }
+  }
+  std::array<std::uint8_t, 4> ip{};
+  std::uint16_t port = 0;
+  if (!parse_host_port(cfg.discovery_server, ip, port)) {
+    out.push_back({"transport.discovery_server",
+                   "must be host:port with host an IPv4 address or localhost and port 1..65535",
+                   quoted(cfg.discovery_server), ""});
+  }
+  if (std::isfinite(cfg.lease_s) && std::isfinite(cfg.announce_s) && cfg.lease_s > 0 && cfg.announce_s > 0 &&
+      !(cfg.announce_s < cfg.lease_s)) {
+    out.push_back({"transport.announce_s",
+                   "must be < transport.lease_s (" + params::format_number(cfg.lease_s) + ")",
+                   params::format_number(cfg.announce_s), "transport.lease_s"});
+  }
+  if (cfg.multicast_data && !cfg.on_loopback()) {
+    out.push_back(
+        {"transport.multicast_data",
+         "needs transport.profile loopback, or discovery-server with a server on 127.x (profile is " +
+             cfg.profile + ")",
+         "true", "transport.profile"});
+  }
+  return out;
+}
+
+void validate(const TransportConfig& cfg) {
+  const auto problems = transport_problems(cfg);
+  if (!problems.empty()) {
+    const TransportProblem& p = problems.front();
+    throw std::runtime_error(p.key + ": " + p.what + ", got " + p.got);
+  }
+}
+
+}  // namespace shapeform::dds

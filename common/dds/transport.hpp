@@ -1,0 +1,71 @@
+#pragma once
+/// The DDS transport description and its one validator. No Fast DDS headers: the config loader fills
+/// and checks a TransportConfig without linking Fast DDS, and the participant factory
+/// (dds/participant.hpp) builds every participant from one.
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/params.hpp"
+
+namespace shapeform::dds {
+
+/// Largest valid DDS domain id (ports 7400 + 250 d must stay below 65536).
+inline constexpr int kMaxDomainId = 232;
+
+/// The transport profiles: "loopback", "lan", "discovery-server".
+inline constexpr const char* kProfiles[] = {"loopback", "lan", "discovery-server"};
+
+/// DDS transport profile; every participant is built from this by the one participant factory.
+struct TransportConfig {
+  std::string profile = "loopback";     ///< loopback | lan | discovery-server
+  int domain = 0;                       ///< DDS domain id, 0..kMaxDomainId
+  int max_participants = 120;           ///< participant ids probed by loopback initial peers
+  std::vector<std::string> interfaces;  ///< lan: IPv4 addresses to bind (empty = all)
+  std::vector<std::string> peers;       ///< lan: unicast peer addresses (empty = multicast discovery)
+  std::string discovery_server = "127.0.0.1:11811";  ///< discovery-server: host:port
+  double lease_s = 2.0;                              ///< participant lease duration
+  double announce_s = 0.5;                           ///< participant announcement period
+  int socket_buffer_bytes = 0;                       ///< UDP send/receive buffer size; 0 = OS default
+  /// State-topic readers listen on the multicast group 239.255.0.1 (the domain's user multicast port)
+  /// instead of a unicast port: a writer sends one datagram per sample instead of one per reader.
+  /// Loopback profile, or discovery-server with a server on 127.x / localhost (whitelist 127.0.0.1,
+  /// so the group stays on lo). Off by default.
+  bool multicast_data = false;
+
+  /// Whether every participant's traffic stays on lo: the loopback profile, or a discovery server on
+  /// 127.x / localhost. multicast_data needs it (the validator checks).
+  bool on_loopback() const {
+    return profile == "loopback" ||
+           (profile == "discovery-server" &&
+            (discovery_server.rfind("127.", 0) == 0 || discovery_server.rfind("localhost:", 0) == 0));
+  }
+};
+
+/// The transport's keys ("transport.profile", ...): type, unit, range and description of each field,
+/// its default read from TransportConfig{}. The config loader reads, emits and documents them from it.
+const std::vector<core::params::Param<TransportConfig>>& transport_table();
+
+/// One problem of a transport description.
+struct TransportProblem {
+  std::string key;      ///< the field's key, e.g. "transport.peers"
+  std::string what;     ///< e.g. "must be a list of IPv4 addresses (\"foo\" is not one)"
+  std::string got;      ///< the offending value as text
+  std::string related;  ///< the other key of a relation ("transport.lease_s" for announce_s), or ""
+};
+
+/// Every problem of cfg, in the table's key order: each number within its declared range, the profile
+/// known, interfaces and peers IPv4 addresses, discovery_server "host:port" (host an IPv4 address or
+/// localhost, port 1..65535), announce_s < lease_s, multicast_data only on loopback. Empty when valid.
+std::vector<TransportProblem> transport_problems(const TransportConfig& cfg);
+
+/// "host:port" with host an IPv4 literal or "localhost" (read as 127.0.0.1) and port 1..65535
+/// (decimal digits only). False for anything else.
+bool parse_host_port(const std::string& text, std::array<std::uint8_t, 4>& ip, std::uint16_t& port);
+
+/// Throws std::runtime_error "<key>: <what>, got <value>" for the first problem of cfg, e.g.
+/// "transport.domain: must be in 0..232, got 300".
+void validate(const TransportConfig& cfg);
+
+}  // namespace shapeform::dds

@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Rewrites the key tables of config/README.md from the declared parameter table (the blocks between
+# "<!-- BEGIN GENERATED keys: SECTION -->" and "<!-- END GENERATED -->"; the prose stays as written).
+set -euo pipefail
+
+usage() {
+  cat <<'USAGE'
+usage: scripts/gen_config_doc.sh [--check] [--build-dir DIR]
+  Builds shapeform_config_doc in DIR (default: build, configured already) and regenerates the key
+  tables of config/README.md from the config table.
+  --check          change nothing; exit 1 when config/README.md is stale
+  --build-dir DIR  the CMake build directory (default: build)
+  -h, --help       this text
+USAGE
+}
+
+root=$(cd "$(dirname "$0")/.." && pwd)
+build="$root/build"
+check=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    -h|--help) usage; exit 0 ;;
+    --check) check=(--check); shift ;;
+    --build-dir) [ $# -ge 2 ] || { usage >&2; exit 2; }; build=$(cd "$2" && pwd); shift 2 ;;
+    *) usage >&2; exit 2 ;;
+  esac
+done
+
+[ -f "$build/CMakeCache.txt" ] || { echo "gen_config_doc: $build is not a configured build directory" >&2; exit 2; }
+cmake --build "$build" --target shapeform_config_doc >/dev/null
+exec "$build/bin/shapeform_config_doc" "${check[@]}" "$root/config/README.md"
