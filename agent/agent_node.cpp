@@ -236,18 +236,9 @@ void AgentNode::report() {
 }
 
 void AgentNode::publish_status() {
-  const util::LoopStats ls = loop_.stats();
   const double share = 1.0 / static_cast<double>(logics_.size());  // of the process figures, per agent
-  dds::StatusSample st;
-  st.stamp_ns = util::steady_ns();
-  st.ticks = ls.ticks;
-  st.overruns = ls.overruns;
-  st.lateness_max_us = ls.lateness_max_us;
-  st.lateness_p99_us = ls.lateness_p99_us;
-  st.age_p50_us = util::percentile(ages_us_, 50).value_or(-1);
-  st.age_p99_us = util::percentile(ages_us_, 99).value_or(-1);
-  st.cpu_percent = cpu_.percent() * share;
-  st.rss_mb = util::rss_mb() * share;
+  dds::StatusSample st =
+      dds::process_status(util::steady_ns(), loop_.stats(), ages_us_, cpu_.percent() * share, util::rss_mb() * share);
   for (const auto& l : logics_) {
     const AgentCounters& k = l->counters();
     st.id = l->id();

@@ -155,8 +155,6 @@ int run(std::int32_t id, const config::Config& cfg) {
     ages.reserve(kAgeCapacity);
     msg::AgentState out;
     out.id(id);
-    sdds::StatusSample st;
-    st.id = id;
     std::uint64_t seq = 0, ticks = 0;
     while (loop.wait_next(util::stop_flag())) {
       out.seq(++seq);
@@ -165,19 +163,11 @@ int run(std::int32_t id, const config::Config& cfg) {
       if (++ticks % status_every == 0) {
         const std::int64_t now = util::steady_ns();
         const auto snap = listener.snapshot(now, timeout_ns, ages);
-        const util::LoopStats ls = loop.stats();
-        st.stamp_ns = now;
-        st.ticks = ls.ticks;
-        st.overruns = ls.overruns;
-        st.lateness_max_us = ls.lateness_max_us;
-        st.lateness_p99_us = ls.lateness_p99_us;
+        sdds::StatusSample st = sdds::process_status(now, loop.stats(), ages, cpu.percent(), util::rss_mb());
+        st.id = id;
         st.neighbours_heard = snap.heard;
         st.samples_received = snap.received;
         st.samples_lost = snap.lost;
-        st.age_p50_us = util::percentile(ages, 50).value_or(-1);
-        st.age_p99_us = util::percentile(ages, 99).value_or(-1);
-        st.cpu_percent = cpu.percent();
-        st.rss_mb = util::rss_mb();
         msg::AgentStatus wire = sdds::to_msg(st);
         status_writer->write(&wire);
       }

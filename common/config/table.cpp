@@ -17,15 +17,8 @@ constexpr params::Name<bool> kSyncNames[] = {{false, "free"}, {true, "lockstep"}
 template <class V, class Field>
 P param(Type type, std::string key, std::string unit, params::Range range, std::string doc, Field field,
         std::string range_note = "") {
-  P p;
-  p.key = std::move(key);
-  p.type = type;
-  p.unit = std::move(unit);
-  p.range = range;
-  p.doc = std::move(doc);
-  p.range_note = std::move(range_note);
-  params::bind<Config, V>(p, field);
-  return p;
+  return params::make<Config, V>(type, std::move(key), std::move(unit), range, std::move(doc), field,
+                                 std::move(range_note));
 }
 
 template <class Field>

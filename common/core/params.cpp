@@ -99,29 +99,15 @@ using P = Param<Command>;
 /// A number field of the command.
 template <class Field>
 P real(std::string key, std::string wire, std::string unit, Range range, std::string doc, Field field) {
-  P p;
-  p.key = std::move(key);
-  p.type = Type::Real;
-  p.unit = std::move(unit);
-  p.range = range;
-  p.doc = std::move(doc);
-  p.wire = {std::move(wire)};
-  bind<Command, double>(p, field);
-  return p;
+  return make<Command, double>(Type::Real, std::move(key), std::move(unit), range, std::move(doc), field, {},
+                               {std::move(wire)});
 }
 
 template <class V, class Field>
 P plain(Type type, std::string key, std::vector<std::string> wire, std::string unit, std::string doc,
         std::string range_note, Field field) {
-  P p;
-  p.key = std::move(key);
-  p.type = type;
-  p.unit = std::move(unit);
-  p.doc = std::move(doc);
-  p.range_note = std::move(range_note);
-  p.wire = std::move(wire);
-  bind<Command, V>(p, field);
-  return p;
+  return make<Command, V>(type, std::move(key), std::move(unit), {}, std::move(doc), field, std::move(range_note),
+                          std::move(wire));
 }
 
 template <class Field>

@@ -190,6 +190,22 @@ void bind(Param<T>& p, Field field) {
   };
 }
 
+/// A parameter of T stored as V in the field `field(t)` returns: the one constructor every table uses.
+template <class T, class V, class Field>
+Param<T> make(Type type, std::string key, std::string unit, Range range, std::string doc, Field field,
+              std::string range_note = {}, std::vector<std::string> wire = {}) {
+  Param<T> p;
+  p.key = std::move(key);
+  p.type = type;
+  p.unit = std::move(unit);
+  p.range = range;
+  p.doc = std::move(doc);
+  p.range_note = std::move(range_note);
+  p.wire = std::move(wire);
+  bind<T, V>(p, field);
+  return p;
+}
+
 /// Binds a Choice parameter to an enumeration field through its name table.
 template <class T, class E, std::size_t N, class Field>
 void bind_choice(Param<T>& p, const Name<E> (&table)[N], Field field) {

@@ -3,23 +3,16 @@
 #include <cmath>
 #include <limits>
 #include <optional>
-#include <sstream>
 #include <utility>
 #include <vector>
 
 #include "core/metric_table.hpp"
 #include "core/params.hpp"
 #include "shapes/shapes.hpp"
+#include "util/text.hpp"
 
 namespace shapeform::dds {
 namespace {
-
-std::string num(double v) {
-  std::ostringstream os;
-  os.precision(10);
-  os << v;
-  return os.str();
-}
 
 /// Collects problems of one message, "prefix.field: problem".
 class Problems {
@@ -28,14 +21,14 @@ class Problems {
 
   bool finite(const std::string& field, double v) {
     if (std::isfinite(v)) return true;
-    add(field, "must be finite, got " + num(v));
+    add(field, "must be finite, got " + util::format_g10(v));
     return false;
   }
   /// A ShapeCommand number: finite and within the range the command table declares for `field`.
   void ranged(const char* field, double v) {
     if (!finite(field, v)) return;
     const core::params::Range& range = core::params::wire_range(field);
-    if (!range.contains(v)) add(field, range.text() + ", got " + num(v));
+    if (!range.contains(v)) add(field, range.text() + ", got " + util::format_g10(v));
   }
   void add(const std::string& field, const std::string& problem) {
     list_.push_back(std::string(prefix_) + "." + field + ": " + problem);
@@ -240,13 +233,13 @@ bool valid_state(const msg::AgentState& s, std::string& why) {
   const bool fpx = p.finite("prev_x", s.prev_x());
   const bool fpy = p.finite("prev_y", s.prev_y());
   p.finite("prev_arc", s.prev_arc());
-  if (fpx && std::abs(s.prev_x()) > kStateLimit) p.add("prev_x", "|prev_x| must be <= 1e6, got " + num(s.prev_x()));
-  if (fpy && std::abs(s.prev_y()) > kStateLimit) p.add("prev_y", "|prev_y| must be <= 1e6, got " + num(s.prev_y()));
-  if (fx && std::abs(s.x()) > kStateLimit) p.add("x", "|x| must be <= 1e6, got " + num(s.x()));
-  if (fy && std::abs(s.y()) > kStateLimit) p.add("y", "|y| must be <= 1e6, got " + num(s.y()));
+  if (fpx && std::abs(s.prev_x()) > kStateLimit) p.add("prev_x", "|prev_x| must be <= 1e6, got " + util::format_g10(s.prev_x()));
+  if (fpy && std::abs(s.prev_y()) > kStateLimit) p.add("prev_y", "|prev_y| must be <= 1e6, got " + util::format_g10(s.prev_y()));
+  if (fx && std::abs(s.x()) > kStateLimit) p.add("x", "|x| must be <= 1e6, got " + util::format_g10(s.x()));
+  if (fy && std::abs(s.y()) > kStateLimit) p.add("y", "|y| must be <= 1e6, got " + util::format_g10(s.y()));
   if (fvx && fvy) {
     const double speed = std::hypot(s.vx(), s.vy());
-    if (speed > kStateLimit) p.add("v", "speed must be <= 1e6, got " + num(speed));
+    if (speed > kStateLimit) p.add("v", "speed must be <= 1e6, got " + util::format_g10(speed));
   }
   if (!p.empty()) {
     why = p.joined();
@@ -306,7 +299,7 @@ bool from_msg(const msg::TrackingTarget& m, TargetSample& out, std::string& why)
   const std::pair<const char*, double> fields[] = {
       {"model_time", m.model_time()}, {"cx", m.cx()}, {"cy", m.cy()}, {"vx", m.vx()}, {"vy", m.vy()}};
   for (const auto& [name, v] : fields)
-    if (p.finite(name, v) && std::abs(v) > kStateLimit) p.add(name, "|" + std::string(name) + "| must be <= 1e6, got " + num(v));
+    if (p.finite(name, v) && std::abs(v) > kStateLimit) p.add(name, "|" + std::string(name) + "| must be <= 1e6, got " + util::format_g10(v));
   if (!p.empty()) {
     why = p.joined();
     return false;

@@ -4,8 +4,11 @@
 /// ShapeCommand <-> core::Command and SwarmMetrics <-> core::Metrics need no struct of their own.
 #include <cstdint>
 #include <optional>
+#include <vector>
 
 #include "core/types.hpp"
+#include "util/rate_loop.hpp"
+#include "util/stats.hpp"
 
 namespace shapeform::dds {
 
@@ -51,5 +54,22 @@ struct StatusSample {
   double rss_mb = 0.0;
   std::uint32_t epoch = 0;
 };
+
+/// The process-wide part of a status sample, as of stamp_ns: the loop's timing, the data ages of the
+/// period (ages_us is reordered), CPU and memory. The per-agent counters are the caller's to fill.
+inline StatusSample process_status(std::int64_t stamp_ns, const util::LoopStats& ls, std::vector<double>& ages_us,
+                                   double cpu_percent, double rss_mb) {
+  StatusSample st;
+  st.stamp_ns = stamp_ns;
+  st.ticks = ls.ticks;
+  st.overruns = ls.overruns;
+  st.lateness_max_us = ls.lateness_max_us;
+  st.lateness_p99_us = ls.lateness_p99_us;
+  st.age_p50_us = util::percentile(ages_us, 50).value_or(-1);
+  st.age_p99_us = util::percentile(ages_us, 99).value_or(-1);
+  st.cpu_percent = cpu_percent;
+  st.rss_mb = rss_mb;
+  return st;
+}
 
 }  // namespace shapeform::dds

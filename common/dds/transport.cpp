@@ -18,15 +18,8 @@ constexpr int kMaxParticipantsLimit = 230;
 template <class V, class Field>
 P param(params::Type type, std::string key, std::string unit, params::Range range, std::string doc,
         std::string range_note, Field field) {
-  P p;
-  p.key = std::move(key);
-  p.type = type;
-  p.unit = std::move(unit);
-  p.range = range;
-  p.doc = std::move(doc);
-  p.range_note = std::move(range_note);
-  params::bind<TransportConfig, V>(p, field);
-  return p;
+  return params::make<TransportConfig, V>(type, std::move(key), std::move(unit), range, std::move(doc), field,
+                                          std::move(range_note));
 }
 
 std::vector<P> build_table() {

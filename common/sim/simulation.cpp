@@ -4,26 +4,20 @@
 #include <cmath>
 #include <fstream>
 #include <ostream>
-#include <sstream>
 #include <stdexcept>
 
 #include "core/metric_table.hpp"
+#include "util/text.hpp"
 
 namespace shapeform::sim {
 
 namespace {
-std::string fmt(double v) {
-  std::ostringstream s;
-  s.precision(10);
-  s << v;
-  return s.str();
-}
 /// One CSV fragment with the metric table's values ("" for undefined values).
 std::string metric_csv_values(const core::Metrics& m) {
   std::string out;
   for (const core::MetricInfo& info : core::kMetricTable) {
     if (&info != core::kMetricTable) out += ',';  // no comma before the first
-    if (const auto v = info.get(m)) out += info.count ? std::to_string(std::llround(*v)) : fmt(*v);
+    if (const auto v = info.get(m)) out += info.count ? std::to_string(std::llround(*v)) : util::format_g10(*v);
   }
   return out;
 }
@@ -52,10 +46,10 @@ SimResult run_simulation(const core::CompiledCommand& cmd, std::vector<core::Vec
     const core::Metrics m = core::compute_metrics(cmd, x, swarm.time(), opt.metrics_csv != nullptr);
     err.push_back(m.shape_error_mean.value_or(0.0));
     gap.push_back(core::uniformity(cmd, m));
-    if (opt.metrics_csv) *opt.metrics_csv << k << ',' << fmt(swarm.time()) << ',' << metric_csv_values(m) << '\n';
+    if (opt.metrics_csv) *opt.metrics_csv << k << ',' << util::format_g10(swarm.time()) << ',' << metric_csv_values(m) << '\n';
     if (opt.positions_csv)
       for (std::size_t i = 0; i < x.size(); ++i)
-        *opt.positions_csv << k << ',' << i << ',' << fmt(x[i].x()) << ',' << fmt(x[i].y()) << '\n';
+        *opt.positions_csv << k << ',' << i << ',' << util::format_g10(x[i].x()) << ',' << util::format_g10(x[i].y()) << '\n';
     if (k == steps) break;
     if (k + 1 == steps) last = x;
     swarm.step();
