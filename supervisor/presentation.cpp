@@ -107,6 +107,7 @@ nlohmann::json status_json(const std::vector<AgentRow>& rows, std::uint32_t epoc
   for (const AgentRow& r : rows)
     agents.push_back({{"id", r.id},
                       {"alive", r.alive},
+                      {"state", r.alive ? "alive" : (r.departed ? "left" : "dead")},
                       {"last_seen_s", r.last_seen_s},
                       {"x", r.x.x()},
                       {"y", r.x.y()},

@@ -184,8 +184,9 @@ void Supervisor::report_membership(std::int64_t now) {
     if (monitor_.alive(a, now)) alive.insert(id);
   for (const auto id : alive)
     if (!alive_ids_.count(id)) out_.event("agent", {{"id", id}, {"change", "joined"}});
-  for (const auto id : alive_ids_)
-    if (!alive.count(id)) out_.event("agent", {{"id", id}, {"change", "left"}});
+  for (const auto id : alive_ids_)  // "left": disposed its instance (a clean exit); "lost": fell silent
+    if (!alive.count(id))
+      out_.event("agent", {{"id", id}, {"change", monitor_.agents().at(id).departed ? "left" : "lost"}});
   alive_ids_.swap(alive);
 }
 

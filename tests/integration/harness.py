@@ -76,8 +76,9 @@ class Agent(Proc):
 
 
 def status_rows(status):
-    """The agents of a supervisor's status event as {id: {alive, last_seen, x1, x2, epoch, shape_error, heard}}."""
-    return {a["id"]: {"alive": a["alive"], "last_seen": a["last_seen_s"], "x1": a["x"], "x2": a["y"],
+    """The agents of a supervisor's status event as {id: {alive, state, last_seen, x1, x2, epoch, shape_error,
+    heard}}; state is "alive", "dead" (silent) or "left" (disposed its instance)."""
+    return {a["id"]: {"alive": a["alive"], "state": a["state"], "last_seen": a["last_seen_s"], "x1": a["x"], "x2": a["y"],
                       "epoch": a["epoch"], "shape_error": a["shape_error"], "heard": a["neighbours_heard"]}
             for a in status["agents"]}
 
@@ -119,7 +120,7 @@ class Supervisor(Proc):
         return self.ask(line, "epoch", timeout, "the supervisor to publish '%s'" % line)["epoch"]
 
     def left(self, since=0):
-        """Ids of the agents the supervisor reported as left."""
+        """Ids of the agents the supervisor reported as left (disposed; a silent agent is "lost")."""
         return {e["id"] for e in self.events("agent", since) if e["change"] == "left"}
 
 

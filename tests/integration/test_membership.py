@@ -87,7 +87,7 @@ class MembershipTest(harness.SwarmTestCase):
         def dropped():
             rows, m = sup.status()
             live = {i: r for i, r in rows.items() if i != 4}
-            ok = (rows.get(4, {}).get("alive") is False and len(live) == AGENTS - 1
+            ok = (rows.get(4, {}).get("state") == "dead" and len(live) == AGENTS - 1
                   and all(r["alive"] and r["heard"] == AGENTS - 2 for r in live.values()))
             return rows if ok else None
 

@@ -3,6 +3,7 @@
 #include <set>
 
 #include "core/metric_table.hpp"
+#include "monitor_fixtures.hpp"
 #include "presentation.hpp"
 #include "app/metrics_json.hpp"
 
@@ -10,15 +11,10 @@ using namespace shapeform;
 using core::Vec2;
 using supervisor::SwarmMonitor;
 
-namespace {
-constexpr std::int64_t kS = 1'000'000'000;
+using test::circle;
+using test::kS;
 
-core::CompiledCommand circle() {
-  core::Command c;
-  c.shape.kind = core::ShapeKind::Circle;
-  c.shape.r0 = 4;
-  return core::compile(c);
-}
+namespace {
 
 /// Agent 0 on the circle following epoch 1 (with a status), agent 1 off it on epoch 1, agent 2 on an
 /// old epoch, agent 3 left, agent 4 silent for 2 s (dead); the command is epoch 1.
@@ -48,7 +44,8 @@ TEST_CASE("status JSON and table carry the same facts for every agent", "[superv
   REQUIRE(a.size() == 5);
   for (std::size_t i = 0; i < a.size(); ++i) {
     CHECK(a[i]["id"] == static_cast<int>(i));  // ascending id
-    const std::set<std::string> keys = {"id", "alive", "last_seen_s", "x", "y", "epoch", "shape_error", "neighbours_heard"};
+    const std::set<std::string> keys = {"id",    "alive",       "state",
+                                            "last_seen_s", "x", "y", "epoch", "shape_error", "neighbours_heard"};
     std::set<std::string> got;
     for (const auto& [k, v] : a[i].items()) got.insert(k);
     CHECK(got == keys);
@@ -64,8 +61,11 @@ TEST_CASE("status JSON and table carry the same facts for every agent", "[superv
   CHECK(a[1]["neighbours_heard"].is_null());  // no status yet
   CHECK(a[2]["epoch"] == 0);
   CHECK(a[2]["shape_error"].is_null());  // not on the current command
-  CHECK(a[3]["alive"] == false);          // left
-  CHECK(a[4]["alive"] == false);          // dead
+  CHECK(a[0]["state"] == "alive");
+  CHECK(a[3]["alive"] == false);
+  CHECK(a[3]["state"] == "left");  // disposed its instance
+  CHECK(a[4]["alive"] == false);
+  CHECK(a[4]["state"] == "dead");  // silent
   CHECK(a[4]["last_seen_s"] == 2.0);
 
   const std::string table = supervisor::status_table(rows);

@@ -39,6 +39,14 @@ LoopClock fake_clock(const std::shared_ptr<FakeTime>& ft) {
                    }};
 }
 
+/// A 100 Hz loop (period 10 ms) on fake time that starts at t0, and a stop flag that stays down.
+struct FakeLoop100 {
+  std::shared_ptr<FakeTime> ft = std::make_shared<FakeTime>();
+  SteadyTime t0 = ft->t;
+  RateLoop loop{100.0, fake_clock(ft)};
+  std::atomic<bool> stop{false};
+};
+
 }  // namespace
 
 TEST_CASE("RateLoop rejects invalid rates", "[util][rate_loop]") {
@@ -57,10 +65,8 @@ TEST_CASE("RateLoop period is 1/rate", "[util][rate_loop]") {
 }
 
 TEST_CASE("RateLoop ticks land exactly on the deadline grid", "[util][rate_loop]") {
-  auto ft = std::make_shared<FakeTime>();
-  const SteadyTime t0 = ft->t;
-  RateLoop loop(100.0, fake_clock(ft));
-  const std::atomic<bool> stop{false};
+  FakeLoop100 fake;
+  auto& [ft, t0, loop, stop] = fake;
 
   for (int k = 1; k <= 50; ++k) {
     REQUIRE(loop.wait_next(stop));
@@ -118,11 +124,9 @@ TEST_CASE("RateLoop records lateness from oversleeping", "[util][rate_loop]") {
 
 TEST_CASE("RateLoop skips and counts whole missed periods, staying on the grid",
           "[util][rate_loop]") {
-  auto ft = std::make_shared<FakeTime>();
-  const SteadyTime t0 = ft->t;
+  FakeLoop100 fake;
+  auto& [ft, t0, loop, stop] = fake;
   const auto P = 10ms;
-  RateLoop loop(100.0, fake_clock(ft));
-  const std::atomic<bool> stop{false};
 
   REQUIRE(loop.wait_next(stop));  // tick at t0 + P
   REQUIRE(ft->t == t0 + P);
@@ -151,11 +155,9 @@ TEST_CASE("RateLoop skips and counts whole missed periods, staying on the grid",
 
 TEST_CASE("RateLoop: late by under a period is no overrun, exactly one period is one",
           "[util][rate_loop]") {
-  auto ft = std::make_shared<FakeTime>();
-  const SteadyTime t0 = ft->t;
+  FakeLoop100 fake;
+  auto& [ft, t0, loop, stop] = fake;
   const auto P = 10ms;
-  RateLoop loop(100.0, fake_clock(ft));
-  const std::atomic<bool> stop{false};
   REQUIRE(loop.wait_next(stop));
 
   ft->t = t0 + 2 * P + 9ms;  // 0.9 P late

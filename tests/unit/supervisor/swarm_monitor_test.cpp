@@ -1,28 +1,16 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
+#include "monitor_fixtures.hpp"
 #include "swarm_monitor.hpp"
 
 using namespace shapeform;
 using core::Vec2;
 using supervisor::SwarmMonitor;
 
-namespace {
-constexpr std::int64_t kS = 1'000'000'000;
-core::CompiledCommand circle() {
-  core::Command c;
-  c.shape.kind = core::ShapeKind::Circle;
-  c.shape.r0 = 4;
-  return core::compile(c);
-}
-void ring(SwarmMonitor& m, int n, double radius, std::uint32_t epoch, std::int64_t now) {
-  for (int i = 0; i < n; ++i) {
-    const double a = 2 * M_PI * i / n;
-    const Vec2 x = radius * Vec2(std::cos(a), std::sin(a));
-    m.on_state(i, x, x, epoch, 0.0, now);
-  }
-}
-}  // namespace
+using test::circle;
+using test::kS;
+using test::ring;
 
 TEST_CASE("alive, dead and departed agents", "[supervisor]") {
   SwarmMonitor m(kS, {});
