@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "agent_logic.hpp"
+#include "app/json.hpp"
 #include "dds/convert.hpp"
 #include "dds/node.hpp"
 #include "dds/participant.hpp"
@@ -127,6 +128,7 @@ void AgentNode::run() {
     state_writer_.dispose(gone);
   }
   util::log_info("stopping after " + std::to_string(ticks_) + " ticks (signal " + std::to_string(util::stop_signal()) + ")");
+  if (opt_.json) emit({{"event", "stop"}, {"ticks", ticks_}, {"signal", util::stop_signal()}});
 }
 
 void AgentNode::reject(const char* what, const std::string& log_line, const std::string& why, bool always) {
@@ -276,6 +278,11 @@ int run_agents(const std::vector<std::int32_t>& ids, const std::vector<core::Vec
     s << cfg.agent.rate_hz << " Hz, " << dds::describe(cfg.transport) << ", neighbour timeout "
       << cfg.agent.neighbour_timeout_periods << " periods";
     util::log_info(s.str());
+  }
+  if (opt.json) {
+    nlohmann::json at = nlohmann::json::array();
+    for (const core::Vec2& x : starts) at.push_back({x.x(), x.y()});
+    emit({{"event", "start"}, {"ids", ids}, {"starts", std::move(at)}, {"config", app::config_json(cfg)}});
   }
   try {
     AgentNode node(ids, starts, cfg, opt);

@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <sstream>
 
-#include "app/metrics_json.hpp"
+#include "app/json.hpp"
 #include "core/params.hpp"
 
 namespace shapeform::supervisor {

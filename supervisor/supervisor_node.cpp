@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "app/json.hpp"
 #include "console_input.hpp"
 #include "console_parser.hpp"
 #include "dds/convert.hpp"
@@ -418,6 +419,7 @@ int Supervisor::run() {
   // Validate the whole script before touching the swarm: a bad line is exit status 2, nothing sent.
   if (!opt_.script.empty() && !load_script()) return kExitBadInput;
   util::log_info(std::string("transport: ") + dds::describe(cfg_.transport));
+  out_.event("start", {{"config", app::config_json(cfg_)}});
   try {
     open_dds();
   } catch (const std::exception& e) {

@@ -7,7 +7,7 @@
 
 #include "simulation.hpp"
 #include "app/app.hpp"
-#include "app/metrics_json.hpp"
+#include "app/json.hpp"
 
 int main(int argc, char** argv) {
   using namespace shapeform;

@@ -9,7 +9,6 @@ shapeform process on the test's domain".
 import glob
 import json
 import os
-import re
 import signal
 import sys
 
@@ -107,13 +106,14 @@ class LauncherTest(harness.SwarmTestCase):
         self.assertEqual([(w["wait"], w["ok"]) for w in waits if w["wait"] != "agents"], [("converged", True)])
         self.assert_nothing_left(p)
 
+    def start_event(self, run, name):
+        """The "start" event a process of the run printed (its start positions and effective config)."""
+        found = harness.events(harness.read_text(os.path.join(run, name + ".out")), "start")
+        self.assertEqual(len(found), 1, "%s prints one start event" % name)
+        return found[0]
+
     def agent_starts(self, run, n):
-        starts = []
-        for i in range(n):
-            m = re.search(r"start \(([-0-9.e+]+), ([-0-9.e+]+)\)", harness.read_text(os.path.join(run, "agent_%d.log" % i)))
-            self.assertIsNotNone(m, "agent %d logs its start" % i)
-            starts.append((float(m.group(1)), float(m.group(2))))
-        return starts
+        return [tuple(self.start_event(run, "agent_%d" % i)["starts"][0]) for i in range(n)]
 
     def test_seeded_and_csv_starts(self):
         # --seed S: agent i starts where shapeform_sim --agents N --seed S puts agent i.
@@ -129,10 +129,11 @@ class LauncherTest(harness.SwarmTestCase):
             self.assertAlmostEqual(got[0], want[0], delta=1e-4, msg="agent %d x1" % i)
             self.assertAlmostEqual(got[1], want[1], delta=1e-4, msg="agent %d x2" % i)
         for i in range(n):
-            log = harness.read_text(os.path.join(run, "agent_%d.log" % i))
-            self.assertRegex(log, r"\b40 Hz\b", "agent %d runs at --rate" % i)
-            self.assertIn("lease 3 s", log, "agent %d got --set" % i)
-        self.assertIn("lease 3 s", harness.read_text(os.path.join(run, "supervisor.log")), "the supervisor got --set")
+            config = self.start_event(run, "agent_%d" % i)["config"]
+            self.assertEqual(config["agent"]["rate_hz"], 40, "agent %d runs at --rate" % i)
+            self.assertEqual(config["transport"]["lease_s"], 3, "agent %d got --set" % i)
+        self.assertEqual(self.start_event(run, "supervisor")["config"]["transport"]["lease_s"], 3,
+                         "the supervisor got --set")
         self.assertEqual(harness.summary(p.out())["recording"], record)
         self.assertTrue(harness.read_csv(os.path.join(record, "metrics.csv")), "recorded into --record")
         self.assertFalse(os.path.exists(os.path.join(run, "record")))
@@ -180,8 +181,9 @@ class LauncherTest(harness.SwarmTestCase):
         self.assertEqual(status, 130, "exit status after Ctrl-C")
         self.assert_nothing_left(p)
         for i in range(10):
-            log = harness.read_text(os.path.join(run, "agent_%d.log" % i))
-            self.assertRegex(log, r"stopping after \d+ ticks", "agent %d stopped cleanly" % i)
+            stops = harness.events(harness.read_text(os.path.join(run, "agent_%d.out" % i)), "stop")
+            self.assertEqual(len(stops), 1, "agent %d stopped cleanly" % i)
+            self.assertGreater(stops[0]["ticks"], 0)
         self.assertIn("summary:", harness.read_text(os.path.join(run, "supervisor.out")),
                       "the supervisor printed its summary")
         self.assertIn("summary:", p.out(), "the launcher shows the summary")

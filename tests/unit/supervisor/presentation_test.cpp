@@ -5,7 +5,7 @@
 #include "core/metric_table.hpp"
 #include "monitor_fixtures.hpp"
 #include "presentation.hpp"
-#include "app/metrics_json.hpp"
+#include "app/json.hpp"
 
 using namespace shapeform;
 using core::Vec2;

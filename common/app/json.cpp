@@ -1,0 +1,52 @@
+#include "app/json.hpp"
+
+#include <cmath>
+#include <string>
+#include <type_traits>
+#include <variant>
+
+#include "core/metric_table.hpp"
+#include "core/params.hpp"
+
+namespace shapeform::app {
+
+nlohmann::json metrics_json(const core::Metrics& m) {
+  nlohmann::json j;
+  j["agents"] = m.agents;
+  for (const core::MetricInfo& info : core::kMetricTable) {
+    const std::optional<double> v = info.get(m);
+    nlohmann::json& field = j[std::string(info.name)];
+    if (!v) field = nullptr;
+    else if (info.count) field = std::llround(*v);
+    else field = *v;
+  }
+  return j;
+}
+
+nlohmann::json config_json(const config::Config& c) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& p : config::config_table()) {
+    nlohmann::json value = std::visit(
+        [](const auto& v) -> nlohmann::json {
+          using V = std::decay_t<decltype(v)>;
+          if constexpr (std::is_same_v<V, core::Vec2>) {
+            return {v.x(), v.y()};
+          } else if constexpr (std::is_same_v<V, std::vector<core::Vec2>>) {
+            nlohmann::json list = nlohmann::json::array();
+            for (const auto& x : v) list.push_back({x.x(), x.y()});
+            return list;
+          } else {
+            return v;
+          }
+        },
+        p.get(c));
+    if (p.degrees) value = value.get<double>() / core::params::kRadPerDeg;
+    std::string pointer = "/" + p.key;  // "agent.rate_hz" -> "/agent/rate_hz"
+    for (char& ch : pointer)
+      if (ch == '.') ch = '/';
+    j[nlohmann::json::json_pointer(pointer)] = std::move(value);
+  }
+  return j;
+}
+
+}  // namespace shapeform::app
