@@ -1,8 +1,12 @@
 #include "console_input.hpp"
 
-#include <editline/readline.h>
+#include <fcntl.h>
+#include <histedit.h>
 #include <poll.h>
+#include <sys/ioctl.h>
 #include <unistd.h>
+
+#include <csignal>
 
 #include <cerrno>
 #include <chrono>
@@ -10,40 +14,43 @@
 #include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
+#include <system_error>
 #include <utility>
 
 namespace shapeform::supervisor {
 namespace {
 
 constexpr int kPollTimeoutMs = 100;  ///< how long a stop request may wait for the reader thread
-constexpr int kPromptPollMs = 10;    ///< how often to look whether the main loop took a line
-constexpr int kPromptDelayMs = 50;   ///< time the main loop gets to answer before the next prompt
 constexpr int kHistoryMax = 1000;
+constexpr auto kPartialFlush = std::chrono::milliseconds(100);  ///< output without newline waits so long
 
-/// The one live ConsoleInput: libedit's callback interface has global state and a C callback.
+/// The one live ConsoleInput: libedit's callbacks are C functions without a context we control.
 std::atomic<ConsoleInput*> g_console{nullptr};
+/// Ctrl-C presses not yet seen by the reader thread, and the pipe that wakes it (signal handler).
+std::atomic<int> g_sigint_count{0};
+std::atomic<int> g_wake_fd{-1};
+struct sigaction g_old_sigint {};
+std::string g_prompt;  ///< what libedit draws as the prompt (reader thread)
 
 void strip_cr(std::string& line) {
   if (!line.empty() && line.back() == '\r') line.pop_back();
 }
 
-/// libedit line handler (reader thread). line is malloc'ed and ours; nullptr means end of input.
-void on_editline_line(char* line) {
-  ConsoleInput* console = g_console.load();
-  if (line == nullptr) {
-    if (console != nullptr) console->set_ended();
-    return;
+void on_sigint(int) {
+  g_sigint_count.fetch_add(1);
+  const int fd = g_wake_fd.load();
+  if (fd >= 0) {
+    const char c = 'i';
+    const ssize_t r = ::write(fd, &c, 1);  // async-signal-safe; a full pipe is fine (already awake)
+    (void)r;
   }
-  std::string text(line);
-  std::free(line);
-  static std::string last;  // reader thread only: skip blank lines and immediate repeats
-  bool blank = true;
-  for (const char ch : text) blank = blank && (ch == ' ' || ch == '\t');
-  if (!blank && text != last) {
-    add_history(text.c_str());
-    last = text;
-  }
-  if (console != nullptr) console->push_line(std::move(text));
+}
+
+char* prompt_fn(EditLine*) { return const_cast<char*>(g_prompt.c_str()); }
+
+unsigned char tab_fn(EditLine*, int) {
+  ConsoleInput* c = g_console.load();
+  return c != nullptr ? c->on_tab() : static_cast<unsigned char>(CC_ERROR);
 }
 
 enum class Wait { Ready, Timeout, Ended };
@@ -58,6 +65,12 @@ Wait wait_readable(int fd) {
   return Wait::Ended;                                 // POLLHUP, POLLERR, POLLNVAL without data
 }
 
+void set_cloexec(int fd) { ::fcntl(fd, F_SETFD, FD_CLOEXEC); }
+
+void set_nonblocking(int fd) { ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) | O_NONBLOCK); }
+
+EditLine* editline(void* p) { return static_cast<EditLine*>(p); }
+
 }  // namespace
 
 std::string with_location(const LineSource& source, std::string_view message) {
@@ -66,6 +79,14 @@ std::string with_location(const LineSource& source, std::string_view message) {
   loc += ": ";
   loc += message;
   return loc;
+}
+
+std::string default_history_file() {
+  if (const char* state = std::getenv("XDG_STATE_HOME"); state != nullptr && *state != '\0')
+    return std::string(state) + "/shapeform_history";
+  if (const char* home = std::getenv("HOME"); home != nullptr && *home != '\0')
+    return std::string(home) + "/.shapeform_history";
+  return {};
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -80,17 +101,75 @@ ConsoleInput::ConsoleInput(Options options) : options_(std::move(options)) {
   }
   interactive_ = !options_.plain && ::isatty(STDIN_FILENO) == 1 && ::isatty(STDOUT_FILENO) == 1;
   try {
+    if (interactive_) capture_output();
     thread_ = std::thread([this] { run(); });
   } catch (...) {
+    if (interactive_) restore_output();
     g_console.store(nullptr);
     throw;
   }
 }
 
 ConsoleInput::~ConsoleInput() {
+  if (interactive_) {
+    std::fflush(stdout);
+    restore_output();  // the pipe's last write ends close: the reader prints the rest, then sees its end
+  }
   stop_.store(true);
+  if (wake_pipe_[1] >= 0) {
+    const char c = 's';
+    const ssize_t r = ::write(wake_pipe_[1], &c, 1);
+    (void)r;
+  }
   if (thread_.joinable()) thread_.join();
+  if (interactive_) {
+    g_wake_fd.store(-1);
+    for (int fd : {out_pipe_[0], wake_pipe_[0], wake_pipe_[1]})
+      if (fd >= 0) ::close(fd);
+    if (term_fd_ >= 0) ::close(term_fd_);
+  }
   g_console.store(nullptr);
+}
+
+void ConsoleInput::capture_output() {
+  // The terminal stays reachable through term_fd_; stdout (and stderr, when it is the same terminal)
+  // now feed a pipe that the reader thread prints above the prompt.
+  term_fd_ = ::dup(STDOUT_FILENO);
+  if (term_fd_ < 0 || ::pipe(out_pipe_) != 0 || ::pipe(wake_pipe_) != 0)
+    throw std::runtime_error("console: cannot set up the terminal output pipe");
+  for (int fd : {term_fd_, out_pipe_[0], out_pipe_[1], wake_pipe_[0], wake_pipe_[1]}) set_cloexec(fd);
+  set_nonblocking(out_pipe_[0]);
+  set_nonblocking(wake_pipe_[0]);
+  set_nonblocking(wake_pipe_[1]);
+  std::fflush(stdout);
+  std::fflush(stderr);
+  ::dup2(out_pipe_[1], STDOUT_FILENO);
+  if (::isatty(STDERR_FILENO) == 1) {
+    saved_err_ = ::dup(STDERR_FILENO);
+    set_cloexec(saved_err_);
+    ::dup2(out_pipe_[1], STDERR_FILENO);
+  }
+  ::close(out_pipe_[1]);
+  out_pipe_[1] = -1;
+  std::setvbuf(stdout, nullptr, _IOLBF, BUFSIZ);  // a pipe now: keep stdout line-buffered
+  // Ctrl-C becomes a key of the console (see take_interrupts), no longer a stop request.
+  g_sigint_count.store(0);
+  g_wake_fd.store(wake_pipe_[1]);
+  struct sigaction sa {};
+  sa.sa_handler = on_sigint;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = 0;
+  ::sigaction(SIGINT, &sa, &g_old_sigint);
+}
+
+void ConsoleInput::restore_output() {
+  ::sigaction(SIGINT, &g_old_sigint, nullptr);
+  if (term_fd_ >= 0) ::dup2(term_fd_, STDOUT_FILENO);
+  if (saved_err_ >= 0) {
+    ::dup2(saved_err_, STDERR_FILENO);
+    ::close(saved_err_);
+    saved_err_ = -1;
+  }
 }
 
 std::optional<std::string> ConsoleInput::poll() {
@@ -98,6 +177,7 @@ std::optional<std::string> ConsoleInput::poll() {
   if (lines_.empty()) return std::nullopt;
   std::string line = std::move(lines_.front());
   lines_.pop_front();
+  busy_ = true;  // the loop runs it; set_busy(false) brings the prompt back after its answer
   return line;
 }
 
@@ -106,18 +186,31 @@ bool ConsoleInput::eof() const {
   return ended_ && lines_.empty();
 }
 
-void ConsoleInput::push_line(std::string line) {
-  strip_cr(line);
+void ConsoleInput::set_busy(bool busy) {
+  if (!interactive_) return;
+  std::fflush(stdout);  // the answer goes into the pipe before the prompt comes back
   {
     const std::lock_guard<std::mutex> lock(mutex_);
-    lines_.push_back(std::move(line));
+    if (busy_ == busy) return;
+    busy_ = busy;
   }
-  ++lines_pushed_;
+  const char c = 'b';
+  const ssize_t r = ::write(wake_pipe_[1], &c, 1);
+  (void)r;
 }
 
-bool ConsoleInput::queue_empty() const {
+int ConsoleInput::take_interrupts() {
   const std::lock_guard<std::mutex> lock(mutex_);
-  return lines_.empty();
+  const int n = interrupts_for_loop_;
+  interrupts_for_loop_ = 0;
+  if (n > 0) busy_ = true;  // the prompt returns once the loop has answered
+  return n;
+}
+
+void ConsoleInput::push_line(std::string line) {
+  strip_cr(line);
+  const std::lock_guard<std::mutex> lock(mutex_);
+  lines_.push_back(std::move(line));
 }
 
 bool ConsoleInput::ended() const {
@@ -165,47 +258,233 @@ void ConsoleInput::run_plain() {
   if (!partial.empty()) push_line(std::move(partial));  // last line without a newline
 }
 
+void ConsoleInput::write_term(std::string_view text) {
+  std::fflush(static_cast<FILE*>(term_file_));  // libedit's own output first
+  const char* p = text.data();
+  std::size_t left = text.size();
+  while (left > 0) {
+    const ssize_t n = ::write(term_fd_, p, left);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return;
+    }
+    p += n;
+    left -= static_cast<std::size_t>(n);
+  }
+}
+
+void ConsoleInput::erase_edit_area() {
+  // Back to the column 0 of the prompt's row, then clear to the end of the screen. The prompt and
+  // the line are ASCII in practice: one column per byte.
+  const LineInfo* li = el_line(editline(el_));
+  const std::size_t cursor = g_prompt.size() + static_cast<std::size_t>(li->cursor - li->buffer);
+  winsize ws{};
+  const std::size_t cols = ::ioctl(term_fd_, TIOCGWINSZ, &ws) == 0 && ws.ws_col > 0 ? ws.ws_col : 80;
+  std::string seq = "\r";
+  if (const std::size_t rows = cursor / cols; rows > 0) seq += "\x1b[" + std::to_string(rows) + "A";
+  seq += "\x1b[J";
+  write_term(seq);
+}
+
+void ConsoleInput::show_prompt(bool show) {
+  EditLine* el = editline(el_);
+  if (show) {
+    if (!at_line_start_) write_term("\n");
+    g_prompt = options_.prompt;
+    el_resize(el);
+    el_set(el, EL_REFRESH);  // draws the prompt and the line from column 0
+  } else {
+    erase_edit_area();  // the line itself is kept for when the prompt returns
+    g_prompt.clear();
+    at_line_start_ = true;
+  }
+  prompt_shown_ = show;
+}
+
+void ConsoleInput::print_above(std::string_view text) {
+  if (text.empty()) return;
+  if (!prompt_shown_) {
+    write_term(text);
+    at_line_start_ = text.back() == '\n';
+    return;
+  }
+  erase_edit_area();
+  write_term(text);
+  if (text.back() != '\n') write_term("\n");
+  el_resize(editline(el_));
+  el_set(editline(el_), EL_REFRESH);
+}
+
+unsigned char ConsoleInput::on_tab() {
+  EditLine* el = editline(el_);
+  const LineInfo* li = el_line(el);
+  const std::string before(li->buffer, static_cast<std::size_t>(li->cursor - li->buffer));
+  if (!options_.complete) return CC_ERROR;
+  const Completion c = options_.complete(before);
+  if (c.candidates.empty() || c.start > before.size()) return CC_ERROR;
+  const std::string word = before.substr(c.start);
+  std::string common = c.candidates.front();
+  for (const std::string& cand : c.candidates) {
+    std::size_t n = 0;
+    while (n < common.size() && n < cand.size() && common[n] == cand[n]) ++n;
+    common.resize(n);
+  }
+  if (common.size() < word.size() || common.compare(0, word.size(), word) != 0) return CC_ERROR;
+  std::string insert = common.substr(word.size());
+  if (c.candidates.size() == 1 && common.back() != '=') insert += ' ';  // a whole word: on to the next
+  if (!insert.empty()) {
+    el_insertstr(el, insert.c_str());
+    return CC_REFRESH;
+  }
+  std::string list;  // several candidates and nothing to add: list them above the line
+  for (const std::string& cand : c.candidates) list += (list.empty() ? "" : "  ") + cand;
+  print_above(list + "\n");
+  return CC_NORM;
+}
+
 void ConsoleInput::run_editline() {
-  // All libedit calls happen on this thread. In callback mode libedit reads one character per
-  // rl_callback_read_char(), so the thread checks stop_ between characters and never blocks in
-  // libedit. libedit leaves callback (raw) mode when it hands over a line; left so, its next call
-  // would block for a whole line. So the handler is installed again for every line, once the
-  // main loop has taken the line and had a moment to print its answer before the new prompt.
-  rl_catch_signals = 0;  // keep the application's signal handlers (must precede rl_initialize)
-  rl_readline_name = "shapeform";
-  rl_instream = stdin;
-  rl_outstream = stdout;
-  rl_initialize();
-  stifle_history(kHistoryMax);
-  if (!options_.history_file.empty()) read_history(options_.history_file.c_str());
-  bool installed = false;
-  bool prompt_shown = false;  // a prompt without a newline after it is on the screen
-  while (!stop_.load() && !ended()) {
-    if (!installed) {
-      if (!queue_empty()) {  // the main loop has not taken the last line yet
-        std::this_thread::sleep_for(std::chrono::milliseconds(kPromptPollMs));
+  // All libedit calls happen on this thread. libedit reads one key per el_gets() (unbuffered mode),
+  // only when poll() says a key is there, so the thread never blocks in libedit and can print the
+  // process's output (from out_pipe_) above the line at any time.
+  FILE* term = ::fdopen(::dup(term_fd_), "w");
+  if (term == nullptr) {
+    run_plain();
+    return;
+  }
+  term_file_ = term;
+  EditLine* el = el_init("shapeform", stdin, term, term);
+  History* hist = history_init();
+  if (el == nullptr || hist == nullptr) {
+    if (el != nullptr) el_end(el);
+    if (hist != nullptr) history_end(hist);
+    std::fclose(term);
+    term_file_ = nullptr;
+    run_plain();
+    return;
+  }
+  el_ = el;
+  hist_ = hist;
+  HistEvent ev;
+  history(hist, &ev, H_SETSIZE, kHistoryMax);
+  history(hist, &ev, H_SETUNIQUE, 1);
+  if (!options_.history_file.empty()) history(hist, &ev, H_LOAD, options_.history_file.c_str());
+  g_prompt.clear();
+  el_set(el, EL_SIGNAL, 0);  // our SIGINT handler stays; libedit installs none
+  el_set(el, EL_EDITOR, "emacs");
+  el_set(el, EL_PROMPT, prompt_fn);
+  el_set(el, EL_HIST, history, hist);
+  el_set(el, EL_ADDFN, "shapeform-complete", "complete a command, shape or parameter name", tab_fn);
+  el_set(el, EL_BIND, "^I", "shapeform-complete", nullptr);
+  el_source(el, nullptr);         // ~/.editrc, as every libedit program
+  el_set(el, EL_UNBUFFERED, 1);   // raw terminal, one key per el_gets(); the prompt is still empty
+
+  const auto new_line = [&] {  // an empty line buffer, terminal still raw, nothing drawn
+    el_reset(el);
+    el_set(el, EL_PREP_TERM, 1);
+    prompt_shown_ = false;
+    g_prompt.clear();
+    at_line_start_ = true;
+  };
+  bool out_open = true;
+  std::chrono::steady_clock::time_point partial_since{};
+  const auto drain_output = [&] {
+    char buf[4096];
+    std::string got;
+    for (;;) {
+      const ssize_t n = ::read(out_pipe_[0], buf, sizeof buf);
+      if (n > 0) {
+        got.append(buf, static_cast<std::size_t>(n));
         continue;
       }
-      std::this_thread::sleep_for(std::chrono::milliseconds(kPromptDelayMs));
-      std::fflush(stdout);
-      rl_callback_handler_install(options_.prompt.c_str(), on_editline_line);  // raw mode, prompt
-      installed = prompt_shown = true;
+      if (n == 0) out_open = false;  // every writer closed: the destructor restored stdout
+      if (n < 0 && errno == EINTR) continue;
+      break;
     }
-    const Wait w = wait_readable(STDIN_FILENO);
-    if (w == Wait::Timeout) continue;
-    if (w == Wait::Ended) break;
-    const std::uint64_t before = lines_pushed_.load();
-    rl_callback_read_char();
-    // After a line or end of input libedit is out of callback mode (terminal cooked).
-    if (lines_pushed_.load() != before) installed = prompt_shown = false;  // Enter gave a newline
-    if (ended()) installed = false;
+    if (!got.empty()) {
+      if (partial_.empty()) partial_since = std::chrono::steady_clock::now();
+      partial_ += got;
+    }
+    // Whole lines at once; a line without its newline waits a little for the rest.
+    const std::size_t nl = partial_.rfind('\n');
+    const bool flush_all = !out_open || !prompt_shown_ ||
+                           std::chrono::steady_clock::now() - partial_since >= kPartialFlush;
+    const std::size_t n = flush_all ? partial_.size() : (nl == std::string::npos ? 0 : nl + 1);
+    if (n > 0) {
+      print_above(std::string_view(partial_).substr(0, n));
+      partial_.erase(0, n);
+      partial_since = std::chrono::steady_clock::now();
+    }
+  };
+
+  while (true) {
+    drain_output();
+    if (stop_.load() && !out_open) break;
+    for (int n = g_sigint_count.exchange(0); n > 0; --n) {
+      const LineInfo* li = el_line(el);
+      if (prompt_shown_ && li->lastchar != li->buffer) {  // a line being typed: clear it, go on
+        write_term(std::string(li->cursor, li->lastchar) + "^C\n");
+        new_line();
+        continue;
+      }
+      write_term(prompt_shown_ || at_line_start_ ? "^C\n" : "\n^C\n");
+      new_line();
+      const std::lock_guard<std::mutex> lock(mutex_);
+      ++interrupts_for_loop_;
+    }
+    bool want = false;
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      want = !busy_ && lines_.empty() && interrupts_for_loop_ == 0 && !ended_ && !stop_.load();
+    }
+    if (want != prompt_shown_) show_prompt(want);
+
+    pollfd fds[3] = {{out_open ? out_pipe_[0] : -1, POLLIN, 0}, {wake_pipe_[0], POLLIN, 0}, {STDIN_FILENO, POLLIN, 0}};
+    const nfds_t nfds = prompt_shown_ ? 3 : 2;
+    const int timeout = partial_.empty() ? kPollTimeoutMs : 20;
+    if (::poll(fds, nfds, timeout) < 0 && errno != EINTR) break;
+    if ((fds[1].revents & POLLIN) != 0) {
+      char wake[64];
+      while (::read(wake_pipe_[0], wake, sizeof wake) > 0) {
+      }
+    }
+    if (!prompt_shown_ || (fds[2].revents & (POLLIN | POLLHUP | POLLERR)) == 0) continue;
+    int pending = 0;
+    if ((fds[2].revents & POLLIN) == 0 || ::ioctl(STDIN_FILENO, FIONREAD, &pending) != 0 || pending == 0) {
+      write_term("\n");  // the terminal hung up: end of input
+      new_line();
+      set_ended();
+      continue;
+    }
+    int count = 0;
+    const char* buf = el_gets(el, &count);
+    if (buf == nullptr || count <= 0) continue;  // an empty line after this key
+    if (count == 1 && buf[0] == '\x04') {  // Ctrl-D on an empty line
+      write_term("\n");
+      new_line();
+      set_ended();
+      continue;
+    }
+    if (buf[count - 1] != '\n') continue;  // still editing
+    std::string text(buf, static_cast<std::size_t>(count - 1));
+    bool blank = true;
+    for (const char ch : text) blank = blank && (ch == ' ' || ch == '\t');
+    if (!blank) history(hist, &ev, H_ENTER, text.c_str());
+    new_line();  // libedit has moved to the next row already
+    push_line(std::move(text));
   }
-  if (installed) rl_callback_handler_remove();  // back to cooked mode
-  if (prompt_shown) {
-    std::fputs("\n", stdout);  // leave the cursor off the prompt line
-    std::fflush(stdout);
+  if (prompt_shown_) erase_edit_area();
+  el_set(el, EL_PREP_TERM, 0);  // cooked again
+  el_end(el);
+  el_ = nullptr;
+  if (!options_.history_file.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(std::filesystem::path(options_.history_file).parent_path(), ec);
+    history(hist, &ev, H_SAVE, options_.history_file.c_str());
   }
-  if (!options_.history_file.empty()) write_history(options_.history_file.c_str());
+  history_end(hist);
+  hist_ = nullptr;
+  std::fclose(term);
+  term_file_ = nullptr;
 }
 
 // ---------------------------------------------------------------------------------------------

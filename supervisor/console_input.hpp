@@ -6,11 +6,13 @@
 #include <deque>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <mutex>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <thread>
+#include <vector>
 
 namespace shapeform::supervisor {
 
@@ -29,23 +31,43 @@ class LineSource {
 /// "LOCATION: message" when the source has a location, else the message unchanged.
 std::string with_location(const LineSource& source, std::string_view message);
 
-/// Reads stdin on its own thread into a queue. When stdin and stdout are terminals it uses
-/// libedit's readline-compatible callback interface (prompt, line editing, history); otherwise
-/// it reads raw lines (pipes, files, /dev/null). libedit is set up with rl_catch_signals = 0, so
-/// the application's SIGINT/SIGTERM handlers stay in force; the terminal is restored when the
-/// object is destroyed. At most one ConsoleInput may exist at a time.
+/// The default history file: $XDG_STATE_HOME/shapeform_history when XDG_STATE_HOME is set, else
+/// ~/.shapeform_history ($HOME); empty when neither variable is set.
+std::string default_history_file();
+
+/// Reads stdin on its own thread into a queue.
+///
+/// When stdin and stdout are terminals (interactive) it edits lines with libedit: prompt, Emacs
+/// keys, history (kept in a file between runs), Tab completion. Everything the process writes to
+/// stdout (and stderr, when it is the same terminal) is then passed through a pipe to this thread,
+/// which prints it above the line being typed and redraws that line, so no output ever breaks it.
+/// Ctrl-C is a key, not a stop request: it clears a line being typed; on an empty line, or while the
+/// loop is busy (a wait, a script), it is counted for the loop (take_interrupts()), which cancels the
+/// wait or, on a second press within a second, ends. While the loop is busy the prompt is hidden and
+/// keys wait in the terminal. Ctrl-D on an empty line ends the input.
+///
+/// Otherwise it reads raw lines (pipes, files, /dev/null) and SIGINT keeps its meaning (stop).
+/// The terminal and the output descriptors are restored when the object is destroyed. At most one
+/// ConsoleInput may exist at a time.
 class ConsoleInput : public LineSource {
  public:
+  struct Completion {
+    std::size_t start = 0;                ///< where the completed word starts in the line
+    std::vector<std::string> candidates;  ///< whole replacements of that word
+  };
   struct Options {
     std::string prompt = "shapeform> ";
     std::string history_file;  ///< loaded at start, saved at the end; empty: no file
     bool plain = false;        ///< never use libedit, even on a terminal
+    /// Tab completion: the candidates for the word that ends the text before the cursor.
+    std::function<Completion(std::string_view)> complete;
   };
 
   /// Starts the reader thread. Throws std::logic_error if another ConsoleInput exists.
   ConsoleInput();
   explicit ConsoleInput(Options options);
-  /// Stops the reader thread (within about 0.1 s), restores the terminal, saves history.
+  /// Prints what is still in the output pipe, restores stdout/stderr and the terminal, stops the
+  /// reader thread, saves history.
   ~ConsoleInput() override;
   ConsoleInput(const ConsoleInput&) = delete;
   ConsoleInput& operator=(const ConsoleInput&) = delete;
@@ -55,16 +77,29 @@ class ConsoleInput : public LineSource {
   /// True when libedit drives a terminal.
   bool interactive() const { return interactive_; }
 
-  /// Called on the reader thread; public only for the C callback.
+  /// Interactive: whether the loop is running something (the prompt is hidden meanwhile). The loop
+  /// calls it after it has written its answer, so the answer comes before the next prompt.
+  void set_busy(bool busy);
+  /// Interactive: the Ctrl-C presses the loop must handle since the last call (none otherwise).
+  int take_interrupts();
+
+  /// Called on the reader thread; public only for the C callbacks.
   void push_line(std::string line);
   void set_ended();
+  unsigned char on_tab();
 
  private:
   bool ended() const;  ///< input ended (lines may still be queued)
-  bool queue_empty() const;
   void run();
   void run_plain();
   void run_editline();
+  void capture_output();
+  void restore_output();
+  /// Reader thread: prints `text` above the prompt (or plainly while it is hidden).
+  void print_above(std::string_view text);
+  void erase_edit_area();
+  void show_prompt(bool show);
+  void write_term(std::string_view text);
 
   Options options_;
   bool interactive_ = false;
@@ -72,8 +107,21 @@ class ConsoleInput : public LineSource {
   mutable std::mutex mutex_;
   std::deque<std::string> lines_;
   bool ended_ = false;
-  std::atomic<std::uint64_t> lines_pushed_{0};
+  bool busy_ = false;
+  int interrupts_for_loop_ = 0;
   std::thread thread_;
+
+  // Interactive only.
+  int term_fd_ = -1;          ///< the terminal (a dup of the original stdout)
+  int saved_err_ = -1;        ///< the original stderr, when it was captured
+  int out_pipe_[2] = {-1, -1};  ///< stdout (and stderr) -> reader thread
+  int wake_pipe_[2] = {-1, -1};  ///< anything -> reader thread: look at the flags again
+  void* term_file_ = nullptr;  ///< FILE* on a dup of term_fd_, libedit's output
+  void* el_ = nullptr;        ///< EditLine*
+  void* hist_ = nullptr;      ///< History*
+  bool prompt_shown_ = false;  ///< the prompt and the line being edited are on the screen
+  bool at_line_start_ = true;  ///< the terminal's cursor is at a line start (prompt hidden)
+  std::string partial_;        ///< output without its newline yet
 };
 
 /// Lines of a script file, one per poll() (a script never waits for input). Comments and blank

@@ -1,5 +1,6 @@
 #include "console_parser.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <climits>
 #include <cmath>
@@ -107,6 +108,57 @@ const Range& field(std::string_view key) {
   return p->range;
 }
 
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Syntax: the key=value parameters of every command, declared once for the parser and for Tab
+// completion. The command words themselves are the help entries' words.
+
+const std::vector<Syntax>& syntax_table() {
+  static const std::vector<Syntax> table = [] {
+    const std::vector<std::string> placed = {"cx", "cy", "rot", "scale"};
+    const auto with = [](std::vector<std::string> keys, const std::vector<std::string>& more) {
+      keys.insert(keys.end(), more.begin(), more.end());
+      return keys;
+    };
+    std::vector<Syntax> t = {
+        {"shape line", {"m", "c", "rot", "scale"}, {}},
+        {"shape circle", with({"r"}, placed), {}},
+        {"shape ellipse", with({"a", "b"}, placed), {}},
+        {"shape square", with({"a"}, placed), {}},
+        {"shape polar", with({"r"}, placed), {}},
+        {"shape parametric", with({"x", "y", "closed"}, placed), {}},
+        {"shape implicit", with({"f"}, placed), {}},
+        {"shape polygon", with({"points", "closed"}, placed), {}},
+        {"track line", {"from", "vel", "r", "ff"}, {}},
+        {"track circle", {"radius", "period", "r", "cx", "cy", "phase", "ff"}, {}},
+        {"track point", {"at", "r", "ff"}, {}},
+        {"track stop", {}, {}},
+        {"gains", {"k1", "k2", "sigma", "beta", "r"}, {}},
+        {"integrator", {"dt"}, params::names(params::kIntegratorNames)},
+        {"law", {"k_normal", "k_tangent", "spacing"}, params::names(params::kLawNames)},
+        {"wait converged", {"timeout"}, {}},
+        {"wait agents", {"timeout"}, {}},
+        {"wait time", {"timeout"}, {}},
+        {"record start", {}, {}},
+        {"record stop", {}, {}},
+        {"metrics", {}, {"json"}},
+        {"progress", {}, {"on", "off", "every"}},
+    };
+    return t;
+  }();
+  return table;
+}
+
+namespace {
+
+/// The key=value parameters `words` ("shape circle", "gains") takes, from the syntax table.
+const std::vector<std::string>& keys_of(std::string_view words) {
+  for (const Syntax& s : syntax_table())
+    if (s.words == words) return s.keys;
+  throw std::logic_error("no syntax entry for '" + std::string(words) + "'");
+}
+
 /// Bounds of parameters that are not fields of the command (timeouts, durations, counts).
 constexpr Range kAnyNumber = params::any();
 constexpr Range kNonNegative = params::at_least(0);
@@ -116,7 +168,7 @@ class Args {
  public:
   /// Checks unknown and duplicate parameters and too many positionals, in token order.
   Args(std::string name, const std::vector<Token>& tokens, std::size_t first,
-       std::initializer_list<const char*> keys, std::size_t max_positionals)
+       const std::vector<std::string>& keys, std::size_t max_positionals)
       : name_(std::move(name)) {
     for (std::size_t i = first; i < tokens.size(); ++i) {
       const Token& t = tokens[i];
@@ -129,11 +181,11 @@ class Args {
       }
       if (t.key.empty()) fail(name_ + ": missing parameter name in '" + t.text + "'");
       bool known = false;
-      for (const char* k : keys) known = known || t.key == k;
+      for (const std::string& k : keys) known = known || t.key == k;
       if (!known) {
         fail(name_ + ": unknown parameter '" + t.key + "' " +
              (keys.size() == 0 ? std::string("(takes no key=value parameters)")
-                               : "(expected " + join(keys, ", ") + ")"));
+                               : "(expected " + params::join(keys, ", ") + ")"));
       }
       if (!pairs_.emplace(t.key, t.value).second) fail(name_ + ": duplicate parameter " + t.key);
     }
@@ -277,7 +329,7 @@ Action parse_shape(const Tokens& t, const core::CompiledCommand& current) {
     fail("shape: unknown shape '" + kind + "' (expected " + kShapeList + ")");
   switch (s.kind) {
     case core::ShapeKind::Line: {
-      const Args a(name, t, 2, {"m", "c", "rot", "scale"}, 0);
+      const Args a(name, t, 2, keys_of(name), 0);
       s.m = a.number("m", field("shape.m"));
       s.c = a.number("c", field("shape.c"));
       s.centre = core::Vec2::Zero();
@@ -285,14 +337,14 @@ Action parse_shape(const Tokens& t, const core::CompiledCommand& current) {
       break;
     }
     case core::ShapeKind::Circle: {
-      const Args a(name, t, 2, {"r", "cx", "cy", "rot", "scale"}, 0);
+      const Args a(name, t, 2, keys_of(name), 0);
       s.r0 = a.number("r", field("shape.r0"));
       s.centre = a.centre();
       a.placement(s);
       break;
     }
     case core::ShapeKind::Ellipse: {
-      const Args a(name, t, 2, {"a", "b", "cx", "cy", "rot", "scale"}, 0);
+      const Args a(name, t, 2, keys_of(name), 0);
       s.a = a.number("a", field("shape.a"));
       s.b = a.number("b", field("shape.b"));
       s.centre = a.centre();
@@ -300,21 +352,21 @@ Action parse_shape(const Tokens& t, const core::CompiledCommand& current) {
       break;
     }
     case core::ShapeKind::Square: {
-      const Args a(name, t, 2, {"a", "cx", "cy", "rot", "scale"}, 0);
+      const Args a(name, t, 2, keys_of(name), 0);
       s.a = a.number("a", field("shape.a"));
       s.centre = a.centre();
       a.placement(s);
       break;
     }
     case core::ShapeKind::Polar: {
-      const Args a(name, t, 2, {"r", "cx", "cy", "rot", "scale"}, 0);
+      const Args a(name, t, 2, keys_of(name), 0);
       s.r_expr = a.raw("r");
       s.centre = a.centre();
       a.placement(s);
       break;
     }
     case core::ShapeKind::Parametric: {
-      const Args a(name, t, 2, {"x", "y", "closed", "cx", "cy", "rot", "scale"}, 0);
+      const Args a(name, t, 2, keys_of(name), 0);
       s.x_expr = a.raw("x");
       s.y_expr = a.raw("y");
       s.closed = a.on_off_or("closed", true);
@@ -323,14 +375,14 @@ Action parse_shape(const Tokens& t, const core::CompiledCommand& current) {
       break;
     }
     case core::ShapeKind::Implicit: {
-      const Args a(name, t, 2, {"f", "cx", "cy", "rot", "scale"}, 0);
+      const Args a(name, t, 2, keys_of(name), 0);
       s.f_expr = a.raw("f");
       s.centre = a.centre();
       a.placement(s);
       break;
     }
     case core::ShapeKind::Polygon: {
-      const Args a(name, t, 2, {"points", "closed", "cx", "cy", "rot", "scale"}, 0);
+      const Args a(name, t, 2, keys_of(name), 0);
       s.vertices = a.points("points");
       s.closed = a.on_off_or("closed", true);
       s.centre = a.centre();
@@ -353,14 +405,14 @@ Action parse_track(const Tokens& t, const core::CompiledCommand& current) {
   double r0 = 0.0;
   bool ff = false;
   if (kind == "line") {
-    const Args a(name, t, 2, {"from", "vel", "r", "ff"}, 0);
+    const Args a(name, t, 2, keys_of(name), 0);
     path.kind = core::CentrePath::Kind::Line;
     path.point = a.vec2("from");
     path.velocity = a.vec2("vel");
     r0 = a.number("r", field("shape.r0"));
     ff = a.on_off_or("ff", false);
   } else if (kind == "circle") {
-    const Args a(name, t, 2, {"radius", "period", "r", "cx", "cy", "phase", "ff"}, 0);
+    const Args a(name, t, 2, keys_of(name), 0);
     path.kind = core::CentrePath::Kind::Circle;
     path.radius = a.number("radius", field("tracking.radius"));
     // A circle of radius 0 is `track point`: this command wants a real circle (the config and the
@@ -372,7 +424,7 @@ Action parse_track(const Tokens& t, const core::CompiledCommand& current) {
     path.phase = a.number_or("phase", field("tracking.phase"), 0.0);
     ff = a.on_off_or("ff", false);
   } else if (kind == "point") {
-    const Args a(name, t, 2, {"at", "r", "ff"}, 0);
+    const Args a(name, t, 2, keys_of(name), 0);
     path.kind = core::CentrePath::Kind::Fixed;
     path.point = a.vec2("at");
     r0 = a.number("r", field("shape.r0"));
@@ -399,7 +451,7 @@ Action parse_track(const Tokens& t, const core::CompiledCommand& current) {
 }
 
 Action parse_gains(const Tokens& t, const core::CompiledCommand& current) {
-  const Args a("gains", t, 1, {"k1", "k2", "sigma", "beta", "r"}, 0);
+  const Args a("gains", t, 1, keys_of("gains"), 0);
   if (a.empty()) fail("gains: expected at least one of k1, k2, sigma, beta, r");
   core::CompiledCommand cmd = current;
   core::Gains& g = cmd.gains;
@@ -412,7 +464,7 @@ Action parse_gains(const Tokens& t, const core::CompiledCommand& current) {
 }
 
 Action parse_integrator(const Tokens& t, const core::CompiledCommand& current) {
-  const Args a("integrator", t, 1, {"dt"}, 1);
+  const Args a("integrator", t, 1, keys_of("integrator"), 1);
   if (a.positionals() == 0) fail("integrator: missing method (euler or rk4)");
   core::CompiledCommand cmd = current;
   const std::string& method = a.positional(0);
@@ -432,7 +484,7 @@ Action parse_max_speed(const Tokens& t, const core::CompiledCommand& current) {
 }
 
 Action parse_law(const Tokens& t, const core::CompiledCommand& current) {
-  const Args a("law", t, 1, {"k_normal", "k_tangent", "spacing"}, 1);
+  const Args a("law", t, 1, keys_of("law"), 1);
   if (a.positionals() == 0) fail("law: missing law (paper or arc)");
   core::CompiledCommand cmd = current;  // the shape (and its curve) is kept
   const std::string& law = a.positional(0);
@@ -455,11 +507,11 @@ Action parse_wait(const Tokens& t) {
   const std::string& what = sub_word(t, "wait", "converged, agents or time");
   const std::string name = "wait " + what;
   if (what == "converged") {
-    const Args a(name, t, 2, {"timeout"}, 0);
+    const Args a(name, t, 2, keys_of(name), 0);
     return WaitConverged{a.number_or("timeout", kNonNegative, 60.0)};
   }
   if (what == "agents") {
-    const Args a(name, t, 2, {"timeout"}, 1);
+    const Args a(name, t, 2, keys_of(name), 1);
     if (a.positionals() == 0) fail(name + ": missing agent count N");
     const std::string& text = a.positional(0);
     const double n = a.check_number("N", text, kAnyNumber);
@@ -469,7 +521,7 @@ Action parse_wait(const Tokens& t) {
     return WaitAgents{static_cast<int>(n), a.number_or("timeout", kNonNegative, 30.0)};
   }
   if (what == "time") {
-    const Args a(name, t, 2, {"timeout"}, 1);
+    const Args a(name, t, 2, keys_of(name), 1);
     if (a.positionals() == 0) fail(name + ": missing model time T");
     const double when = a.check_number("T", a.positional(0), kNonNegative);
     return WaitTime{when, a.number_or("timeout", kNonNegative, 600.0)};
@@ -502,13 +554,29 @@ Action parse_tokens(const Tokens& t, const core::CompiledCommand& current) {
   if (word == "law") return parse_law(t, current);
   if (word == "wait") return parse_wait(t);
   if (word == "record") return parse_record(t);
-  if (word == "status" || word == "metrics" || word == "quit" || word == "exit" ||
-      word == "start") {
+  if (word == "status" || word == "quit" || word == "exit" || word == "start" || word == "show") {
     const Args a(word, t, 1, {}, 0);
     if (word == "start") return StartScenario{};
     if (word == "status") return Status{};
-    if (word == "metrics") return ShowMetrics{};
+    if (word == "show") return Show{};
     return Quit{};
+  }
+  if (word == "metrics") {
+    const Args a(word, t, 1, {}, 1);
+    if (a.positionals() == 0) return ShowMetrics{};
+    if (a.positional(0) != "json") fail("metrics: unexpected argument '" + a.positional(0) + "' (expected json)");
+    return ShowMetrics{true};
+  }
+  if (word == "progress") {
+    const Args a(word, t, 1, {}, 2);
+    const std::string mode = a.positionals() > 0 ? a.positional(0) : "";
+    if ((mode == "on" || mode == "off") && a.positionals() == 1)
+      return Progress{mode == "on" ? Progress::Mode::OnChange : Progress::Mode::Off, 0.0};
+    if (mode == "every") {
+      if (a.positionals() < 2) fail("progress every: missing interval S (wall seconds)");
+      return Progress{Progress::Mode::Every, a.check_number("S", a.positional(1), params::above(0))};
+    }
+    fail("progress: expected on, off or every S");
   }
   if (word == "sleep") {
     const Args a(word, t, 1, {}, 1);
@@ -630,31 +698,51 @@ const std::vector<HelpEntry>& help_entries() {
    "status\n"
    "  One row per agent heard: id, alive/DEAD/left, last seen, position, epoch followed,\n"
    "  its shape error and how many neighbours it hears.\n"},
+  {"show",
+   "show                                                        the command in force and its epoch\n",
+   "show\n"
+   "  The command in force: shape, tracking, law, gains, integrator, speed limit, its epoch and\n"
+   "  who published it (this supervisor, or another participant when the agents follow an epoch\n"
+   "  this supervisor did not publish), and how many agents follow it.\n"},
   {"metrics",
-   "metrics                                                     latest formation metrics\n",
+   "metrics [json]                                              latest formation metrics\n",
    "metrics\n"
-   "  Prints the latest metrics (shape error, gap CV, clusters, ...).\n"},
+   "metrics json\n"
+   "  Prints the latest metrics (shape error, gap CV, clusters, ...) as a table, 4 significant\n"
+   "  digits, with units; `metrics json` prints them as one JSON object (with --json both print\n"
+   "  the JSON event).\n"},
+  {"progress",
+   "progress on|off|every S                                     when to print the progress line\n",
+   "progress on\n"
+   "progress off\n"
+   "progress every S\n"
+   "  The progress line (model time, agents, shape error, gap CV, ...). on (the default): printed\n"
+   "  when something changed: the number of agents alive or following, the epoch, the converged\n"
+   "  flag, the cluster count, or a metric by more than 10% of its last printed value (changes\n"
+   "  smaller than 0.001 ignored); at most once a second. every S: every S wall seconds (> 0).\n"
+   "  off: never. At a terminal it is printed above the line being typed.\n"},
   {"wait",
-   "wait converged [timeout=S]                                  wait for convergence\n"
+   "wait converged [timeout=S]                                  wait for convergence (S wall seconds)\n"
    "wait agents N [timeout=S]                                   wait for N agents hearing each other\n"
-   "wait time T [timeout=S]                                     wait for model time T\n",
+   "wait time T [timeout=S]                                     wait for model time T (not seconds)\n",
    "wait converged [timeout=S]\n"
    "wait agents N [timeout=S]\n"
    "wait time T [timeout=S]\n"
    "  Holds further input until the condition holds or the timeout (wall seconds, >= 0;\n"
    "  default 60 for converged, 30 for agents, 600 for time) runs out. N is an integer >= 1;\n"
    "  T is model time since the current command was published (one paper iteration = dt),\n"
-   "  counted by the agents: it holds until every agent on the command has reached T.\n"},
+   "  counted by the agents: it holds until every agent on the command has reached T.\n"
+   "  At a terminal, Ctrl-C cancels the wait.\n"},
   {"sleep",
-   "sleep S                                                     pause input for S seconds\n",
+   "sleep S                                                     pause input for S wall seconds\n",
    "sleep S\n"
-   "  Holds further input for S wall-clock seconds (>= 0).\n"},
+   "  Holds further input for S wall-clock seconds (>= 0). At a terminal, Ctrl-C cancels it.\n"},
   {"record",
    "record start DIR | record stop                              CSV recording\n",
    "record start DIR\n"
    "record stop\n"
    "  Writes DIR/metrics.csv and DIR/positions.csv (DIR is created; files are overwritten).\n"
-   "  Quote DIR if it contains spaces.\n"},
+   "  Quote DIR if it contains spaces. record stop closes the files (or says nothing is recording).\n"},
   {"help",
    "help [COMMAND]                                              this list, or details\n",
    "help [COMMAND]\n"
@@ -663,7 +751,9 @@ const std::vector<HelpEntry>& help_entries() {
    "quit | exit                                                 stop the supervisor\n",
    "quit\n"
    "exit\n"
-   "  Stops the supervisor.\n"},
+   "  Stops the supervisor (exit status 0, or 3 after a wait timed out). At a terminal, Ctrl-D on\n"
+   "  an empty line does the same; Ctrl-C clears the line being typed or cancels a wait, and a\n"
+   "  second Ctrl-C within 1 s on an empty line stops the supervisor with exit status 130.\n"},
   };
   return entries;
 }
@@ -694,6 +784,57 @@ ParseResult parse_command(std::string_view line, const core::CompiledCommand& cu
 }
 
 bool has_help(std::string_view word) { return find_help(word) != nullptr; }
+
+std::vector<std::string> command_words() {
+  std::vector<std::string> words;
+  for (const HelpEntry& e : help_entries()) {
+    words.emplace_back(e.word);
+    if (words.back() == "quit") words.emplace_back("exit");
+  }
+  return words;
+}
+
+Completion complete(std::string_view before_cursor) {
+  std::vector<Token> tokens;
+  Completion c;
+  // Complete only outside quotes: an unterminated quote is an expression being typed.
+  if (!tokenize(before_cursor, tokens).empty()) return c;
+  const bool new_word = before_cursor.empty() || is_space(before_cursor.back());
+  std::string word;
+  if (!new_word && !tokens.empty()) {
+    word = tokens.back().text;
+    tokens.pop_back();
+  }
+  c.start = before_cursor.size() - word.size();
+  if (word.find('=') != std::string::npos || word.find('"') != std::string::npos) return c;  // a value
+  std::vector<std::string> offer;
+  if (tokens.empty()) {
+    offer = command_words();
+  } else {
+    std::string words = tokens[0].text;
+    // Second words: those of the syntax entries "FIRST SECOND".
+    if (tokens.size() == 1)
+      for (const Syntax& s : syntax_table())
+        if (s.words.rfind(words + " ", 0) == 0) offer.push_back(s.words.substr(words.size() + 1));
+    if (words == "help" && tokens.size() == 1) offer = command_words();
+    if (tokens.size() >= 2 && !tokens[1].is_pair) words += " " + tokens[1].text;
+    for (const Syntax& s : syntax_table()) {
+      if (s.words != words && s.words != tokens[0].text) continue;
+      if (s.words == tokens[0].text && tokens.size() == 1) offer.insert(offer.end(), s.values.begin(), s.values.end());
+      for (const std::string& k : s.keys) {
+        bool given = false;  // a parameter is offered once
+        for (const Token& t : tokens) given = given || (t.is_pair && t.key == k);
+        if (!given) offer.push_back(k + "=");
+      }
+      break;
+    }
+  }
+  for (const std::string& o : offer)
+    if (o.rfind(word, 0) == 0) c.candidates.push_back(o);
+  std::sort(c.candidates.begin(), c.candidates.end());
+  c.candidates.erase(std::unique(c.candidates.begin(), c.candidates.end()), c.candidates.end());
+  return c;
+}
 
 std::string help_text(std::string_view command) {
   if (command.empty()) {

@@ -6,9 +6,11 @@
 /// and key=value parameters in any order. Tokens split on whitespace except inside double quotes;
 /// quotes are stripped (`r="4 + 1"` gives key r, value `4 + 1`). A token starting with `#`
 /// (outside quotes) starts a comment; blank and comment-only lines are no-ops.
+#include <cstddef>
 #include <string>
 #include <string_view>
 #include <variant>
+#include <vector>
 
 #include "core/compiled_command.hpp"
 
@@ -31,8 +33,18 @@ struct SetCommand {
 struct TrackStop {};
 /// `status`: print the current command, agents, loop statistics.
 struct Status {};
-/// `metrics`: print the latest metrics.
-struct ShowMetrics {};
+/// `metrics`: print the latest metrics as a table; `metrics json`: as one JSON object.
+struct ShowMetrics {
+  bool json = false;
+};
+/// `show`: print the command in force, its epoch and who published it.
+struct Show {};
+/// `progress on|off|every S`: when the loop prints its progress line.
+struct Progress {
+  enum class Mode { OnChange, Off, Every };
+  Mode mode = Mode::OnChange;
+  double every_s = 0.0;  ///< Every: wall seconds between two lines (> 0)
+};
 /// `wait converged [timeout=S]`: block further input until converged or timeout.
 struct WaitConverged {
   double timeout_s = 60.0;
@@ -67,7 +79,8 @@ struct Quit {};
 struct StartScenario {};
 
 using Action = std::variant<NoOp, SetCommand, TrackStop, Status, ShowMetrics, WaitConverged,
-                            WaitAgents, WaitTime, Sleep, RecordStart, RecordStop, Help, Quit, StartScenario>;
+                            WaitAgents, WaitTime, Sleep, RecordStart, RecordStop, Help, Quit, StartScenario,
+                            Show, Progress>;
 
 /// Either an action (error empty) or an error (action is NoOp).
 struct ParseResult {
@@ -88,5 +101,26 @@ std::string help_text(std::string_view command = {});
 
 /// True when `help_text(word)` has a details page for `word`.
 bool has_help(std::string_view word);
+
+/// The key=value parameters and positional values of one command, declared once: the parser checks
+/// parameters against `keys` and Tab completion offers them.
+struct Syntax {
+  std::string words;                ///< the command words: "gains", "shape circle"
+  std::vector<std::string> keys;    ///< parameter names, e.g. {"k1", "k2", ...}
+  std::vector<std::string> values;  ///< positional values offered by completion ("euler", "rk4")
+};
+const std::vector<Syntax>& syntax_table();
+
+/// The command words (`shape`, `wait`, `quit`, `exit`, ...), in help order.
+std::vector<std::string> command_words();
+
+/// Tab completion of the word that ends `before_cursor` (the line up to the cursor): command words,
+/// second words (shape kinds, track paths, wait conditions, record start/stop), positional values
+/// (law and integrator names, help topics, progress modes) and parameter names, offered as "key=".
+struct Completion {
+  std::size_t start = 0;                ///< where the word being completed starts in the line
+  std::vector<std::string> candidates;  ///< whole replacements for the word, sorted
+};
+Completion complete(std::string_view before_cursor);
 
 }  // namespace shapeform::supervisor

@@ -1,10 +1,12 @@
 #include "presentation.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
 
 #include "app/json.hpp"
+#include "core/metric_table.hpp"
 #include "core/params.hpp"
 
 namespace shapeform::supervisor {
@@ -137,6 +139,105 @@ nlohmann::json metrics_answer(const SwarmMonitor::Sample& s, std::uint32_t epoch
   j["model_time"] = s.model_time;
   j["converged"] = s.converged;
   return j;
+}
+
+std::string metrics_table(const SwarmMonitor::Sample& s, std::uint32_t epoch) {
+  std::ostringstream o;
+  o << "epoch " << epoch << ", model time t=" << fmt_opt(s.model_time, "%.4g") << ", " << s.alive << " agents alive, "
+    << s.following << " following, " << (s.converged ? "converged" : "not converged") << '\n';
+  char line[160];
+  for (const core::MetricInfo& info : core::kMetricTable) {
+    const std::optional<double> v = info.get(s.metrics);
+    const std::string value = !v ? "-" : info.count ? std::to_string(std::llround(*v)) : fmt_opt(v, "%.4g");
+    std::snprintf(line, sizeof line, "  %-17s %11s  %s\n", std::string(info.name).c_str(), value.c_str(),
+                  info.unit == "1" ? "" : std::string(info.unit).c_str());
+    o << line;
+  }
+  return o.str();
+}
+
+void ProgressFilter::every(double seconds) {
+  mode_ = Mode::Every;
+  every_ns_ = static_cast<std::int64_t>(std::min(seconds, 1e9) * 1e9);
+}
+
+bool ProgressFilter::changed(const SwarmMonitor::Sample& s, std::uint32_t epoch) const {
+  if (!last_) return true;
+  const SwarmMonitor::Sample& l = *last_;
+  if (s.alive != l.alive || s.following != l.following || epoch != last_epoch_ || s.converged != l.converged)
+    return true;
+  for (const core::MetricInfo& info : core::kMetricTable) {
+    const std::optional<double> a = info.get(l.metrics);
+    const std::optional<double> b = info.get(s.metrics);
+    if (a.has_value() != b.has_value()) return true;
+    if (!a) continue;
+    if (info.count ? *a != *b : std::abs(*b - *a) > kRelTol * std::max(std::abs(*a), kAbsFloor)) return true;
+  }
+  return false;
+}
+
+bool ProgressFilter::due(const SwarmMonitor::Sample& s, std::uint32_t epoch, std::int64_t now_ns) {
+  bool print = false;
+  switch (mode_) {
+    case Mode::Off: print = false; break;
+    case Mode::Every: print = !last_ || now_ns - last_ns_ >= every_ns_; break;
+    case Mode::OnChange: print = (!last_ || now_ns - last_ns_ >= kMinIntervalNs) && changed(s, epoch); break;
+  }
+  if (print) {
+    last_ = s;
+    last_epoch_ = epoch;
+    last_ns_ = now_ns;
+  }
+  return print;
+}
+
+std::string show_text(const ShowInfo& info) {
+  const core::Command& c = info.command;
+  const core::ShapeSpec& sh = c.shape;
+  std::ostringstream o;
+  if (info.epoch == 0) {
+    o << "nothing published by this supervisor yet; below is its --config scenario (`start` publishes it)\n";
+    if (info.agents_epoch != 0)
+      o << "the agents follow epoch " << info.agents_epoch << ", published by another participant\n";
+  } else {
+    o << "epoch " << info.epoch << ", published by this supervisor " << fmt_opt(info.published_s_ago, "%.1f")
+      << " s ago; " << info.following << " of " << info.alive << " agents follow it\n";
+    if (info.agents_epoch > info.epoch)
+      o << "the agents follow epoch " << info.agents_epoch << ", published by another participant since\n";
+  }
+  std::ostringstream shape;
+  shape << core::to_string(sh.kind);
+  switch (sh.kind) {
+    case core::ShapeKind::Line: shape << " m=" << sh.m << " c=" << sh.c; break;
+    case core::ShapeKind::Circle: shape << " r=" << sh.r0; break;
+    case core::ShapeKind::Ellipse: shape << " a=" << sh.a << " b=" << sh.b; break;
+    case core::ShapeKind::Square: shape << " a=" << sh.a; break;
+    case core::ShapeKind::Polar: shape << " r=\"" << sh.r_expr << '"'; break;
+    case core::ShapeKind::Parametric: shape << " x=\"" << sh.x_expr << "\" y=\"" << sh.y_expr << '"'; break;
+    case core::ShapeKind::Implicit: shape << " f=\"" << sh.f_expr << '"'; break;
+    case core::ShapeKind::Polygon: shape << " " << sh.vertices.size() << " vertices"; break;
+  }
+  if (sh.kind == core::ShapeKind::Parametric || sh.kind == core::ShapeKind::Polygon)
+    shape << (sh.closed ? " closed" : " open");
+  if (sh.kind != core::ShapeKind::Line) shape << " centre (" << sh.centre.x() << ", " << sh.centre.y() << ")";
+  shape << " rot=" << sh.rotation / core::params::kRadPerDeg << " deg scale=" << sh.scale;
+  o << "  shape       " << shape.str() << '\n';
+  o << "  tracking    ";
+  if (c.tracking.enabled)
+    o << "on a " << core::to_string(c.tracking.path.kind) << " path, feed-forward "
+      << (c.tracking.feedforward ? "on" : "off") << '\n';
+  else
+    o << "off\n";
+  o << "  law         " << core::to_string(c.law);
+  if (c.law == core::Law::Arc)
+    o << " k_normal=" << c.arc.k_normal << " k_tangent=" << c.arc.k_tangent << " spacing=" << c.arc.spacing;
+  o << "\n  gains       k1=" << c.gains.k1 << " k2=" << c.gains.k2 << " sigma=" << c.gains.sigma
+    << " beta=" << c.gains.beta << " r=" << c.gains.r << '\n';
+  o << "  integrator  " << core::to_string(c.integrator) << " dt=" << c.dt << '\n';
+  o << "  max_speed   ";
+  if (c.max_speed > 0) o << c.max_speed << '\n';
+  else o << "off\n";
+  return o.str();
 }
 
 nlohmann::json summary_json(const Summary& s) {

@@ -3,6 +3,7 @@
 /// the one-line description of a command, the `status` table and its JSON, the progress line, the
 /// `metrics` answer and the exit summary (text and JSON).
 #include <cstdint>
+#include <cstddef>
 #include <optional>
 #include <string>
 #include <utility>
@@ -48,6 +49,53 @@ std::string progress_line(const SwarmMonitor::Sample& s, const core::Command& cu
 
 /// The `metrics` answer: every metric (app::metrics_json), epoch, model_time, converged.
 nlohmann::json metrics_answer(const SwarmMonitor::Sample& s, std::uint32_t epoch);
+
+/// The `metrics` table: a heading line (epoch, model time, agents, converged), then one row per metric
+/// of the metric table: name, value to 4 significant digits ("-" when undefined), unit.
+std::string metrics_table(const SwarmMonitor::Sample& s, std::uint32_t epoch);
+
+/// Decides when the progress line is printed: on change (the default), every S seconds, or never.
+/// "Changed" means: the agents alive or following, the epoch, the converged flag or the cluster count
+/// differ from the last printed line, or a metric moved by more than kRelTol of its last printed value
+/// (moves below kAbsFloor ignored, so noise around zero prints nothing). On change, at most one line
+/// per kMinInterval.
+class ProgressFilter {
+ public:
+  static constexpr double kRelTol = 0.1;
+  static constexpr double kAbsFloor = 1e-3;
+  static constexpr std::int64_t kMinIntervalNs = 1'000'000'000;
+
+  void on_change() { mode_ = Mode::OnChange; }
+  void off() { mode_ = Mode::Off; }
+  /// Every `seconds` (> 0) of wall time.
+  void every(double seconds);
+  /// True when the line for `s` (epoch `epoch`) should be printed at `now_ns`; it is then the
+  /// reference for the next decision.
+  bool due(const SwarmMonitor::Sample& s, std::uint32_t epoch, std::int64_t now_ns);
+
+ private:
+  enum class Mode { OnChange, Every, Off };
+  bool changed(const SwarmMonitor::Sample& s, std::uint32_t epoch) const;
+  Mode mode_ = Mode::OnChange;
+  std::int64_t every_ns_ = 0;
+  std::optional<SwarmMonitor::Sample> last_;
+  std::uint32_t last_epoch_ = 0;
+  std::int64_t last_ns_ = 0;
+};
+
+/// What `show` knows about the command in force.
+struct ShowInfo {
+  core::Command command;           ///< this supervisor's current command (or its --config one)
+  std::uint32_t epoch = 0;         ///< the epoch this supervisor published last; 0: none yet
+  double published_s_ago = 0.0;    ///< wall seconds since it published that epoch
+  std::uint32_t agents_epoch = 0;  ///< the newest epoch any agent follows (0: none heard)
+  int alive = 0;
+  int following = 0;               ///< alive agents on `epoch`
+};
+
+/// The `show` answer: who published the command in force and when, then one line each for the
+/// shape, tracking, law, gains, integrator and speed limit.
+std::string show_text(const ShowInfo& info);
 
 /// What the exit summary reports.
 struct Summary {

@@ -107,8 +107,14 @@ class Supervisor {
   void publish_target(std::int64_t now);
   void metrics_tick(std::int64_t now);
   void publish_command(const core::CompiledCommand& cmd, std::int64_t now);
-  /// Runs input lines until one blocks (wait, sleep) or none is available.
+  /// Handles Ctrl-C, runs input lines, tells the console whether the loop is busy.
   void run_input(std::int64_t now);
+  /// Runs input lines until one blocks (wait, sleep) or none is available.
+  void run_lines(std::int64_t now);
+  /// Ctrl-C at the console: cancels the wait (and the script), or arms / performs the quit.
+  void interrupt(std::int64_t now);
+  /// The `show` answer.
+  ShowInfo show_info(std::int64_t now) const;
   /// Executes one parsed action; a blocking one becomes pending_.
   void execute(const Action& a, std::int64_t now);
   /// The pending action's outcome: nullopt while it blocks, else whether it succeeded (false: timed out).
@@ -144,7 +150,8 @@ class Supervisor {
   std::int64_t pending_deadline_ns_ = 0;
   bool quit_ = false;
   int exit_status_ = kExitOk;
-  std::int64_t last_progress_ns_ = 0;
+  ProgressFilter progress_;
+  std::int64_t armed_quit_ns_ = -1;  ///< when Ctrl-C last found nothing to cancel (-1: not armed)
 };
 
 void Supervisor::drain(std::int64_t now) {
@@ -227,10 +234,7 @@ void Supervisor::metrics_tick(std::int64_t now) {
       throttled_.error("record", std::string("recording: ") + e.what());
     }
   }
-  if (now - last_progress_ns_ >= 1'000'000'000LL) {
-    last_progress_ns_ = now;
-    util::log_info(progress_line(s, current_));
-  }
+  if (progress_.due(s, epoch_, now)) util::log_info(progress_line(s, current_));
 }
 
 std::optional<bool> Supervisor::wait_outcome(const Action& a, std::int64_t now) {
@@ -308,9 +312,17 @@ void Supervisor::execute(const Action& a, std::int64_t now) {
           out_.event("status", status_json(rows, epoch_, t));
         } else if constexpr (std::is_same_v<T, ShowMetrics>) {
           // A query: the detector sees only the metrics ticks.
-          const nlohmann::json j = metrics_answer(monitor_.measure(metrics_time(now), now), epoch_);
-          out << j.dump() << std::endl;
+          const SwarmMonitor::Sample sample = monitor_.measure(metrics_time(now), now);
+          const nlohmann::json j = metrics_answer(sample, epoch_);
+          if (act.json) out << j.dump() << std::endl;
+          else out << metrics_table(sample, epoch_) << std::flush;
           out_.event("metrics", j);
+        } else if constexpr (std::is_same_v<T, Show>) {
+          out << show_text(show_info(now)) << std::flush;
+        } else if constexpr (std::is_same_v<T, Progress>) {
+          if (act.mode == Progress::Mode::Off) progress_.off();
+          else if (act.mode == Progress::Mode::Every) progress_.every(act.every_s);
+          else progress_.on_change();
         } else if constexpr (std::is_same_v<T, WaitConverged> || std::is_same_v<T, WaitAgents> ||
                              std::is_same_v<T, WaitTime>) {
           block(act.timeout_s);
@@ -327,6 +339,8 @@ void Supervisor::execute(const Action& a, std::int64_t now) {
           if (recorder_.is_open()) {
             out << "recording stopped: " << recorder_.dir().string() << std::endl;
             out_.event("record", {{"dir", recorder_.dir().string()}, {"open", false}});
+          } else {
+            out << "record stop: nothing is being recorded" << std::endl;
           }
           recorder_.close();
         } else if constexpr (std::is_same_v<T, Help>) {
@@ -338,7 +352,61 @@ void Supervisor::execute(const Action& a, std::int64_t now) {
       a);
 }
 
+void Supervisor::interrupt(std::int64_t now) {
+  std::ostream& out = out_.human();
+  if (pending_ || (script_ && !script_->eof())) {
+    if (pending_) {
+      out << (std::holds_alternative<Sleep>(*pending_) ? std::string("sleep") : std::string("wait ") + wait_name(*pending_))
+          << ": cancelled (Ctrl-C)" << std::endl;
+      out_.event("wait", {{"wait", wait_name(*pending_)},
+                          {"ok", false},
+                          {"cancelled", true},
+                          {"model_time", metrics_time(now)},
+                          {"alive", monitor_.alive_count(now)}});
+      pending_.reset();
+    }
+    if (script_ && !script_->eof()) {
+      out << "script " << script_->path() << " abandoned after line " << script_->line_number() << std::endl;
+      script_.reset();
+    }
+    armed_quit_ns_ = -1;
+    return;
+  }
+  if (armed_quit_ns_ >= 0 && now - armed_quit_ns_ <= 1'000'000'000LL) {
+    quit_ = true;
+    exit_status_ = kExitInterrupted;
+    return;
+  }
+  armed_quit_ns_ = now;
+  out << "(Ctrl-C again within 1 s, Ctrl-D or 'quit' to leave)" << std::endl;
+}
+
+ShowInfo Supervisor::show_info(std::int64_t now) const {
+  ShowInfo info;
+  info.command = current_;
+  info.epoch = epoch_;
+  info.published_s_ago = static_cast<double>(now - epoch_start_ns_) * 1e-9;
+  info.agents_epoch = monitor_.max_epoch_seen();
+  info.alive = monitor_.alive_count(now);
+  info.following = monitor_.following_count(now);
+  return info;
+}
+
 void Supervisor::run_input(std::int64_t now) {
+  if (console_) {
+    for (int n = console_->take_interrupts(); n > 0 && !quit_; --n) interrupt(now);
+    // Ctrl-D at the terminal: the operator leaves (a recording in progress is closed).
+    if (console_->interactive() && console_->eof()) quit_ = true;
+  }
+  run_lines(now);
+  if (console_) {
+    std::cout.flush();
+    std::cerr.flush();
+    console_->set_busy(pending_.has_value() || (script_ && !script_->eof()));
+  }
+}
+
+void Supervisor::run_lines(std::int64_t now) {
   while (!quit_) {
     if (pending_) {
       const std::optional<bool> ok = wait_outcome(*pending_, now);
@@ -434,7 +502,13 @@ int Supervisor::run() {
       return kExitBadInput;
     }
   }
-  console_ = std::make_unique<ConsoleInput>();
+  ConsoleInput::Options console_options;
+  console_options.history_file = default_history_file();
+  console_options.complete = [](std::string_view before_cursor) {
+    const Completion c = complete(before_cursor);
+    return ConsoleInput::Completion{c.start, c.candidates};
+  };
+  console_ = std::make_unique<ConsoleInput>(std::move(console_options));
 
   util::RateLoop loop(cfg_.supervisor.target_rate_hz);
   const auto metrics_every = std::max<std::uint64_t>(
@@ -444,13 +518,13 @@ int Supervisor::run() {
     const bool input_done = (!script_ || script_->eof()) && !pending_ && console_->eof();
     if (input_done && !recorder_.is_open()) break;
   }
+  console_.reset();  // the terminal back as it was: the summary is printed straight to it
   const std::int64_t now = util::steady_ns();
   drain(now);
   const Summary s = summary(now);
   if (opt_.json) std::cout << summary_json(s).dump() << std::endl;
   else std::cout << summary_text(s) << std::flush;
   recorder_.close();
-  console_.reset();
   return exit_status_;
 }
 

@@ -2,9 +2,15 @@
 
 #include <iostream>
 
+#include "shapeform_version.hpp"  // generated in the build tree
+
 namespace shapeform::app {
 
-App::App(std::string prog, const std::string& description) : prog_(std::move(prog)), cli_(description) {}
+App::App(std::string prog, const std::string& description) : prog_(std::move(prog)), cli_(description) {
+  cli_.set_version_flag("--version", version_line(prog_), "print the program's version and exit");
+}
+
+std::string version_line(const std::string& prog) { return prog + " " + kVersion; }
 
 void App::add_config_options(const std::string& config_help, bool with_domain) {
   cli_.add_option("--config", config_path_, config_help);
@@ -16,7 +22,7 @@ std::optional<int> App::parse(int argc, char** argv) {
   try {
     cli_.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return cli_.exit(e);  // --help
+    if (e.get_exit_code() == 0) return cli_.exit(e);  // --help, --version
     return usage_error(e.what());
   }
   return std::nullopt;

@@ -19,6 +19,10 @@ namespace shapeform::app {
 /// Exit status of a bad command line or config.
 inline constexpr int kExitUsage = 2;
 
+/// "prog VERSION": the project version and, when built from git, `git describe --always --dirty`
+/// ("shapeform_agent 0.1.0 (git 0b3727a-dirty)"). What --version prints.
+std::string version_line(const std::string& prog);
+
 class App {
  public:
   App(std::string prog, const std::string& description);
@@ -31,8 +35,8 @@ class App {
   void add_config_options(const std::string& config_help = "YAML config (default: built-in defaults)",
                           bool with_domain = true);
 
-  /// Parses argv. nullopt: go on. Otherwise the exit status to return at once: 0 after --help
-  /// (printed), 2 after a parse error (printed on stderr as "prog: message").
+  /// Parses argv. nullopt: go on. Otherwise the exit status to return at once: 0 after --help or
+  /// --version (printed), 2 after a parse error (printed on stderr as "prog: message").
   std::optional<int> parse(int argc, char** argv);
 
   /// Loads the config: the --config file with the --set overrides, then --domain, then `extra`

@@ -6,19 +6,25 @@
 #include <string>
 
 #include "config/config.hpp"
+#include "shapeform_version.hpp"  // generated in the build tree
 
 int main(int argc, char** argv) {
   const std::string usage =
       "usage: shapeform_config_doc [--check] FILE\n"
       "  Replaces every block between '<!-- BEGIN GENERATED keys: SECTION -->' and '<!-- END GENERATED -->'\n"
       "  in FILE (config/README.md) by the key table of SECTION generated from the config table.\n"
-      "  --check  change nothing; exit 1 when FILE differs from what would be generated\n";
+      "  --check    change nothing; exit 1 when FILE differs from what would be generated\n"
+      "  --version  print the program's version and exit\n";
   bool check = false;
   std::string path;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--help" || arg == "-h") {
       std::cout << usage;
+      return 0;
+    }
+    if (arg == "--version") {
+      std::cout << "shapeform_config_doc " << shapeform::kVersion << "\n";
       return 0;
     }
     if (arg == "--check") {

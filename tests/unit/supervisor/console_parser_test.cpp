@@ -1,7 +1,10 @@
 #include "console_parser.hpp"
 
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <vector>
+
+#include "core/params.hpp"
 
 #include "shapes/shapes.hpp"
 #include <sstream>
@@ -841,4 +844,101 @@ TEST_CASE("help examples parse", "[supervisor][parser][help]") {
     CHECK(r.ok());
     CHECK_FALSE(std::holds_alternative<NoOp>(r.action));
   }
+}
+
+TEST_CASE("show, metrics json, progress", "[supervisor][parser]") {
+  parse_as<Show>("show");
+  CHECK_FALSE(parse_as<ShowMetrics>("metrics").json);
+  CHECK(parse_as<ShowMetrics>("metrics json").json);
+  CHECK(error_of("metrics csv") == "metrics: unexpected argument 'csv' (expected json)");
+  CHECK(error_of("show all") == "show: unexpected argument 'all'");
+  CHECK(parse_as<Progress>("progress on").mode == Progress::Mode::OnChange);
+  CHECK(parse_as<Progress>("progress off").mode == Progress::Mode::Off);
+  const Progress p = parse_as<Progress>("progress every 0.2");
+  CHECK(p.mode == Progress::Mode::Every);
+  CHECK(p.every_s == 0.2);
+  CHECK(error_of("progress") == "progress: expected on, off or every S");
+  CHECK(error_of("progress on 2") == "progress: expected on, off or every S");
+  CHECK(error_of("progress every") == "progress every: missing interval S (wall seconds)");
+  CHECK(error_of("progress every 0") == "progress: S must be > 0, got 0");
+}
+
+TEST_CASE("help states each wait's unit, and the new commands", "[supervisor][parser][help]") {
+  const std::string overview = help_text();
+  CHECK(overview.find("wait converged [timeout=S]                                  wait for convergence (S wall seconds)") !=
+        std::string::npos);
+  CHECK(overview.find("wait time T [timeout=S]                                     wait for model time T (not seconds)") !=
+        std::string::npos);
+  CHECK(overview.find("sleep S                                                     pause input for S wall seconds") !=
+        std::string::npos);
+  for (const char* syntax : {"show ", "metrics [json]", "progress on|off|every S"}) {
+    INFO(syntax);
+    CHECK(overview.find(syntax) != std::string::npos);
+  }
+  CHECK(help_text("wait").find("timeout (wall seconds") != std::string::npos);
+  CHECK(help_text("wait").find("T is model time") != std::string::npos);
+  CHECK(help_text("quit").find("130") != std::string::npos);
+  CHECK(help_text("progress").find("10%") != std::string::npos);
+  for (const char* word : {"show", "progress"}) CHECK(has_help(word));
+}
+
+TEST_CASE("the syntax table is what the parser accepts", "[supervisor][parser][complete]") {
+  // Every shape kind has its entry, and every entry's keys are exactly those the parser names when
+  // it refuses an unknown one.
+  for (const auto& kind : core::params::names(core::params::kShapeKindNames)) {
+    bool found = false;
+    for (const Syntax& s : syntax_table()) found = found || s.words == "shape " + kind;
+    INFO(kind);
+    CHECK(found);
+  }
+  for (const Syntax& s : syntax_table()) {
+    INFO(s.words);
+    const ParseResult r = parse_command(s.words + " zzz=1", current_command());
+    REQUIRE_FALSE(r.ok());
+    if (s.keys.empty()) {
+      CHECK(r.error.find("takes no key=value parameters") != std::string::npos);
+    } else {
+      CHECK(r.error.find("unknown parameter 'zzz' (expected " + core::params::join(s.keys, ", ") + ")") !=
+            std::string::npos);
+    }
+  }
+}
+
+TEST_CASE("Tab completion: commands, second words, values, parameter names", "[supervisor][parser][complete]") {
+  using V = std::vector<std::string>;
+  const auto cands = [](std::string_view line) { return complete(line).candidates; };
+  CHECK(cands("sh") == V{"shape", "show"});
+  CHECK(cands("qu") == V{"quit"});
+  CHECK(cands("e") == V{"exit"});
+  CHECK(complete("sh").start == 0);
+  const std::vector<std::string> words = command_words();
+  CHECK(cands("") == [&] {
+    V sorted = words;
+    std::sort(sorted.begin(), sorted.end());
+    return sorted;
+  }());
+  for (const char* w : {"shape", "track", "wait", "record", "metrics", "progress", "show", "quit", "exit", "help"})
+    CHECK(std::find(words.begin(), words.end(), w) != words.end());
+  CHECK(cands("shape c") == V{"circle"});
+  CHECK(cands("shape p") == V{"parametric", "polar", "polygon"});
+  CHECK(complete("shape p").start == 6);
+  CHECK(cands("shape circle ") == V{"cx=", "cy=", "r=", "rot=", "scale="});
+  CHECK(cands("shape circle r=4 ") == V{"cx=", "cy=", "rot=", "scale="});  // a given key is not offered again
+  CHECK(cands("shape circle r=4 s") == V{"scale="});
+  CHECK(cands("shape circle r=") == V{});  // a value: nothing to offer
+  CHECK(cands("shape polar r=\"4 + c") == V{});  // inside quotes
+  CHECK(cands("track ") == V{"circle", "line", "point", "stop"});
+  CHECK(cands("track circle ra") == V{"radius="});
+  CHECK(cands("wait ") == V{"agents", "converged", "time"});
+  CHECK(cands("wait converged ") == V{"timeout="});
+  CHECK(cands("wait agents 3 t") == V{"timeout="});
+  CHECK(cands("record s") == V{"start", "stop"});
+  CHECK(cands("law ") == V{"arc", "k_normal=", "k_tangent=", "paper", "spacing="});
+  CHECK(cands("law arc k_t") == V{"k_tangent="});
+  CHECK(cands("integrator ") == V{"dt=", "euler", "rk4"});
+  CHECK(cands("gains k") == V{"k1=", "k2="});
+  CHECK(cands("metrics ") == V{"json"});
+  CHECK(cands("progress ") == V{"every", "off", "on"});
+  CHECK(cands("help sh") == V{"shape", "show"});
+  CHECK(cands("bogus ") == V{});
 }

@@ -165,3 +165,86 @@ TEST_CASE("a command is described on one line", "[supervisor][presentation]") {
   CHECK(supervisor::describe_command(circle()) ==
         "circle r=4 centre (0, 0); k1=0.1 k2=2 sigma=3.5 beta=1.2 r=0.1, euler dt=1");
 }
+
+namespace {
+SwarmMonitor::Sample sample(int alive, double shape_error, bool converged = false) {
+  SwarmMonitor::Sample s;
+  s.model_time = 12.0;
+  s.alive = alive;
+  s.following = alive;
+  s.converged = converged;
+  s.metrics.agents = alive;
+  s.metrics.shape_error_mean = shape_error;
+  s.metrics.clusters = 1;
+  return s;
+}
+}  // namespace
+
+TEST_CASE("metrics table: every metric, 4 significant digits, units", "[supervisor][presentation]") {
+  SwarmMonitor::Sample s = sample(8, 0.0123456789, true);
+  s.metrics.gap_cv = 12345.678;
+  const std::string t = supervisor::metrics_table(s, 3);
+  INFO(t);
+  CHECK(t.rfind("epoch 3, model time t=12, 8 agents alive, 8 following, converged\n", 0) == 0);
+  CHECK(t.find("shape_error_mean       0.01235  shape units\n") != std::string::npos);
+  CHECK(t.find("gap_cv               1.235e+04  \n") != std::string::npos);
+  CHECK(t.find("clusters                     1  count\n") != std::string::npos);
+  CHECK(t.find("min_separation               -  shape units\n") != std::string::npos);
+  for (const core::MetricInfo& info : core::kMetricTable) CHECK(t.find("  " + std::string(info.name) + " ") != std::string::npos);
+  CHECK(t.find("0.0123456") == std::string::npos);  // no long numbers
+}
+
+TEST_CASE("progress: printed on change only, every S, or never", "[supervisor][presentation]") {
+  using supervisor::ProgressFilter;
+  ProgressFilter f;
+  std::int64_t now = 100 * kS;
+  CHECK(f.due(sample(8, 1.0), 1, now));               // the first line
+  CHECK_FALSE(f.due(sample(8, 1.0), 1, now += 2 * kS));  // nothing changed
+  CHECK_FALSE(f.due(sample(8, 0.95), 1, now += kS));     // 5%: below the tolerance
+  CHECK(f.due(sample(8, 0.85), 1, now += kS));           // 15% of the last printed value
+  CHECK_FALSE(f.due(sample(7, 0.85), 1, now + kS / 2));  // changed, but within a second of the last line
+  CHECK(f.due(sample(7, 0.85), 1, now += kS));           // agents count
+  CHECK(f.due(sample(7, 0.85), 2, now += kS));           // epoch
+  CHECK(f.due(sample(7, 0.85, true), 2, now += kS));     // converged
+  CHECK(f.due(sample(7, 0.0), 2, now += kS));            // 0.85 -> 0
+  CHECK_FALSE(f.due(sample(7, 0.0009), 2, now += kS));   // below the absolute floor
+  SwarmMonitor::Sample two = sample(7, 0.0009);
+  two.metrics.clusters = 2;
+  CHECK(f.due(two, 2, now += kS));  // a count changes
+  f.off();
+  CHECK_FALSE(f.due(sample(1, 5.0), 9, now += 10 * kS));
+  f.every(0.2);
+  CHECK(f.due(sample(1, 5.0), 9, now += kS));
+  CHECK_FALSE(f.due(sample(1, 5.0), 9, now + kS / 10));
+  CHECK(f.due(sample(1, 5.0), 9, now += kS / 5));  // unchanged, but 0.2 s passed
+  f.on_change();
+  CHECK_FALSE(f.due(sample(1, 5.0), 9, now += 5 * kS));
+}
+
+TEST_CASE("show: the command in force and who published it", "[supervisor][presentation]") {
+  supervisor::ShowInfo info;
+  info.command = test::circle();
+  info.command.gains.k1 = 0.5;
+  info.epoch = 4;
+  info.published_s_ago = 12.34;
+  info.agents_epoch = 4;
+  info.alive = 8;
+  info.following = 7;
+  std::string t = supervisor::show_text(info);
+  INFO(t);
+  CHECK(t.rfind("epoch 4, published by this supervisor 12.3 s ago; 7 of 8 agents follow it\n", 0) == 0);
+  CHECK(t.find("  shape       circle r=4 centre (0, 0) rot=0 deg scale=1\n") != std::string::npos);
+  CHECK(t.find("  tracking    off\n") != std::string::npos);
+  CHECK(t.find("  law         paper\n") != std::string::npos);
+  CHECK(t.find("  gains       k1=0.5 k2=") != std::string::npos);
+  CHECK(t.find("  integrator  euler dt=1\n") != std::string::npos);
+  CHECK(t.find("  max_speed   off\n") != std::string::npos);
+  CHECK(t.find("another participant") == std::string::npos);
+  info.agents_epoch = 6;  // someone else published since
+  t = supervisor::show_text(info);
+  CHECK(t.find("the agents follow epoch 6, published by another participant") != std::string::npos);
+  info.epoch = 0;  // nothing published here
+  t = supervisor::show_text(info);
+  CHECK(t.rfind("nothing published by this supervisor yet", 0) == 0);
+  CHECK(t.find("the agents follow epoch 6, published by another participant") != std::string::npos);
+}
