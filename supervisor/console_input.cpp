@@ -374,7 +374,7 @@ void ConsoleInput::run_editline() {
   el_set(el, EL_PROMPT, prompt_fn);
   el_set(el, EL_HIST, history, hist);
   el_set(el, EL_ADDFN, "shapeform-complete", "complete a command, shape or parameter name", tab_fn);
-  el_set(el, EL_BIND, "^I", "shapeform-complete", nullptr);
+  el_set(el, EL_BIND, "^I", "shapeform-complete", static_cast<const char*>(nullptr));
   el_source(el, nullptr);         // ~/.editrc, as every libedit program
   el_set(el, EL_UNBUFFERED, 1);   // raw terminal, one key per el_gets(); the prompt is still empty
 

@@ -709,8 +709,8 @@ const std::vector<HelpEntry>& help_entries() {
    "metrics\n"
    "metrics json\n"
    "  Prints the latest metrics (shape error, gap CV, clusters, ...) as a table, 4 significant\n"
-   "  digits, with units; `metrics json` prints them as one JSON object (with --json both print\n"
-   "  the JSON event).\n"},
+   "  digits, with units; `metrics json` prints them as one JSON object. With --json both print\n"
+   "  the JSON object (and the metrics event on stdout).\n"},
   {"progress",
    "progress on|off|every S                                     when to print the progress line\n",
    "progress on\n"

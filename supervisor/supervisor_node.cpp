@@ -314,7 +314,8 @@ void Supervisor::execute(const Action& a, std::int64_t now) {
           // A query: the detector sees only the metrics ticks.
           const SwarmMonitor::Sample sample = monitor_.measure(metrics_time(now), now);
           const nlohmann::json j = metrics_answer(sample, epoch_);
-          if (act.json) out << j.dump() << std::endl;
+          // With --json the human copy stays the JSON object (scripts filter it like the event).
+          if (act.json || out_.json()) out << j.dump() << std::endl;
           else out << metrics_table(sample, epoch_) << std::flush;
           out_.event("metrics", j);
         } else if constexpr (std::is_same_v<T, Show>) {
