@@ -171,7 +171,7 @@ bool ProgressFilter::changed(const SwarmMonitor::Sample& s, std::uint32_t epoch)
     const std::optional<double> b = info.get(s.metrics);
     if (a.has_value() != b.has_value()) return true;
     if (!a) continue;
-    if (info.count ? *a != *b : std::abs(*b - *a) > kRelTol * std::max(std::abs(*a), kAbsFloor)) return true;
+    if (info.count ? *a != *b : std::abs(*b - *a) > std::max(kRelTol * std::abs(*a), kAbsFloor)) return true;
   }
   return false;
 }

@@ -57,7 +57,7 @@ std::string metrics_table(const SwarmMonitor::Sample& s, std::uint32_t epoch);
 /// Decides when the progress line is printed: on change (the default), every S seconds, or never.
 /// "Changed" means: the agents alive or following, the epoch, the converged flag or the cluster count
 /// differ from the last printed line, or a metric moved by more than kRelTol of its last printed value
-/// (moves below kAbsFloor ignored, so noise around zero prints nothing). On change, at most one line
+/// (moves of kAbsFloor or less ignored, so noise around zero prints nothing). On change, at most one line
 /// per kMinInterval.
 class ProgressFilter {
  public:

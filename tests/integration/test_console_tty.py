@@ -70,6 +70,12 @@ class Screen:
                 if i + 1 >= len(text) or (text[i + 1] == "[" and not CSI.match(text + "m", i)):
                     self.pending = text[i:]  # an escape sequence cut in two
                     return
+                if text[i + 1] in "()":  # ESC ( B: a character set
+                    if i + 2 >= len(text):
+                        self.pending = text[i:]
+                        return
+                    i += 3
+                    continue
                 i += 2  # ESC = , ESC > , ...
                 continue
             if ch == "\r":
