@@ -5,6 +5,8 @@
 
 #include <catch2/catch.hpp>
 #include <chrono>
+#include <cstdlib>
+#include <optional>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
@@ -172,4 +174,37 @@ TEST_CASE("console input: destruction does not wait for input; one at a time",
   CHECK(std::chrono::steady_clock::now() - t0 < std::chrono::seconds(5));
   ConsoleInput again(opt);  // the slot is free again
   CHECK_FALSE(again.eof());
+}
+
+TEST_CASE("the history file: XDG_STATE_HOME, else HOME", "[supervisor][console]") {
+  const char* old_state = std::getenv("XDG_STATE_HOME");
+  const char* old_home = std::getenv("HOME");
+  const std::string saved_state = old_state ? old_state : "";
+  const std::string saved_home = old_home ? old_home : "";
+  ::setenv("XDG_STATE_HOME", "/tmp/state", 1);
+  ::setenv("HOME", "/home/op", 1);
+  CHECK(default_history_file() == "/tmp/state/shapeform_history");
+  ::unsetenv("XDG_STATE_HOME");
+  CHECK(default_history_file() == "/home/op/.shapeform_history");
+  ::unsetenv("HOME");
+  CHECK(default_history_file().empty());
+  if (old_state) ::setenv("XDG_STATE_HOME", saved_state.c_str(), 1);
+  if (old_home) ::setenv("HOME", saved_home.c_str(), 1);
+}
+
+TEST_CASE("without a terminal Ctrl-C and busy are not the console's", "[supervisor][console]") {
+  StdinPipe in;
+  ConsoleInput console(ConsoleInput::Options{"> ", "", false, {}});
+  CHECK_FALSE(console.interactive());
+  console.set_busy(true);  // no effect, no prompt to hide
+  CHECK(console.take_interrupts() == 0);
+  in.write("status\n");
+  in.close_writer();
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  std::optional<std::string> line;
+  while (!line && std::chrono::steady_clock::now() < deadline) {
+    line = console.poll();
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  CHECK(line == std::optional<std::string>("status"));
 }
