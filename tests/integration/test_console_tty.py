@@ -183,7 +183,12 @@ class Tty:
         raise AssertionError("timed out waiting for %s; screen:\n%s" % (what, "\n".join(self.screen.text())))
 
     def until_cursor_line(self, text, timeout=10.0):
-        self.until("cursor line %r" % text, lambda: self.screen.cursor_line() == text, timeout)
+        """The row of the cursor reads `text` (trailing blanks aside)."""
+        self.until("cursor line %r" % text, lambda: self.screen.cursor_line() == text.rstrip(), timeout)
+
+    def until_raw_count(self, text, n, timeout=10.0):
+        """`text` has been written at least n times in all."""
+        self.until("%r written %d times" % (text, n), lambda: self.raw.count(text) >= n, timeout)
 
     def until_screen_has(self, text, timeout=10.0):
         self.until("%r on the screen" % text, lambda: any(text in line for line in self.screen.text()), timeout)
@@ -239,9 +244,10 @@ class ConsoleTtyTest(harness.SwarmTestCase):
 
     def assert_alive(self, tty):
         self.assertIsNone(tty.proc.poll(), "the supervisor ended")
+        answers = tty.raw.count("(no agent heard yet)")
         tty.type("status\r")  # it still answers
-        tty.until_screen_has("(no agent heard yet)")
-        tty.until_cursor_line(PROMPT.rstrip())
+        tty.until_raw_count("(no agent heard yet)", answers + 1)
+        tty.until_cursor_line(PROMPT)
 
     def test_console_in_a_terminal(self):
         tty = self.start_tty("first")
