@@ -5,7 +5,6 @@
 #include <climits>
 #include <cmath>
 #include <cstdlib>
-#include <initializer_list>
 #include <map>
 #include <optional>
 #include <stdexcept>
@@ -72,15 +71,6 @@ struct ParseError {
 };
 
 [[noreturn]] void fail(std::string message) { throw ParseError{std::move(message)}; }
-
-std::string join(std::initializer_list<const char*> words, const char* sep) {
-  std::string s;
-  for (const char* w : words) {
-    if (!s.empty()) s += sep;
-    s += w;
-  }
-  return s;
-}
 
 // ---------------------------------------------------------------------------------------------
 // Numbers
@@ -564,7 +554,7 @@ Action parse_tokens(const Tokens& t, const core::CompiledCommand& current) {
   if (word == "metrics") {
     const Args a(word, t, 1, {}, 1);
     if (a.positionals() == 0) return ShowMetrics{};
-    if (a.positional(0) != "json") fail("metrics: unexpected argument '" + a.positional(0) + "' (expected json)");
+    if (a.positional(0) != "json") fail("metrics: unexpected argument '" + a.positional(0) + "'");
     return ShowMetrics{true};
   }
   if (word == "progress") {

@@ -149,8 +149,8 @@ std::string metrics_table(const SwarmMonitor::Sample& s, std::uint32_t epoch) {
   for (const core::MetricInfo& info : core::kMetricTable) {
     const std::optional<double> v = info.get(s.metrics);
     const std::string value = !v ? "-" : info.count ? std::to_string(std::llround(*v)) : fmt_opt(v, "%.4g");
-    std::snprintf(line, sizeof line, "  %-17s %11s  %s\n", std::string(info.name).c_str(), value.c_str(),
-                  info.unit == "1" ? "" : std::string(info.unit).c_str());
+    const std::string unit = info.unit == "1" ? "" : "  " + std::string(info.unit);  // "1": a ratio
+    std::snprintf(line, sizeof line, "  %-17s %11s%s\n", std::string(info.name).c_str(), value.c_str(), unit.c_str());
     o << line;
   }
   return o.str();

@@ -186,10 +186,10 @@ TEST_CASE("metrics table: every metric, 4 significant digits, units", "[supervis
   const std::string t = supervisor::metrics_table(s, 3);
   INFO(t);
   CHECK(t.rfind("epoch 3, model time t=12, 8 agents alive, 8 following, converged\n", 0) == 0);
-  CHECK(t.find("shape_error_mean       0.01235  shape units\n") != std::string::npos);
-  CHECK(t.find("gap_cv               1.235e+04  \n") != std::string::npos);
-  CHECK(t.find("clusters                     1  count\n") != std::string::npos);
-  CHECK(t.find("min_separation               -  shape units\n") != std::string::npos);
+  CHECK(t.find("\n  shape_error_mean      0.01235  shape units\n") != std::string::npos);
+  CHECK(t.find("\n  gap_cv              1.235e+04\n") != std::string::npos);
+  CHECK(t.find("\n  clusters                    1  count\n") != std::string::npos);
+  CHECK(t.find("\n  min_separation              -  shape units\n") != std::string::npos);
   for (const core::MetricInfo& info : core::kMetricTable) CHECK(t.find("  " + std::string(info.name) + " ") != std::string::npos);
   CHECK(t.find("0.0123456") == std::string::npos);  // no long numbers
 }
