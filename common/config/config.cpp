@@ -881,4 +881,40 @@ std::string regenerate_doc(const std::string& text) {
   return out + text.substr(pos);
 }
 
+std::string default_yaml() {
+  static const Config defaults;
+  std::string out =
+      "# shapeform: every key with its default value, the loader's built-in defaults. Every key but\n"
+      "# schema_version is optional: this file is documentation and a starting point. Generated from the\n"
+      "# config table by scripts/gen_config_doc.sh (a test fails while it is stale); each comment gives the\n"
+      "# key's unit, range and meaning (more in config/README.md).\n";
+  std::vector<std::string> open;  // sections written, outermost first
+  for (const Param& p : config_table()) {
+    std::vector<std::string> parts;
+    for (std::size_t begin = 0;;) {
+      const auto dot = p.key.find('.', begin);
+      parts.push_back(p.key.substr(begin, dot == std::string::npos ? std::string::npos : dot - begin));
+      if (dot == std::string::npos) break;
+      begin = dot + 1;
+    }
+    const std::vector<std::string> sections(parts.begin(), parts.end() - 1);
+    std::size_t common = 0;
+    while (common < open.size() && common < sections.size() && open[common] == sections[common]) ++common;
+    open.resize(common);
+    for (; open.size() < sections.size(); open.push_back(sections[open.size()])) {
+      if (open.empty()) out += "\n";
+      out += std::string(2 * open.size(), ' ') + sections[open.size()] + ":\n";
+    }
+    std::string line = std::string(2 * open.size(), ' ') + parts.back() + ": " + yaml_text(p, p.get(defaults));
+    std::string note = p.doc;
+    if (!p.unit.empty()) note += ", " + p.unit;
+    const std::string range = range_doc(p);
+    if (!range.empty() && range != "finite") note += "; " + range;
+    note.erase(std::remove(note.begin(), note.end(), '`'), note.end());  // Markdown quoting
+    line.resize(std::max<std::size_t>(line.size() + 1, 32), ' ');
+    out += line + "# " + note + "\n";
+  }
+  return out;
+}
+
 }  // namespace shapeform::config
