@@ -18,8 +18,8 @@ ALLOWED = {
     "common/dds": {"core", "shapes", "util", "shapeform"},
     "common/config": {"core", "shapes", "util", "dds/transport.hpp"},
     "common/sim": {"core", "util", "app"},
-    "common/app": {"config", "core", "util"},
-    "agent": {"core", "dds", "config", "util", "app"},
+    "common/app": {"config", "core", "util", "dds/transport.hpp"},
+    "agent": {"core", "shapes", "dds", "config", "util", "app"},
     "supervisor": {"core", "shapes", "dds", "config", "util", "app"},
     "bench": {"core", "dds", "config", "util", "app", "shapeform"},
 }

@@ -1,6 +1,9 @@
 #include "app/app.hpp"
 
 #include <iostream>
+#include <string>
+
+#include "dds/transport.hpp"
 
 #include "shapeform_version.hpp"  // generated in the build tree
 
@@ -14,7 +17,7 @@ std::string version_line(const std::string& prog) { return prog + " " + kVersion
 
 void App::add_config_options(const std::string& config_help, bool with_domain) {
   cli_.add_option("--config", config_path_, config_help);
-  if (with_domain) domain_option_ = cli_.add_option("--domain", domain_, "DDS domain id 0..232 (overrides transport.domain)");
+  if (with_domain) domain_option_ = cli_.add_option("--domain", domain_, "DDS domain id 0.." + std::to_string(dds::kMaxDomainId) + " (overrides transport.domain)");
   cli_.add_option("--set", sets_, "override any config key: dotted.key=value (repeatable)");
 }
 
