@@ -32,11 +32,10 @@ std::optional<long long> settle_step(const Summary& s) {
   return std::llround(*s.settle_time / s.command.dt);
 }
 
-}  // namespace
-
-std::string describe_command(const core::CompiledCommand& c) {
+/// The shape's kind and the parameters that define it, as the console spells them
+/// ("circle r=4", "polygon 5 vertices closed").
+std::string shape_parameters(const core::ShapeSpec& s) {
   std::ostringstream o;
-  const auto& s = c.shape;
   o << core::to_string(s.kind);
   switch (s.kind) {
     case core::ShapeKind::Line: o << " m=" << s.m << " c=" << s.c; break;
@@ -44,12 +43,20 @@ std::string describe_command(const core::CompiledCommand& c) {
     case core::ShapeKind::Ellipse: o << " a=" << s.a << " b=" << s.b; break;
     case core::ShapeKind::Square: o << " a=" << s.a; break;
     case core::ShapeKind::Polar: o << " r=\"" << s.r_expr << '"'; break;
-    case core::ShapeKind::Parametric:
-      o << " x=\"" << s.x_expr << "\" y=\"" << s.y_expr << '"' << (s.closed ? " closed" : " open");
-      break;
+    case core::ShapeKind::Parametric: o << " x=\"" << s.x_expr << "\" y=\"" << s.y_expr << '"'; break;
     case core::ShapeKind::Implicit: o << " f=\"" << s.f_expr << '"'; break;
-    case core::ShapeKind::Polygon: o << " with " << s.vertices.size() << (s.closed ? " vertices, closed" : " vertices, open"); break;
+    case core::ShapeKind::Polygon: o << " " << s.vertices.size() << " vertices"; break;
   }
+  if (s.kind == core::ShapeKind::Parametric || s.kind == core::ShapeKind::Polygon) o << (s.closed ? " closed" : " open");
+  return o.str();
+}
+
+}  // namespace
+
+std::string describe_command(const core::CompiledCommand& c) {
+  std::ostringstream o;
+  const auto& s = c.shape;
+  o << shape_parameters(s);
   if (s.rotation != 0.0) o << " rotated " << s.rotation / core::params::kRadPerDeg << " deg";
   if (s.scale != 1.0) o << " scaled " << s.scale;
   if (c.tracking.enabled)
@@ -206,19 +213,7 @@ std::string show_text(const ShowInfo& info) {
       o << "the agents follow epoch " << info.agents_epoch << ", published by another participant since\n";
   }
   std::ostringstream shape;
-  shape << core::to_string(sh.kind);
-  switch (sh.kind) {
-    case core::ShapeKind::Line: shape << " m=" << sh.m << " c=" << sh.c; break;
-    case core::ShapeKind::Circle: shape << " r=" << sh.r0; break;
-    case core::ShapeKind::Ellipse: shape << " a=" << sh.a << " b=" << sh.b; break;
-    case core::ShapeKind::Square: shape << " a=" << sh.a; break;
-    case core::ShapeKind::Polar: shape << " r=\"" << sh.r_expr << '"'; break;
-    case core::ShapeKind::Parametric: shape << " x=\"" << sh.x_expr << "\" y=\"" << sh.y_expr << '"'; break;
-    case core::ShapeKind::Implicit: shape << " f=\"" << sh.f_expr << '"'; break;
-    case core::ShapeKind::Polygon: shape << " " << sh.vertices.size() << " vertices"; break;
-  }
-  if (sh.kind == core::ShapeKind::Parametric || sh.kind == core::ShapeKind::Polygon)
-    shape << (sh.closed ? " closed" : " open");
+  shape << shape_parameters(sh);
   if (sh.kind != core::ShapeKind::Line) shape << " centre (" << sh.centre.x() << ", " << sh.centre.y() << ")";
   shape << " rot=" << sh.rotation / core::params::kRadPerDeg << " deg scale=" << sh.scale;
   o << "  shape       " << shape.str() << '\n';
