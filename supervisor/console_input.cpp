@@ -17,6 +17,8 @@
 #include <system_error>
 #include <utility>
 
+#include "util/log.hpp"
+
 namespace shapeform::supervisor {
 namespace {
 
@@ -260,17 +262,7 @@ void ConsoleInput::run_plain() {
 
 void ConsoleInput::write_term(std::string_view text) {
   std::fflush(static_cast<FILE*>(term_file_));  // libedit's own output first
-  const char* p = text.data();
-  std::size_t left = text.size();
-  while (left > 0) {
-    const ssize_t n = ::write(term_fd_, p, left);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      return;
-    }
-    p += n;
-    left -= static_cast<std::size_t>(n);
-  }
+  util::write_all(term_fd_, text);
 }
 
 void ConsoleInput::erase_edit_area() {

@@ -43,22 +43,6 @@ std::string format_with_prefix(const std::string& prefix, LogLevel level, std::s
   return line;
 }
 
-// One write(2) per line; loops only on a partial write or EINTR. Errors are dropped: there is
-// nowhere left to report a failing stderr.
-void write_all_stderr(const std::string& line) {
-  const char* p = line.data();
-  std::size_t left = line.size();
-  while (left > 0) {
-    const ssize_t n = ::write(STDERR_FILENO, p, left);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      return;
-    }
-    p += n;
-    left -= static_cast<std::size_t>(n);
-  }
-}
-
 }  // namespace
 
 void log_init(std::string role, int id) {
@@ -79,7 +63,7 @@ std::string format_log_line(LogLevel level, std::string_view msg) {
 void log(LogLevel level, std::string_view msg) {
   LogState& st = state();
   const std::lock_guard<std::mutex> lock(st.mutex);
-  write_all_stderr(format_with_prefix(st.prefix, level, msg));
+  write_all(STDERR_FILENO, format_with_prefix(st.prefix, level, msg));  // one write(2) per line
 }
 
 void log_info(std::string_view msg) { log(LogLevel::Info, msg); }
@@ -141,6 +125,20 @@ std::uint64_t ThrottledLog::suppressed(std::string_view key) const {
 std::uint64_t ThrottledLog::suppressed_total() const {
   const std::lock_guard<std::mutex> lock(mutex_);
   return total_;
+}
+
+void write_all(int fd, std::string_view text) {
+  const char* p = text.data();
+  std::size_t left = text.size();
+  while (left > 0) {
+    const ssize_t n = ::write(fd, p, left);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return;
+    }
+    p += n;
+    left -= static_cast<std::size_t>(n);
+  }
 }
 
 }  // namespace shapeform::util

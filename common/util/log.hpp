@@ -17,6 +17,10 @@ enum class LogLevel { Info, Warn, Error };
 /// Sets the line prefix: "[role id] ", or "[role] " when id < 0. Until called: "[shapeform] ".
 void log_init(std::string role, int id = -1);
 
+/// Writes all of text to fd, looping only on a partial write or EINTR. Errors are dropped: this is
+/// how logs and the console reach a terminal, and there is nowhere left to report a failing one.
+void write_all(int fd, std::string_view text);
+
 /// The full line for msg at level, with prefix, level tag (none for Info, "WARN ", "ERROR ") and
 /// one trailing newline (a trailing newline already in msg is not doubled).
 std::string format_log_line(LogLevel level, std::string_view msg);
