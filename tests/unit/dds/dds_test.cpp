@@ -118,6 +118,7 @@ core::Command sample_command() {
   c.integrator = core::Integrator::RK4;
   c.dt = 0.5;
   c.max_speed = 3.0;
+  c.hold = true;  // not the default, so a field dropped on the way is seen
   return c;
 }
 
@@ -141,6 +142,7 @@ void require_same(const core::Command& a, const core::Command& b) {
   CHECK(a.arc.k_normal == b.arc.k_normal);
   CHECK(a.arc.k_tangent == b.arc.k_tangent);
   CHECK(a.arc.spacing == b.arc.spacing);
+  CHECK(a.hold == b.hold);
   CHECK(a.tracking.enabled == b.tracking.enabled);
   CHECK(a.tracking.path.kind == b.tracking.path.kind);
   CHECK(a.tracking.path.point == b.tracking.path.point);
@@ -227,6 +229,8 @@ TEST_CASE("ShapeCommand round trip keeps every field", "[dds][convert]") {
   CHECK(m.k_normal() == 0.75);
   CHECK(m.k_tangent() == 0.5);
   CHECK(m.spacing() == 1.25);
+  CHECK(m.hold());
+  CHECK_FALSE(dds::to_msg(core::Command{}, 1).hold());
   CHECK(dds::to_msg(core::Command{}, 1).law() == "paper");
 
   core::CompiledCommand out;
