@@ -19,6 +19,7 @@
 #include "core/metric_table.hpp"
 #include "core/params.hpp"
 #include "dds/convert.hpp"
+#include "dds/discovery.hpp"
 #include "dds/node.hpp"
 #include "dds/participant.hpp"
 #include "dds/topics.hpp"
@@ -1280,6 +1281,65 @@ TEST_CASE("node refuses a topic of another type and handles survive their node",
   std::vector<dds::Received<msg::AgentStatus>> batch;
   CHECK(moved.drain(batch) == 0u);
   CHECK(moved.matched() == -1);
+}
+
+TEST_CASE("topic table lookup by name", "[dds][topics]") {
+  for (const dds::TopicId id : dds::kAllTopics) CHECK(dds::find_topic(dds::topic_name(id)) == id);
+  CHECK_FALSE(dds::find_topic("shapeform/nope"));
+  CHECK_FALSE(dds::find_topic("shapeform/State"));
+  CHECK_FALSE(dds::find_topic(""));
+}
+
+TEST_CASE("discovery lists the topics of other participants with name, host, pid and QoS", "[dds][discovery]") {
+  const auto cfg = loopback(test_domain(0));
+  // Named after this process, so that a test of another process on the same domain cannot confuse it.
+  const std::string name = "test-discovered-" + std::to_string(::getpid());
+  dds::Node node(cfg, name);
+  auto writer = node.writer<msg::ShapeCommand>(dds::TopicId::Command);
+  auto reader = node.reader<msg::AgentState>(dds::TopicId::State);
+  char host[256] = {};
+  REQUIRE(::gethostname(host, sizeof host - 1) == 0);
+
+  std::vector<dds::TopicSeen> topics;
+  const auto mine = [&](const std::vector<dds::EndpointSeen>& list) {
+    std::vector<dds::EndpointSeen> out;
+    for (const auto& e : list)
+      if (e.participant == name) out.push_back(e);
+    return out;
+  };
+  const auto find = [&](const char* topic) -> const dds::TopicSeen* {
+    for (const auto& t : topics)
+      if (t.name == topic) return &t;
+    return nullptr;
+  };
+  // Discovery takes a moment: listen again until both endpoints are seen (each call listens 1 s).
+  REQUIRE(wait_for([&] {
+    topics = dds::discover_topics(cfg, "test-discovery", 1.0);
+    return find("shapeform/command") && find("shapeform/state") && !mine(find("shapeform/command")->writers).empty() &&
+           !mine(find("shapeform/state")->readers).empty();
+  }, 20.0));
+  for (std::size_t i = 1; i < topics.size(); ++i) CHECK(topics[i - 1].name < topics[i].name);
+  const dds::TopicSeen& cmd = *find("shapeform/command");
+  CHECK(cmd.types == std::vector<std::string>{"shapeform::msg::ShapeCommand"});
+  CHECK(mine(cmd.readers).empty());
+  const auto w = mine(cmd.writers);
+  REQUIRE(w.size() == 1);
+  CHECK(w[0].host == host);
+  CHECK(w[0].pid == ::getpid());
+  CHECK(w[0].reliability == "reliable");
+  CHECK(w[0].durability == "transient_local");
+  CHECK(w[0].type == "shapeform::msg::ShapeCommand");
+  CHECK_FALSE(w[0].guid.empty());
+  const auto r = mine(find("shapeform/state")->readers);
+  REQUIRE(r.size() == 1);
+  CHECK(r[0].reliability == "best_effort");
+  CHECK(r[0].durability == "volatile");
+  CHECK(r[0].type == "shapeform::msg::AgentState");
+  // The listening participant itself has no endpoints, and a stop flag ends the wait at once.
+  std::atomic<bool> stop{true};
+  const auto t0 = std::chrono::steady_clock::now();
+  dds::discover_topics(cfg, "test-discovery", 30.0, &stop);
+  CHECK(std::chrono::steady_clock::now() - t0 < std::chrono::seconds(10));
 }
 
 }  // namespace shapeform
