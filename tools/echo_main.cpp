@@ -9,8 +9,7 @@
 #include "util/clock.hpp"
 #include "util/signals.hpp"
 
-using namespace shapeform;
-
+namespace shapeform {
 namespace {
 
 /// Prints every sample of topic `id` (type Msg) until `count` lines (0: no limit), SIGINT/SIGTERM,
@@ -38,9 +37,8 @@ int echo(const config::Config& cfg, dds::TopicId id, long long count, double tim
   return 0;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+/// The program: arguments, config, then the topic's type.
+int run(int argc, char** argv) {
   std::string topics;
   for (const dds::TopicId id : dds::kAllTopics) topics += (topics.empty() ? "" : ", ") + std::string(dds::topic_name(id));
   app::App app("shapeform_echo",
@@ -76,3 +74,8 @@ int main(int argc, char** argv) {
   }
   return 1;
 }
+
+}  // namespace
+}  // namespace shapeform
+
+int main(int argc, char** argv) { return shapeform::run(argc, argv); }

@@ -6,8 +6,10 @@
 #include "traffic_json.hpp"
 #include "util/signals.hpp"
 
-int main(int argc, char** argv) {
-  using namespace shapeform;
+namespace shapeform {
+namespace {
+
+int run(int argc, char** argv) {
   app::App app("shapeform_topics",
                "shapeform_topics: lists every topic seen on a DDS domain with its type, its writers and readers "
                "(participant, host, pid) and their QoS, after listening --wait seconds. Joins the domain with the "
@@ -35,3 +37,8 @@ int main(int argc, char** argv) {
   }
   return 0;
 }
+
+}  // namespace
+}  // namespace shapeform
+
+int main(int argc, char** argv) { return shapeform::run(argc, argv); }

@@ -9,8 +9,7 @@
 #include "core/params.hpp"
 #include "traffic_json.hpp"
 
-using namespace shapeform;
-
+namespace shapeform {
 namespace {
 
 dds::EndpointSeen endpoint(const std::string& participant, const char* rel, const char* dur, int pid = 42) {
@@ -169,3 +168,5 @@ TEST_CASE("a target and a metrics sample", "[tools][echo]") {
   CHECK(j["shape_error_mean"] == 0.25);
   for (const core::MetricInfo& info : core::kMetricTable) CHECK(j.contains(std::string(info.name)));
 }
+
+}  // namespace shapeform
