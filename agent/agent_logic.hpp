@@ -11,6 +11,9 @@
 
 namespace shapeform::agent {
 
+/// Largest agent id (ids are 0..kMaxAgentId, unique in the swarm).
+inline constexpr int kMaxAgentId = 9999;
+
 /// The latest tracking target heard: the centre C and its velocity at the supervisor's model time.
 using TargetSample = dds::TargetSample;
 

@@ -152,10 +152,11 @@ void AgentNode::drain_commands() {
     bool adopted = false;
     for (auto& l : logics_) adopted = l->on_command(cmd, c.msg.epoch()) || adopted;
     if (!adopted) continue;
-    util::log_info("following command epoch " + std::to_string(c.msg.epoch()) + ": " + c.msg.shape_kind() +
+    const std::string shape(core::to_string(cmd.shape.kind));
+    util::log_info("following command epoch " + std::to_string(c.msg.epoch()) + ": " + shape +
                    (cmd.tracking.enabled ? " (tracking)" : ""));
     if (opt_.json)
-      emit({{"event", "command"}, {"epoch", c.msg.epoch()}, {"shape", c.msg.shape_kind()}, {"tracking", cmd.tracking.enabled}});
+      emit({{"event", "command"}, {"epoch", c.msg.epoch()}, {"shape", shape}, {"tracking", cmd.tracking.enabled}});
   }
 }
 

@@ -28,8 +28,8 @@ bool parse_ids(const std::string& text, std::vector<std::int32_t>& ids, std::str
       error = "expected ids like 0-49 or 0,5,7, got '" + part + "'";
       return false;
     }
-    if (a < 0 || b > 9999 || a > b) {
-      error = "ids must be in 0..9999 with first <= last, got '" + part + "'";
+    if (a < 0 || b > shapeform::agent::kMaxAgentId || a > b) {
+      error = "ids must be in 0.." + std::to_string(shapeform::agent::kMaxAgentId) + " with first <= last, got '" + part + "'";
       return false;
     }
     for (long i = a; i <= b; ++i) {

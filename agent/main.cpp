@@ -5,6 +5,7 @@
 #include "agent_logic.hpp"
 #include "agent_node.hpp"
 #include "app/app.hpp"
+#include "dds/samples.hpp"
 
 int main(int argc, char** argv) {
   using namespace shapeform;
@@ -12,7 +13,8 @@ int main(int argc, char** argv) {
   int id = -1;
   std::string start, seed;
   agent::AgentOptions opt;
-  app.cli().add_option("--id", id, "agent id, 0..9999 (unique in the swarm)")->required();
+  app.cli().add_option("--id", id, "agent id, 0.." + std::to_string(agent::kMaxAgentId) + " (unique in the swarm)")
+      ->required();
   app.add_config_options();
   auto* start_opt = app.cli().add_option("--start", start, "starting position x,y");
   app.cli()
@@ -20,7 +22,8 @@ int main(int argc, char** argv) {
       ->excludes(start_opt);
   app.cli().add_flag("--json", opt.json, "machine output: JSON lines on stdout (status, command, rejected)");
   if (const auto rc = app.parse(argc, argv)) return *rc;
-  if (id < 0 || id > 9999) return app.usage_error("--id must be in 0..9999, got " + std::to_string(id));
+  if (id < 0 || id > agent::kMaxAgentId)
+    return app.usage_error("--id must be in 0.." + std::to_string(agent::kMaxAgentId) + ", got " + std::to_string(id));
   // The loader checks the seed (64-bit, >= 0).
   const auto cfg = app.load_config(app.given("--seed") ? std::vector<std::string>{"swarm.seed=" + seed}
                                                         : std::vector<std::string>{});
@@ -31,7 +34,7 @@ int main(int argc, char** argv) {
     double a = 0, b = 0;
     char extra = 0;
     if (std::sscanf(start.c_str(), "%lf,%lf%c", &a, &b, &extra) != 2 || !std::isfinite(a) || !std::isfinite(b) ||
-        std::abs(a) > 1e6 || std::abs(b) > 1e6)
+        std::abs(a) > dds::kStateLimit || std::abs(b) > dds::kStateLimit)
       return app.usage_error("--start: expected two finite numbers x,y, got '" + start + "'");
     x0 = core::Vec2(a, b);
   } else {

@@ -413,7 +413,8 @@ Action parse_gains(const Tokens& t, const core::CompiledCommand& current) {
 
 Action parse_integrator(const Tokens& t, const core::CompiledCommand& current) {
   const Args a("integrator", t, 1, {"dt"}, 1);
-  if (a.positionals() == 0) fail("integrator: missing method (euler or rk4)");
+  if (a.positionals() == 0)
+    fail("integrator: missing method (" + params::join(params::names(params::kIntegratorNames), " or ") + ")");
   core::CompiledCommand cmd = current;
   const std::string& method = a.positional(0);
   if (!params::parse_name(params::kIntegratorNames, method, cmd.integrator))
@@ -433,7 +434,7 @@ Action parse_max_speed(const Tokens& t, const core::CompiledCommand& current) {
 
 Action parse_law(const Tokens& t, const core::CompiledCommand& current) {
   const Args a("law", t, 1, {"k_normal", "k_tangent", "spacing"}, 1);
-  if (a.positionals() == 0) fail("law: missing law (paper or arc)");
+  if (a.positionals() == 0) fail("law: missing law (" + params::join(params::names(params::kLawNames), " or ") + ")");
   core::CompiledCommand cmd = current;  // the shape (and its curve) is kept
   const std::string& law = a.positional(0);
   if (!params::parse_name(params::kLawNames, law, cmd.law))

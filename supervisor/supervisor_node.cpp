@@ -393,7 +393,7 @@ Summary Supervisor::summary(std::int64_t now) const {
   s.sample = monitor_.measure(metrics_time(now), now);
   s.agents_seen = monitor_.agents().size();
   const auto& cv = cfg_.supervisor.converge;
-  s.settle_time = monitor_.settle_time({cv.band_abs, cv.band_rel, cv.gap_cv_max});
+  s.settle_time = monitor_.settle_time(cv);
   s.final_positions = monitor_.alive_positions(now);
   for (const auto& [id, x] : s.final_positions) s.final_model_times.push_back(monitor_.agents().at(id).model_time);
   s.samples_rejected = rejected_;

@@ -1,6 +1,9 @@
 #include "app/app.hpp"
 
 #include <iostream>
+#include <string>
+
+#include "dds/transport.hpp"
 
 namespace shapeform::app {
 
@@ -8,7 +11,7 @@ App::App(std::string prog, const std::string& description) : prog_(std::move(pro
 
 void App::add_config_options(const std::string& config_help, bool with_domain) {
   cli_.add_option("--config", config_path_, config_help);
-  if (with_domain) domain_option_ = cli_.add_option("--domain", domain_, "DDS domain id 0..232 (overrides transport.domain)");
+  if (with_domain) domain_option_ = cli_.add_option("--domain", domain_, "DDS domain id 0.." + std::to_string(dds::kMaxDomainId) + " (overrides transport.domain)");
   cli_.add_option("--set", sets_, "override any config key: dotted.key=value (repeatable)");
 }
 

@@ -413,15 +413,17 @@ class Reader {
     return ok ? std::optional<core::Vec2>(out) : std::nullopt;
   }
 
-  /// A list of [x, y] pairs (each checked like vec2, named "key[i]"); null means empty.
-  std::optional<std::vector<core::Vec2>> vec2_list(const Entry& e) {
+  /// A list whose items `read_item(item entry)` checks one by one (each named "key[i]"); null means
+  /// empty; `what` names the list in its error ("a list of strings").
+  template <class T, class ReadItem>
+  std::optional<std::vector<T>> list(const Entry& e, const char* what, ReadItem read_item) {
     if (!e.present) return std::nullopt;
-    if (e.value.IsNull()) return std::vector<core::Vec2>{};
+    if (e.value.IsNull()) return std::vector<T>{};
     if (!e.value.IsSequence()) {
-      bad(e, "expected a list of [x, y] pairs");
+      bad(e, std::string("expected ") + what);
       return std::nullopt;
     }
-    std::vector<core::Vec2> out;
+    std::vector<T> out;
     bool ok = true;
     for (std::size_t i = 0; i < e.value.size(); ++i) {
       Entry item;
@@ -429,38 +431,31 @@ class Reader {
       item.key.reset(e.key);
       item.value.reset(e.value[i]);  // reset, not '=': assigning a YAML::Node writes through it
       item.present = true;
-      const auto v = vec2(item);
+      const std::optional<T> v = read_item(item);
       if (v) out.push_back(*v);
       ok = ok && v.has_value();
     }
-    return ok ? std::optional<std::vector<core::Vec2>>(std::move(out)) : std::nullopt;
+    return ok ? std::optional<std::vector<T>>(std::move(out)) : std::nullopt;
+  }
+
+  /// A list of [x, y] pairs (each checked like vec2); null means empty.
+  std::optional<std::vector<core::Vec2>> vec2_list(const Entry& e) {
+    return list<core::Vec2>(e, "a list of [x, y] pairs", [this](const Entry& item) { return vec2(item); });
   }
 
   /// A list of non-empty strings; null means empty.
   std::optional<std::vector<std::string>> text_list(const Entry& e) {
-    if (!e.present) return std::nullopt;
-    if (e.value.IsNull()) return std::vector<std::string>{};
-    if (!e.value.IsSequence()) {
-      bad(e, "expected a list of strings");
-      return std::nullopt;
-    }
-    std::vector<std::string> out;
-    bool ok = true;
-    for (std::size_t i = 0; i < e.value.size(); ++i) {
-      const YAML::Node item = e.value[i];
-      const std::string path = e.path + "[" + std::to_string(i) + "]";
-      const YAML::Node& at = item.IsNull() ? e.anchor() : item;
-      if (!item.IsScalar()) {
-        bad(path, "expected a string", item, at);
-        ok = false;
-      } else if (item.Scalar().empty()) {
-        bad(path, "must not be empty", item, at);
-        ok = false;
+    return list<std::string>(e, "a list of strings", [this, &e](const Entry& item) -> std::optional<std::string> {
+      const YAML::Node& at = item.value.IsNull() ? e.anchor() : item.value;
+      if (!item.value.IsScalar()) {
+        bad(item.path, "expected a string", item.value, at);
+      } else if (item.value.Scalar().empty()) {
+        bad(item.path, "must not be empty", item.value, at);
       } else {
-        out.push_back(item.Scalar());
+        return item.value.Scalar();
       }
-    }
-    return ok ? std::optional<std::vector<std::string>>(std::move(out)) : std::nullopt;
+      return std::nullopt;
+    });
   }
 
   /// The value of e as parameter p declares it (type, then range), or nullopt (problem reported,
@@ -766,21 +761,36 @@ Config load(const std::string& path, const std::vector<std::string>& overrides) 
   return load_string(text.str(), overrides, path);
 }
 
+namespace {
+
+/// "a.b.c" -> {"a", "b", "c"}: every part of a dotted key.
+std::vector<std::string> key_parts(const std::string& key) {
+  std::vector<std::string> parts;
+  for (std::size_t begin = 0;;) {
+    const auto dot = key.find('.', begin);
+    parts.push_back(key.substr(begin, dot == std::string::npos ? std::string::npos : dot - begin));
+    if (dot == std::string::npos) return parts;
+    begin = dot + 1;
+  }
+}
+
+/// How many leading sections the open ones share with a key's sections (the tables are in file order).
+std::size_t shared_depth(const std::vector<std::string>& open, const std::vector<std::string>& sections) {
+  std::size_t n = 0;
+  while (n < open.size() && n < sections.size() && open[n] == sections[n]) ++n;
+  return n;
+}
+
+}  // namespace
+
 std::string to_yaml(const Config& c) {
   YAML::Emitter e;
   e << YAML::BeginMap;
   std::vector<std::string> open;  // the sections whose maps are open, outermost first
   for (const Param& p : config_table()) {
-    std::vector<std::string> parts;
-    for (std::size_t begin = 0;;) {
-      const auto dot = p.key.find('.', begin);
-      parts.push_back(p.key.substr(begin, dot == std::string::npos ? std::string::npos : dot - begin));
-      if (dot == std::string::npos) break;
-      begin = dot + 1;
-    }
+    const std::vector<std::string> parts = key_parts(p.key);
     const std::vector<std::string> sections(parts.begin(), parts.end() - 1);
-    std::size_t common = 0;
-    while (common < open.size() && common < sections.size() && open[common] == sections[common]) ++common;
+    const std::size_t common = shared_depth(open, sections);
     for (; open.size() > common; open.pop_back()) e << YAML::EndMap;
     for (; open.size() < sections.size(); open.push_back(sections[open.size()]))
       e << YAML::Key << sections[open.size()] << YAML::Value << YAML::BeginMap;
@@ -879,6 +889,35 @@ std::string regenerate_doc(const std::string& text) {
     pos = end;
   }
   return out + text.substr(pos);
+}
+
+std::string default_yaml() {
+  static const Config defaults;
+  std::string out =
+      "# shapeform: every key with its default value, the loader's built-in defaults. Every key but\n"
+      "# schema_version is optional: this file is documentation and a starting point. Generated from the\n"
+      "# config table by scripts/gen_config_doc.sh (a test fails while it is stale); each comment gives the\n"
+      "# key's unit, range and meaning (more in config/README.md).\n";
+  std::vector<std::string> open;  // sections written, outermost first
+  for (const Param& p : config_table()) {
+    const std::vector<std::string> parts = key_parts(p.key);
+    const std::vector<std::string> sections(parts.begin(), parts.end() - 1);
+    const std::size_t common = shared_depth(open, sections);
+    open.resize(common);
+    for (; open.size() < sections.size(); open.push_back(sections[open.size()])) {
+      if (open.empty()) out += "\n";
+      out += std::string(2 * open.size(), ' ') + sections[open.size()] + ":\n";
+    }
+    std::string line = std::string(2 * open.size(), ' ') + parts.back() + ": " + yaml_text(p, p.get(defaults));
+    std::string note = p.doc;
+    if (!p.unit.empty()) note += ", " + p.unit;
+    const std::string range = range_doc(p);
+    if (!range.empty() && range != "finite") note += "; " + range;
+    note.erase(std::remove(note.begin(), note.end(), '`'), note.end());  // Markdown quoting
+    line.resize(std::max<std::size_t>(line.size() + 1, 32), ' ');
+    out += line + "# " + note + "\n";
+  }
+  return out;
 }
 
 }  // namespace shapeform::config

@@ -97,4 +97,8 @@ std::string markdown_table(const std::string& section);
 /// Throws std::invalid_argument for an unknown section or an unterminated block.
 std::string regenerate_doc(const std::string& text);
 
+/// config/default.yaml: every key of the config table with its default, as to_yaml writes it, and a
+/// comment with its description, unit and range. It loads back to exactly Config{}.
+std::string default_yaml();
+
 }  // namespace shapeform::config

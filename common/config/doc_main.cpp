@@ -1,5 +1,5 @@
-/// shapeform_config_doc: rewrites (or checks) the generated key tables of config/README.md from the
-/// config table. Usage: shapeform_config_doc [--check] README.md
+/// shapeform_config_doc: rewrites (or checks) what is generated from the config table: the key tables
+/// of config/README.md and the whole of config/default.yaml. Usage: shapeform_config_doc [--check] FILE
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -10,8 +10,9 @@
 int main(int argc, char** argv) {
   const std::string usage =
       "usage: shapeform_config_doc [--check] FILE\n"
-      "  Replaces every block between '<!-- BEGIN GENERATED keys: SECTION -->' and '<!-- END GENERATED -->'\n"
-      "  in FILE (config/README.md) by the key table of SECTION generated from the config table.\n"
+      "  FILE.md (config/README.md): replaces every block between '<!-- BEGIN GENERATED keys: SECTION -->'\n"
+      "  and '<!-- END GENERATED -->' by the key table of SECTION generated from the config table.\n"
+      "  FILE.yaml (config/default.yaml): writes every key with its default and a comment.\n"
       "  --check  change nothing; exit 1 when FILE differs from what would be generated\n";
   bool check = false;
   std::string path;
@@ -43,7 +44,8 @@ int main(int argc, char** argv) {
   text << in.rdbuf();
   std::string generated;
   try {
-    generated = shapeform::config::regenerate_doc(text.str());
+    const bool yaml = path.size() >= 5 && path.compare(path.size() - 5, 5, ".yaml") == 0;
+    generated = yaml ? shapeform::config::default_yaml() : shapeform::config::regenerate_doc(text.str());
   } catch (const std::exception& e) {
     std::cerr << "shapeform_config_doc: " << path << ": " << e.what() << "\n";
     return 2;
@@ -51,7 +53,7 @@ int main(int argc, char** argv) {
   if (generated == text.str()) return 0;
   if (check) {
     std::cerr << path
-              << " is stale: its key tables differ from the config table; run scripts/gen_config_doc.sh\n";
+              << " is stale: it differs from what the config table generates; run scripts/gen_config_doc.sh\n";
     return 1;
   }
   std::ofstream out(path, std::ios::binary | std::ios::trunc);

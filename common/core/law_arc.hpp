@@ -12,7 +12,7 @@ namespace shapeform::core {
 
 /// Parameters of the arc law.
 struct ArcParams {
-  double k_normal = 0.5;   ///< rate toward the curve point ahead (1/model time; k_normal dt <= 1)
+  double k_normal = 0.5;   ///< rate toward the curve point ahead (1/model time)
   double k_tangent = 1.0;  ///< fraction of the slot error taken per step along the curve
   double spacing = 1.0;    ///< gap between agents on an infinite line (shape units)
 };

@@ -10,9 +10,9 @@ namespace shapeform::core {
 struct Gains {
   double k1 = 0.1;     ///< cohesion (foraging) gain
   double k2 = 2.0;     ///< attraction-to-shape gain
-  double sigma = 3.5;  ///< softening length (> 0)
-  double beta = 1.2;   ///< decay exponent (>= 0)
-  double r = 0.1;      ///< nearest-neighbour repulsion magnitude (>= 0)
+  double sigma = 3.5;  ///< softening length
+  double beta = 1.2;   ///< decay exponent
+  double r = 0.1;      ///< nearest-neighbour repulsion magnitude
 };
 
 /// sum_j k1 (x_j - x_i) / (sigma^2 + |x_j - x_i|^2)^beta over all neighbours.

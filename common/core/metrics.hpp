@@ -68,10 +68,7 @@ std::optional<int> settle_index(const std::vector<double>& shape_error,
 /// Online convergence for a live swarm: converged when, over the last `hold` span of model time,
 /// the shape error stayed within a band (max - min <= max(band_abs, band_rel * mean)) and gap CV
 /// stayed <= gap_cv_max. Suits the paper's law, whose plateau is off the shape and chatters.
-struct ConvergenceParams {
-  double band_abs = 0.02;
-  double band_rel = 0.1;
-  double gap_cv_max = 0.15;
+struct ConvergenceParams : SettleParams {
   double hold = 50.0;  ///< model time units the conditions must hold
 };
 

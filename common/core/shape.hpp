@@ -24,12 +24,12 @@ struct ShapeSpec {
   ShapeKind kind = ShapeKind::Circle;
   double m = -1.0;  ///< line slope: x2 = m x1 + c
   double c = 5.0;   ///< line intercept
-  double r0 = 4.0;  ///< circle radius (> 0)
-  double a = 4.0;   ///< ellipse semi-axis along x1, or square half side (> 0)
-  double b = 2.0;   ///< ellipse semi-axis along x2 (> 0)
+  double r0 = 4.0;  ///< circle radius
+  double a = 4.0;   ///< ellipse semi-axis along x1, or square half side
+  double b = 2.0;   ///< ellipse semi-axis along x2
   Vec2 centre = Vec2::Zero();  ///< where the shape's origin is placed (the centre of closed shapes)
   double rotation = 0.0;       ///< counter-clockwise rotation about the centre, radians
-  double scale = 1.0;          ///< uniform scale about the centre (> 0)
+  double scale = 1.0;          ///< uniform scale about the centre
   std::string r_expr;          ///< polar: r(phi), phi in [0, 2 pi)
   std::string x_expr, y_expr;  ///< parametric: x(s), y(s), s in [0, 1]
   std::string f_expr;          ///< implicit: f(x, y) = 0
@@ -73,7 +73,7 @@ struct CentrePath {
   Vec2 velocity = Vec2::Zero();  ///< Line: units per model time unit
   Vec2 origin = Vec2::Zero();    ///< Circle: the centre of the circular path
   double radius = 6.0;           ///< Circle: path radius
-  double period = 200.0;         ///< Circle: model time units per revolution (> 0)
+  double period = 200.0;         ///< Circle: model time units per revolution
   double phase = 0.0;            ///< Circle: angle at t = 0, radians
 };
 

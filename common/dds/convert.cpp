@@ -30,6 +30,11 @@ class Problems {
     const core::params::Range& range = core::params::wire_range(field);
     if (!range.contains(v)) add(field, range.text() + ", got " + util::format_g10(v));
   }
+  /// |v| (or what `what` names) at most kStateLimit: the bound of every received position and speed.
+  void within_limit(const std::string& field, const std::string& what, double v) {
+    if (std::abs(v) > kStateLimit)
+      add(field, what + " must be <= " + util::format_g10(kStateLimit) + ", got " + util::format_g10(v));
+  }
   void add(const std::string& field, const std::string& problem) {
     list_.push_back(std::string(prefix_) + "." + field + ": " + problem);
   }
@@ -235,14 +240,11 @@ bool valid_state(const msg::AgentState& s, std::string& why) {
   const bool fpx = p.finite("prev_x", s.prev_x());
   const bool fpy = p.finite("prev_y", s.prev_y());
   p.finite("prev_arc", s.prev_arc());
-  if (fpx && std::abs(s.prev_x()) > kStateLimit) p.add("prev_x", "|prev_x| must be <= 1e6, got " + util::format_g10(s.prev_x()));
-  if (fpy && std::abs(s.prev_y()) > kStateLimit) p.add("prev_y", "|prev_y| must be <= 1e6, got " + util::format_g10(s.prev_y()));
-  if (fx && std::abs(s.x()) > kStateLimit) p.add("x", "|x| must be <= 1e6, got " + util::format_g10(s.x()));
-  if (fy && std::abs(s.y()) > kStateLimit) p.add("y", "|y| must be <= 1e6, got " + util::format_g10(s.y()));
-  if (fvx && fvy) {
-    const double speed = std::hypot(s.vx(), s.vy());
-    if (speed > kStateLimit) p.add("v", "speed must be <= 1e6, got " + util::format_g10(speed));
-  }
+  if (fpx) p.within_limit("prev_x", "|prev_x|", s.prev_x());
+  if (fpy) p.within_limit("prev_y", "|prev_y|", s.prev_y());
+  if (fx) p.within_limit("x", "|x|", s.x());
+  if (fy) p.within_limit("y", "|y|", s.y());
+  if (fvx && fvy) p.within_limit("v", "speed", std::hypot(s.vx(), s.vy()));
   if (!p.empty()) {
     why = p.joined();
     return false;
@@ -301,7 +303,7 @@ bool from_msg(const msg::TrackingTarget& m, TargetSample& out, std::string& why)
   const std::pair<const char*, double> fields[] = {
       {"model_time", m.model_time()}, {"cx", m.cx()}, {"cy", m.cy()}, {"vx", m.vx()}, {"vy", m.vy()}};
   for (const auto& [name, v] : fields)
-    if (p.finite(name, v) && std::abs(v) > kStateLimit) p.add(name, "|" + std::string(name) + "| must be <= 1e6, got " + util::format_g10(v));
+    if (p.finite(name, v)) p.within_limit(name, "|" + std::string(name) + "|", v);
   if (!p.empty()) {
     why = p.joined();
     return false;

@@ -17,8 +17,6 @@
 
 namespace shapeform::dds {
 
-/// Largest |x|, |y| and speed accepted in an AgentState.
-inline constexpr double kStateLimit = 1e6;
 
 /// core::Command -> wire message with the given epoch (every field, the law by name; polygon
 /// vertices flattened x0, y0, x1, y1, ...; the compiled curve is not sent: receivers compile).
@@ -28,11 +26,9 @@ msg::ShapeCommand to_msg(const core::Command& cmd, std::uint32_t epoch);
 /// On failure returns false, leaves `out` untouched and sets `error` to every problem found,
 /// separated by "; ", each naming its field, e.g. "command.dt: must be in (0, 10], got 50". Checks:
 /// every number finite and within the range the command table (core/params.hpp) declares for its
-/// field, the same bounds as the config loader and the console (r0, a, b, scale, sigma, path_period,
-/// spacing > 0; dt, k_normal in (0, 10]; k_tangent in (0, 1]; k1, k2, beta, r, max_speed,
-/// path_radius >= 0); shape_kind, path_kind, integrator, law known; vertices of even length. When
-/// all of that passes, the shape is
-/// compiled; a core::ShapeError is reported as "command: <its message>", e.g.
+/// field, the same bounds as the config loader and the console; shape_kind, path_kind, integrator,
+/// law one of the names of their tables; vertices of even length. When all of that passes, the
+/// shape is compiled; a core::ShapeError is reported as "command: <its message>", e.g.
 /// "command: polar: r(phi) = '4+foo': Unexpected token \"foo\" found at position 2.".
 /// The epoch is not part of core::Command: read m.epoch().
 bool from_msg(const msg::ShapeCommand& m, core::CompiledCommand& out, std::string& error);

@@ -126,14 +126,14 @@ fdds::DomainParticipantQos participant_qos(const TransportConfig& cfg, const std
   builtin.discovery_config.leaseDuration_announcementperiod =
       eprosima::fastrtps::Duration_t(cfg.announce_s);
 
-  if (cfg.profile == "loopback") {
+  if (cfg.profile == kLoopback) {
     udp->interfaceWhiteList.push_back("127.0.0.1");
     // Port 0: expanded to the metatraffic unicast ports of participant ids 0..maxInitialPeersRange-1.
     builtin.initialPeersList.push_back(loopback_locator(0));
     // Unicast locators only: with no multicast locator nothing is sent to or joined on multicast.
     builtin.metatrafficUnicastLocatorList.push_back(loopback_locator(0));
     pq.wire_protocol().default_unicast_locator_list.push_back(loopback_locator(0));
-  } else if (cfg.profile == "lan") {
+  } else if (cfg.profile == kLan) {
     // validate() checked every address.
     for (const std::string& address : cfg.interfaces) udp->interfaceWhiteList.push_back(address);
     for (const std::string& peer : cfg.peers) {
@@ -142,7 +142,7 @@ fdds::DomainParticipantQos participant_qos(const TransportConfig& cfg, const std
       builtin.initialPeersList.push_back(udp_locator(ip, 0));
     }
     // No peers: Fast DDS uses the default multicast discovery locator as the initial peer.
-  } else if (cfg.profile == "discovery-server") {
+  } else if (cfg.profile == kDiscoveryServer) {
     std::array<std::uint8_t, 4> server_ip{};
     std::uint16_t server_port = 0;
     parse_host_port(cfg.discovery_server, server_ip, server_port);  // validate() checked it
@@ -210,10 +210,10 @@ void delete_participant(fdds::DomainParticipant* participant) {
 
 std::string describe(const TransportConfig& cfg) {
   std::ostringstream os;
-  if (cfg.profile == "loopback") {
+  if (cfg.profile == kLoopback) {
     os << "loopback (UDPv4 127.0.0.1 only, unicast discovery of ids 0.." << (cfg.max_participants - 1)
        << ")";
-  } else if (cfg.profile == "lan") {
+  } else if (cfg.profile == kLan) {
     os << "lan (UDPv4 on ";
     if (cfg.interfaces.empty()) {
       os << "all interfaces";
@@ -227,7 +227,7 @@ std::string describe(const TransportConfig& cfg) {
       for (std::size_t i = 0; i < cfg.peers.size(); ++i) os << (i ? "," : "") << cfg.peers[i];
       os << " ids 0.." << (cfg.max_participants - 1) << ")";
     }
-  } else if (cfg.profile == "discovery-server") {
+  } else if (cfg.profile == kDiscoveryServer) {
     os << "discovery-server (client of " << cfg.discovery_server << ")";
   } else {
     os << "unknown profile \"" << cfg.profile << "\"";

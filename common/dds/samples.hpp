@@ -12,6 +12,10 @@
 
 namespace shapeform::dds {
 
+/// Largest |x|, |y| and speed accepted in a received AgentState or TrackingTarget (and as an agent's
+/// start): beyond it a sample is absurd and refused.
+inline constexpr double kStateLimit = 1e6;
+
 /// AgentState: one agent's state after a step (see idl/AgentState.idl).
 struct StateSample {
   std::int32_t id = 0;

@@ -22,6 +22,10 @@ P param(params::Type type, std::string key, std::string unit, params::Range rang
                                           std::move(range_note));
 }
 
+/// What transport.discovery_server accepts, as the docs and the error both say it.
+const std::string kHostPortRule = "host:port with host an IPv4 address or localhost and port 1..65535";
+constexpr unsigned long kMaxPort = 65535;
+
 std::vector<P> build_table() {
   using params::Type;
   const std::string ipv4_list = "list of IPv4 addresses (dotted quads)";
@@ -54,7 +58,7 @@ std::vector<P> build_table() {
       ipv4_list, [](auto& c) -> auto& { return c.peers; }));
   t.push_back(param<std::string>(
       Type::Text, "transport.discovery_server", "", {}, "discovery-server: address of the server",
-      "`host:port`, host an IPv4 address or `localhost`, port `1..65535`",
+      kHostPortRule,
       [](auto& c) -> auto& { return c.discovery_server; }));
   t.push_back(param<double>(
       Type::Real, "transport.lease_s", "s", params::above(0), "participant lease duration", "",
@@ -103,10 +107,10 @@ bool parse_host_port(const std::string& text, std::array<std::uint8_t, 4>& ip, s
   unsigned long value = 0;
   for (std::size_t i = colon + 1; i < text.size(); ++i) {
     const char ch = text[i];
-    if (ch < '0' || ch > '9' || value > 65535) return false;
+    if (ch < '0' || ch > '9' || value > kMaxPort) return false;
     value = value * 10 + static_cast<unsigned long>(ch - '0');
   }
-  if (value < 1 || value > 65535) return false;
+  if (value < 1 || value > kMaxPort) return false;
   port = static_cast<std::uint16_t>(value);
   return true;
 }
@@ -153,7 +157,7 @@ std::vector<TransportProblem> transport_problems(const TransportConfig& cfg) {
   std::uint16_t port = 0;
   if (!parse_host_port(cfg.discovery_server, ip, port)) {
     out.push_back({"transport.discovery_server",
-                   "must be host:port with host an IPv4 address or localhost and port 1..65535",
+                   "must be " + kHostPortRule,
                    quoted(cfg.discovery_server), ""});
   }
   if (std::isfinite(cfg.lease_s) && std::isfinite(cfg.announce_s) && cfg.lease_s > 0 && cfg.announce_s > 0 &&

@@ -14,12 +14,15 @@ namespace shapeform::dds {
 /// Largest valid DDS domain id (ports 7400 + 250 d must stay below 65536).
 inline constexpr int kMaxDomainId = 232;
 
-/// The transport profiles: "loopback", "lan", "discovery-server".
-inline constexpr const char* kProfiles[] = {"loopback", "lan", "discovery-server"};
+/// The transport profiles, by the names config files and TransportConfig::profile use.
+inline constexpr const char* kLoopback = "loopback";
+inline constexpr const char* kLan = "lan";
+inline constexpr const char* kDiscoveryServer = "discovery-server";
+inline constexpr const char* kProfiles[] = {kLoopback, kLan, kDiscoveryServer};
 
 /// DDS transport profile; every participant is built from this by the one participant factory.
 struct TransportConfig {
-  std::string profile = "loopback";     ///< loopback | lan | discovery-server
+  std::string profile = kLoopback;      ///< one of kProfiles
   int domain = 0;                       ///< DDS domain id, 0..kMaxDomainId
   int max_participants = 120;           ///< participant ids probed by loopback initial peers
   std::vector<std::string> interfaces;  ///< lan: IPv4 addresses to bind (empty = all)
@@ -37,8 +40,8 @@ struct TransportConfig {
   /// Whether every participant's traffic stays on lo: the loopback profile, or a discovery server on
   /// 127.x / localhost. multicast_data needs it (the validator checks).
   bool on_loopback() const {
-    return profile == "loopback" ||
-           (profile == "discovery-server" &&
+    return profile == kLoopback ||
+           (profile == kDiscoveryServer &&
             (discovery_server.rfind("127.", 0) == 0 || discovery_server.rfind("localhost:", 0) == 0));
   }
 };

@@ -8,11 +8,12 @@
 #include "simulation.hpp"
 #include "app/app.hpp"
 #include "app/json.hpp"
+#include "core/params.hpp"
 
 int main(int argc, char** argv) {
   using namespace shapeform;
   app::App app("shapeform_sim",
-                "shapeform_sim: N agents of the configured law (paper or arc) in one process, no DDS. Prints one JSON object.");
+                "shapeform_sim: N agents of the configured law (" + core::params::join(core::params::names(core::params::kLawNames), " or ") + ") in one process, no DDS. Prints one JSON object.");
   CLI::App& cli = app.cli();
   std::string init_path, csv_path, positions_path, integrator;
   int agents = 0;
@@ -26,7 +27,9 @@ int main(int argc, char** argv) {
   cli.add_option("--seed", seed, "seed of the uniform start (overrides swarm.seed)");
   cli.add_option("--steps", steps, "number of steps (overrides sim.steps)");
   cli.add_option("--dt", dt, "model time per step (overrides integration.dt)");
-  cli.add_option("--integrator", integrator, "euler | rk4 (overrides integration.integrator)");
+  cli.add_option("--integrator", integrator,
+                 core::params::join(core::params::names(core::params::kIntegratorNames), " | ") +
+                     " (overrides integration.integrator)");
   cli.add_option("--init", init_path, "CSV of starting positions, one x1,x2 row per agent");
   cli.add_option("--csv", csv_path, "write per-step metrics to this CSV file");
   cli.add_option("--positions", positions_path, "write per-step positions (step,agent,x1,x2) to this CSV file");

@@ -34,10 +34,6 @@ def fmt(v, f="{:.3f}"):
     return f.format(v)
 
 
-METRICS = ["shape_error_mean", "shape_error_max", "gap_cv", "nn_cv", "min_separation", "clusters", "extent",
-           "centroid_error", "ring_error"]
-
-
 def load_series_csv(path):
     """A simulator --csv file as dict step -> row."""
     return {int(r["step"]): r for r in read_csv(path)}

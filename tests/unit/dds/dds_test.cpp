@@ -428,6 +428,33 @@ TEST_CASE("every bounded command field is refused on the wire by the command tab
   CHECK(checked >= 15);
 }
 
+TEST_CASE("every number field of the command is refused on the wire when not finite", "[dds][convert]") {
+  // Every Real and Vec2 row of the command table, whether bounded or not: a field whose check is missing
+  // from from_msg would let NaN through.
+  namespace params = core::params;
+  int checked = 0;
+  for (const auto& p : params::command_table()) {
+    if (p.type != params::Type::Real && p.type != params::Type::Vec2) continue;
+    for (std::size_t k = 0; k < p.wire.size(); ++k) {
+      INFO(p.key << " (" << p.wire[k] << ")");
+      core::Command c = sample_command();
+      if (p.type == params::Type::Real) {
+        p.set(c, params::Value(kNaN));
+      } else {
+        core::Vec2 v = std::get<core::Vec2>(p.get(c));
+        v[static_cast<Eigen::Index>(k)] = kNaN;
+        p.set(c, params::Value(v));
+      }
+      core::CompiledCommand out;
+      std::string error;
+      CHECK_FALSE(dds::from_msg(dds::to_msg(c, 1), out, error));
+      CHECK(error.find("command." + p.wire[k] + ": must be finite") != std::string::npos);
+      ++checked;
+    }
+  }
+  CHECK(checked >= 25);
+}
+
 TEST_CASE("a shape that does not compile is rejected whole", "[dds][convert]") {
   using M = msg::ShapeCommand;
   CHECK(reject([](M& m) {
@@ -521,14 +548,14 @@ TEST_CASE("valid_state rejects non-finite and absurd samples", "[dds][convert]")
   CHECK(state_problem(s) == "state.model_time: must be finite, got nan");
   s = good_state();
   s.y(2e6);
-  CHECK(state_problem(s) == "state.y: |y| must be <= 1e6, got 2000000");
+  CHECK(state_problem(s) == "state.y: |y| must be <= 1000000, got 2000000");
   s = good_state();
   s.x(-1e6);  // the limit itself is accepted
   CHECK(state_problem(s).empty());
   s = good_state();
   s.vx(8e5);
   s.vy(8e5);  // each component fine, speed 1.13e6 is not
-  CHECK(state_problem(s).find("state.v: speed must be <= 1e6") == 0);
+  CHECK(state_problem(s).find("state.v: speed must be <= 1000000") == 0);
 }
 
 TEST_CASE("AgentState converts both ways; a refused sample leaves the output untouched", "[dds][convert]") {
@@ -594,7 +621,7 @@ TEST_CASE("TrackingTarget converts both ways and refuses non-finite or absurd va
   CHECK(problem([](msg::TrackingTarget&) {}).empty());
   CHECK(problem([](msg::TrackingTarget& w) { w.cx(kNaN); }) == "target.cx: must be finite, got nan");
   CHECK(problem([](msg::TrackingTarget& w) { w.model_time(kInf); }) == "target.model_time: must be finite, got inf");
-  CHECK(problem([](msg::TrackingTarget& w) { w.vy(-2e6); }) == "target.vy: |vy| must be <= 1e6, got -2000000");
+  CHECK(problem([](msg::TrackingTarget& w) { w.vy(-2e6); }) == "target.vy: |vy| must be <= 1000000, got -2000000");
   CHECK(problem([](msg::TrackingTarget& w) { w.cy(1e6); }).empty());  // the limit itself is accepted
   CHECK(problem([](msg::TrackingTarget& w) {
           w.cx(kNaN);
