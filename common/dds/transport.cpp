@@ -141,7 +141,8 @@ std::vector<TransportProblem> transport_problems(const TransportConfig& cfg) {
   for (const char* name : kProfiles) known_profile = known_profile || cfg.profile == name;
   if (!known_profile) {
     out.push_back(
-        {"transport.profile", "must be one of loopback, lan, discovery-server", quoted(cfg.profile), ""});
+        {"transport.profile", "must be one of " + params::join({std::begin(kProfiles), std::end(kProfiles)}, ", "),
+         quoted(cfg.profile), ""});
   }
   for (const auto& [key, list] :
        {std::pair{"transport.interfaces", &cfg.interfaces}, std::pair{"transport.peers", &cfg.peers}}) {
