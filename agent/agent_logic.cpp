@@ -105,7 +105,9 @@ std::optional<double> AgentLogic::arc() const {
 }
 
 bool AgentLogic::step() {
-  if (!has_command()) {
+  if (!has_command() || cmd_.hold) {
+    // Before any command, and while held: stay put, and model time (with the tracked centre and
+    // the lockstep step count) stands still.
     v_ = core::Vec2::Zero();
     return false;
   }

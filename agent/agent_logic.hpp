@@ -58,7 +58,8 @@ class AgentLogic {
   /// Whether a tracking target from the supervisor is in use (false: none yet, lost, or lockstep).
   bool following_target() const { return cmd_.tracking.enabled && target_ && !lockstep_; }
   /// One control step: the law for the command and target in force, integrated over cmd.dt.
-  /// Before the first command the agent holds its position.
+  /// Before the first command, and while the command is held (Command::hold), the agent keeps its
+  /// position with velocity 0 and its model time does not advance; returns false.
   /// Lockstep (agent.sync: lockstep): step k -> k+1 is taken only once every neighbour has published
   /// its state of step k for the same command, and uses exactly those states; the tracked centre is
   /// then the command's path at the agent's own model time. This is the simulator's synchronous

@@ -545,6 +545,11 @@ Action parse_tokens(const Tokens& t, const core::CompiledCommand& current) {
   if (word == "law") return parse_law(t, current);
   if (word == "wait") return parse_wait(t);
   if (word == "record") return parse_record(t);
+  if (word == "hold" || word == "stop" || word == "resume") {
+    const Args a(word, t, 1, {}, 0);
+    if (word == "resume") return Resume{};
+    return Hold{word == "stop"};
+  }
   if (word == "status" || word == "quit" || word == "exit" || word == "start" || word == "show") {
     const Args a(word, t, 1, {}, 0);
     if (word == "start") return StartScenario{};
@@ -684,6 +689,26 @@ const std::vector<HelpEntry>& help_entries() {
    "start\n"
    "  Publishes the command of the supervisor's --config file (shape, tracking, gains,\n"
    "  integrator) as a new epoch. The launcher runs it once every agent is heard.\n"},
+  {"hold",
+   "hold                                                        freeze the swarm where it is\n",
+   "hold\n"
+   "  Every agent stops moving and keeps its position; model time stands still, so a tracked\n"
+   "  centre does not move on either ('wait time' does not advance). Sent on the command topic as\n"
+   "  a new epoch with the command in force: an agent that joins later holds too. While held, new\n"
+   "  commands (shape, gains, start, ...) are taken but stay held until 'resume'. 'stop' is the\n"
+   "  same.\n"},
+  {"stop",
+   "stop                                                        emergency stop: the same as hold\n",
+   "stop\n"
+   "  Emergency stop: exactly 'hold' (every agent stops at once and keeps its position, late\n"
+   "  joiners too), under the word an operator reaches for. 'resume' releases it. ('track stop'\n"
+   "  only ends tracking; the swarm keeps forming its shape.)\n"},
+  {"resume",
+   "resume                                                      release a hold or stop\n",
+   "resume\n"
+   "  Publishes the command in force with the hold released (a new epoch): the swarm moves again\n"
+   "  and re-converges. A tracked centre continues from where it was held. Without a hold in\n"
+   "  force it changes nothing and sends nothing.\n"},
   {"status",
    "status                                                      table of agents\n",
    "status\n"

@@ -77,10 +77,17 @@ struct Help {
 struct Quit {};
 /// Publish the supervisor's configured scenario (its --config command) as a new epoch.
 struct StartScenario {};
+/// `hold`, or `stop` (the emergency alias, same effect): the caller publishes the command in force
+/// with Command::hold set (a new epoch): every agent keeps its position, model time stands still.
+struct Hold {
+  bool emergency = false;  ///< typed as `stop`
+};
+/// `resume`: the caller publishes the command in force with Command::hold cleared (a new epoch).
+struct Resume {};
 
-using Action = std::variant<NoOp, SetCommand, TrackStop, Status, ShowMetrics, WaitConverged,
-                            WaitAgents, WaitTime, Sleep, RecordStart, RecordStop, Help, Quit, StartScenario,
-                            Show, Progress>;
+using Action = std::variant<NoOp, SetCommand, TrackStop, Status, ShowMetrics, WaitConverged, WaitAgents,
+                            WaitTime, Sleep, RecordStart, RecordStop, Help, Quit, StartScenario, Show, Progress,
+                            Hold, Resume>;
 
 /// Either an action (error empty) or an error (action is NoOp).
 struct ParseResult {

@@ -71,6 +71,7 @@ std::string describe_command(const core::CompiledCommand& c) {
   o << "; k1=" << c.gains.k1 << " k2=" << c.gains.k2 << " sigma=" << c.gains.sigma << " beta=" << c.gains.beta
     << " r=" << c.gains.r << ", " << core::to_string(c.integrator) << " dt=" << c.dt;
   if (c.max_speed > 0) o << ", max_speed=" << c.max_speed;
+  if (c.hold) o << "; HELD: every agent keeps its position ('resume' releases)";
   return o.str();
 }
 

@@ -87,8 +87,9 @@ class Supervisor {
     if (metrics_due) metrics_tick(now);
     run_input(now);
   }
+  /// Model time of the epoch in force by the supervisor's clock; it stands still while held.
   double model_time(std::int64_t now) const {
-    if (epoch_ == 0) return 0.0;
+    if (epoch_ == 0 || current_.hold) return 0.0;
     return static_cast<double>(now - epoch_start_ns_) * 1e-9 * cfg_.agent.rate_hz * current_.dt;
   }
   /// The model time the metrics are taken at: the supervisor's clock, or, in lockstep, where the agents
@@ -199,7 +200,7 @@ void Supervisor::report_membership(std::int64_t now) {
 }
 
 void Supervisor::publish_target(std::int64_t now) {
-  if (epoch_ == 0 || !current_.tracking.enabled) return;
+  if (epoch_ == 0 || !current_.tracking.enabled || current_.hold) return;
   const double t = model_time(now);
   target_writer_.write(dds::to_msg(dds::TargetSample{epoch_, t, core::centre_at(current_.tracking.path, t),
                                                      core::centre_velocity(current_.tracking.path, t), now}));
@@ -216,12 +217,15 @@ void Supervisor::publish_command(const core::CompiledCommand& cmd, std::int64_t 
   out_.event("epoch", {{"epoch", epoch_},
                        {"shape", std::string(core::to_string(cmd.shape.kind))},
                        {"law", std::string(core::to_string(cmd.law))},
-                       {"tracking", cmd.tracking.enabled}});
+                       {"tracking", cmd.tracking.enabled},
+                       {"hold", cmd.hold}});
 }
 
 void Supervisor::metrics_tick(std::int64_t now) {
   const double t = metrics_time(now);
-  const SwarmMonitor::Sample s = monitor_.update(t, now);
+  // Held, no model time passes: nothing is fed to the convergence detector (it would pile up samples
+  // at one instant).
+  const SwarmMonitor::Sample s = current_.hold ? monitor_.measure(t, now) : monitor_.update(t, now);
   if (epoch_ != 0) metrics_writer_.write(dds::to_msg(s.metrics, epoch_, t, now, s.converged));
   const double wall = static_cast<double>(now - start_ns_) * 1e-9;
   if (recorder_.is_open()) {
@@ -299,7 +303,24 @@ void Supervisor::execute(const Action& a, std::int64_t now) {
         if constexpr (std::is_same_v<T, SetCommand>) {
           publish_command(act.command, now);
         } else if constexpr (std::is_same_v<T, StartScenario>) {
-          publish_command(cfg_.command, now);
+          core::CompiledCommand c = cfg_.command;
+          c.hold = c.hold || current_.hold;  // only `resume` releases a hold
+          publish_command(c, now);
+        } else if constexpr (std::is_same_v<T, Hold>) {
+          // The tracked path restarts where the agents are (a no-op when already held: model time
+          // stands still then), so that `resume` continues from here.
+          core::CompiledCommand c = current_;
+          if (c.tracking.enabled) c.tracking.path = core::advanced(c.tracking.path, metrics_time(now));
+          c.hold = true;
+          publish_command(c, now);
+        } else if constexpr (std::is_same_v<T, Resume>) {
+          if (!current_.hold) {
+            out << "resume: nothing is held" << std::endl;
+          } else {
+            core::CompiledCommand c = current_;
+            c.hold = false;
+            publish_command(c, now);
+          }
         } else if constexpr (std::is_same_v<T, TrackStop>) {
           core::CompiledCommand c = current_;
           if (c.tracking.enabled) c.shape.centre = core::centre_at(c.tracking.path, model_time(now));

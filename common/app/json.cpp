@@ -4,6 +4,7 @@
 #include <string>
 #include <type_traits>
 #include <variant>
+#include <vector>
 
 #include "core/metric_table.hpp"
 #include "core/params.hpp"
@@ -23,9 +24,14 @@ nlohmann::json metrics_json(const core::Metrics& m) {
   return j;
 }
 
-nlohmann::json config_json(const config::Config& c) {
+namespace {
+
+/// Every parameter of `table` read from obj, nested by the dots of its key ("agent.rate_hz" ->
+/// {"agent": {"rate_hz": ...}}); rotation in degrees, choices by name.
+template <class T>
+nlohmann::json table_json(const std::vector<core::params::Param<T>>& table, const T& obj) {
   nlohmann::json j = nlohmann::json::object();
-  for (const auto& p : config::config_table()) {
+  for (const auto& p : table) {
     nlohmann::json value = std::visit(
         [](const auto& v) -> nlohmann::json {
           using V = std::decay_t<decltype(v)>;
@@ -39,7 +45,7 @@ nlohmann::json config_json(const config::Config& c) {
             return v;
           }
         },
-        p.get(c));
+        p.get(obj));
     if (p.degrees) value = value.get<double>() / core::params::kRadPerDeg;
     std::string pointer = "/" + p.key;  // "agent.rate_hz" -> "/agent/rate_hz"
     for (char& ch : pointer)
@@ -48,5 +54,11 @@ nlohmann::json config_json(const config::Config& c) {
   }
   return j;
 }
+
+}  // namespace
+
+nlohmann::json config_json(const config::Config& c) { return table_json(config::config_table(), c); }
+
+nlohmann::json command_json(const core::Command& c) { return table_json(core::params::command_table(), c); }
 
 }  // namespace shapeform::app

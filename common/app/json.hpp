@@ -18,4 +18,8 @@ nlohmann::json metrics_json(const core::Metrics& m);
 /// table; shape.rotation_deg in degrees, choices by name.
 nlohmann::json config_json(const config::Config& c);
 
+/// A command as config_json nests its keys ({"shape": {"kind": "circle", ...}, "tracking": {...},
+/// "dynamics": {...}, "integration": {...}}), every key of the command table.
+nlohmann::json command_json(const core::Command& c);
+
 }  // namespace shapeform::app

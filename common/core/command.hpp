@@ -35,6 +35,9 @@ struct Command {
   double max_speed = 0.0;  ///< speed limit in units per model time; 0 = none
   Law law = Law::Paper;
   ArcParams arc;
+  /// Held (the console's hold / stop): every agent keeps its position (velocity 0) and its model
+  /// time stands still, so a tracked centre does not move on either. Cleared by `resume`.
+  bool hold = false;
 };
 
 /// The shape in force at model time t (tracked shapes are centred on C(t)).

@@ -21,6 +21,7 @@ Vec2 agent_velocity(const CompiledCommand& cmd, std::int32_t self_id, const Vec2
 
 StepResult agent_step(const CompiledCommand& cmd, std::int32_t self_id, const Vec2& x,
                       const std::vector<Neighbour>& nbrs, double t) {
+  if (cmd.hold) return {x, Vec2::Zero()};  // held: nobody moves (the simulator holds the same way)
   const auto f = [&](const Vec2& y, double tau) { return agent_velocity(cmd, self_id, y, nbrs, tau); };
   const Vec2 next = integrate(cmd.integrator, f, x, t, cmd.dt);
   return {next, (next - x) / cmd.dt};

@@ -20,6 +20,7 @@ struct StepResult {
 };
 
 /// One integration step of agent self_id from model time t to t + cmd.dt, neighbours held fixed.
+/// A held command (cmd.hold) leaves x where it is, with velocity 0.
 StepResult agent_step(const CompiledCommand& cmd, std::int32_t self_id, const Vec2& x,
                       const std::vector<Neighbour>& nbrs, double t);
 

@@ -264,6 +264,11 @@ std::vector<P> build_command_table() {
       "dynamics.spacing", "spacing", su, above(0),
       "arc law: gap between neighbours on an unbounded curve (the line)",
       [](auto& c) -> auto& { return c.arc.spacing; }));
+  t.push_back(flag(
+      "dynamics.hold", "hold",
+      "every agent keeps its position and model time stands still (the console's `hold` / `stop` set "
+      "it, `resume` clears it)",
+      [](auto& c) -> auto& { return c.hold; }));
   // integration
   t.push_back(choice(
       "integration.integrator", "integrator", "integration scheme", kIntegratorNames,

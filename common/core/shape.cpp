@@ -101,4 +101,14 @@ Vec2 centre_velocity(const CentrePath& p, double t) {
   return Vec2::Zero();
 }
 
+CentrePath advanced(const CentrePath& p, double t) {
+  CentrePath out = p;
+  switch (p.kind) {
+    case CentrePath::Kind::Fixed: break;
+    case CentrePath::Kind::Line: out.point = centre_at(p, t); break;
+    case CentrePath::Kind::Circle: out.phase = std::fmod(p.phase + kTwoPi * t / p.period, kTwoPi); break;
+  }
+  return out;
+}
+
 }  // namespace shapeform::core

@@ -84,5 +84,8 @@ bool parse_path_kind(std::string_view name, CentrePath::Kind& out);
 Vec2 centre_at(const CentrePath& p, double t);
 /// dC/dt at t.
 Vec2 centre_velocity(const CentrePath& p, double t);
+/// The same path started at model time t: advanced(p, t) at s is p at t + s (a line's point moved
+/// on, a circle's phase turned; a fixed point unchanged). A held swarm's path restarts where it was.
+CentrePath advanced(const CentrePath& p, double t);
 
 }  // namespace shapeform::core

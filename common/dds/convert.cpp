@@ -121,6 +121,7 @@ msg::ShapeCommand to_msg(const core::Command& cmd, std::uint32_t epoch) {
   m.k_normal(cmd.arc.k_normal);
   m.k_tangent(cmd.arc.k_tangent);
   m.spacing(cmd.arc.spacing);
+  m.hold(cmd.hold);
   return m;
 }
 
@@ -211,6 +212,7 @@ bool from_msg(const msg::ShapeCommand& m, core::CompiledCommand& out, std::strin
   c.arc.k_normal = m.k_normal();
   c.arc.k_tangent = m.k_tangent();
   c.arc.spacing = m.spacing();
+  c.hold = m.hold();
 
   if (!p.empty()) {
     error = p.joined();

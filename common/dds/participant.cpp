@@ -14,7 +14,9 @@
 #include <fastdds/rtps/attributes/ServerAttributes.h>
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastrtps/utils/IPLocator.h>
+#include <unistd.h>
 
+#include "dds/discovery.hpp"
 #include "util/ipv4.hpp"
 
 namespace shapeform::dds {
@@ -157,6 +159,13 @@ fdds::DomainParticipantQos participant_qos(const TransportConfig& cfg, const std
   }
 
   pq.transport().user_transports.push_back(udp);
+
+  // Where this participant runs, announced in discovery so that a tool can tell the operator.
+  char host[256] = {};
+  if (gethostname(host, sizeof host - 1) != 0) host[0] = '\0';
+  auto& props = pq.properties().properties();
+  props.emplace_back(kHostProperty, std::string(host), true);
+  props.emplace_back(kPidProperty, std::to_string(getpid()), true);
   return pq;
 }
 
@@ -165,7 +174,8 @@ frtps::Locator_t data_multicast_locator(const TransportConfig& cfg) {
   return udp_locator(kDataMulticastGroup, user_multicast_port(cfg.domain));
 }
 
-fdds::DomainParticipant* create_participant(const TransportConfig& cfg, const std::string& name) {
+fdds::DomainParticipant* create_participant(const TransportConfig& cfg, const std::string& name,
+                                            fdds::DomainParticipantListener* listener) {
   const fdds::DomainParticipantQos pq = participant_qos(cfg, name);
   // Invariant of the project: never builtin transports (they open every interface and SHM).
   if (pq.transport().use_builtin_transports || pq.transport().user_transports.empty()) {
@@ -175,7 +185,7 @@ fdds::DomainParticipant* create_participant(const TransportConfig& cfg, const st
   if (factory == nullptr) fail("create_participant: DomainParticipantFactory unavailable");
   const auto ports_before = own_udp_ports();
   fdds::DomainParticipant* participant =
-      factory->create_participant(static_cast<fdds::DomainId_t>(cfg.domain), pq);
+      factory->create_participant(static_cast<fdds::DomainId_t>(cfg.domain), pq, listener);
   if (participant == nullptr) {
     fail("create_participant failed for " + quoted(name) + " on " + describe(cfg) +
          " (see Fast DDS log above; ports in use or bad interface address?)");

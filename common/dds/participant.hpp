@@ -7,6 +7,7 @@
 #include <string>
 
 #include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/domain/DomainParticipantListener.hpp>
 #include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
 
 #include "dds/transport.hpp"
@@ -35,6 +36,8 @@ inline constexpr std::array<std::uint8_t, 4> kDataMulticastGroup = {239, 255, 0,
 /// (builtin.mutation_tries; the library's default of 100 left the 102nd participant on a host deaf).
 /// Lease and announcement period come from lease_s / announce_s; socket_buffer_bytes > 0 sets the
 /// UDP send and receive buffer sizes (the kernel caps them at net.core.rmem_max / wmem_max).
+/// Every participant announces its host name and process id in discovery (the propagated
+/// properties kHostProperty and kPidProperty of dds/discovery.hpp), for shapeform_topics.
 /// multicast_data (loopback only) changes no participant setting: see data_multicast_locator().
 /// Pure: creates nothing.
 /// Throws std::runtime_error naming the offending field (validate(): "transport.domain: must be in 0..232,
@@ -55,8 +58,10 @@ eprosima::fastrtps::rtps::Locator_t data_multicast_locator(const TransportConfig
 /// throws std::runtime_error naming the problem, including a participant that got no unicast port
 /// (every participant slot it may take, max_participants of them, is in use on this host: Fast DDS
 /// itself would create it deaf). Free it with delete_participant().
-eprosima::fastdds::dds::DomainParticipant* create_participant(const TransportConfig& cfg,
-                                                              const std::string& name);
+/// `listener` (optional, outliving the participant) hears discovery from the first announcement on.
+eprosima::fastdds::dds::DomainParticipant* create_participant(
+    const TransportConfig& cfg, const std::string& name,
+    eprosima::fastdds::dds::DomainParticipantListener* listener = nullptr);
 
 /// delete_contained_entities() then deletes the participant. Null is a no-op. Never throws.
 void delete_participant(eprosima::fastdds::dds::DomainParticipant* participant);

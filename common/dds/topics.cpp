@@ -56,6 +56,12 @@ void set_history(const TopicRow& r, fdds::HistoryQosPolicy& history,
 
 const char* topic_name(TopicId id) { return row(id).name; }
 const char* type_name(TopicId id) { return row(id).type; }
+
+std::optional<TopicId> find_topic(std::string_view name) {
+  for (const TopicRow& r : kTable)
+    if (name == r.name) return r.id;
+  return std::nullopt;
+}
 bool is_keyed(TopicId id) { return row(id).keyed; }
 
 fdds::DataWriterQos writer_qos(TopicId id) {

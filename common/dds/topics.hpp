@@ -2,6 +2,8 @@
 /// The ONE topic table of the project: topic names, their types and their QoS. Writers and readers are
 /// only ever created with writer_qos() / reader_qos() so both sides always match.
 #include <array>
+#include <optional>
+#include <string_view>
 
 #include <fastdds/dds/publisher/qos/DataWriterQos.hpp>
 #include <fastdds/dds/subscriber/qos/DataReaderQos.hpp>
@@ -18,6 +20,9 @@ inline constexpr std::array<TopicId, 5> kAllTopics = {TopicId::State, TopicId::C
 /// DDS topic name: "shapeform/state", "shapeform/command", "shapeform/target", "shapeform/metrics",
 /// "shapeform/status".
 const char* topic_name(TopicId id);
+
+/// The topic named `name` ("shapeform/state"), or nullopt.
+std::optional<TopicId> find_topic(std::string_view name);
 
 /// Registered type name of the topic's message, e.g. "shapeform::msg::AgentState".
 const char* type_name(TopicId id);

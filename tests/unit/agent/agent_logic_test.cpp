@@ -246,3 +246,40 @@ TEST_CASE("lockstep: wait for a lagging neighbour, a late joiner starts at the s
   late.on_command(cmd, 1);
   CHECK(late.model_time() == a.model_time());
 }
+
+TEST_CASE("a held command: the agent keeps its position, model time stands still; resume moves on", "[agent][hold]") {
+  for (const bool lockstep : {false, true}) {
+    INFO("lockstep " << lockstep);
+    core::CompiledCommand c = circle();
+    c.tracking.enabled = true;
+    c.tracking.path.kind = core::CentrePath::Kind::Line;
+    c.tracking.path.velocity = Vec2(0.1, 0);
+    AgentLogic a(0, Vec2(9, 9), 60 * kMs, lockstep);
+    a.on_state(1, Vec2(-9, 9), 1, 0, 1, std::nullopt, 0.0);
+    REQUIRE(a.on_command(c, 1));
+    REQUIRE(a.step());
+    const Vec2 moved = a.position();
+    CHECK(moved != Vec2(9, 9));
+    // The same command held, as the supervisor's `hold` publishes it (a new epoch).
+    core::CompiledCommand held = c;
+    held.hold = true;
+    REQUIRE(a.on_command(held, 2));
+    a.on_state(1, Vec2(-9, 9), 2, 0, 2, std::nullopt, 0.0);
+    for (int k = 0; k < 20; ++k) CHECK_FALSE(a.step());
+    CHECK(a.position() == moved);  // exactly: not even rounding
+    CHECK(a.velocity() == Vec2::Zero());
+    CHECK(a.previous_position() == moved);
+    CHECK(a.model_time() == 0.0);
+    CHECK((*a.tracked_centre() - Vec2(0, 0)).norm() == 0.0);  // the tracked centre does not move on
+    // A late target of the held epoch changes nothing either.
+    a.on_target({2, 5.0, Vec2(3, 3), Vec2(1, 1)}, 0);
+    CHECK_FALSE(a.step());
+    CHECK(a.position() == moved);
+    // resume: the same command with hold off, a new epoch: the agent moves again.
+    REQUIRE(a.on_command(c, 3));
+    a.on_state(1, Vec2(-9, 9), 3, 0, 3, std::nullopt, 0.0);
+    CHECK(a.step());
+    CHECK(a.position() != moved);
+    CHECK(a.model_time() == c.dt);
+  }
+}

@@ -3,6 +3,7 @@
 
 #include "app/json.hpp"
 #include "config/config.hpp"
+#include "core/params.hpp"
 
 using namespace shapeform;
 
@@ -40,4 +41,22 @@ TEST_CASE("config JSON follows the config, not the defaults", "[app][json]") {
   CHECK(a["swarm"]["agents"] == config::Config{}.swarm.agents);
   CHECK(b["swarm"]["agents"] == 7);
   CHECK(a != b);
+}
+
+TEST_CASE("command JSON: every key of the command table, as the config nests it", "[app][json]") {
+  const config::Config c = config::load("", {"shape.kind=ellipse", "shape.rotation_deg=45", "dynamics.hold=true",
+                                             "tracking.enabled=true", "integration.dt=0.5"});
+  const nlohmann::json j = app::command_json(c.command);
+  for (const auto& p : core::params::command_table()) {
+    INFO(p.key);
+    CHECK_NOTHROW(at_key(j, p.key));
+  }
+  CHECK(j["shape"]["kind"] == "ellipse");
+  CHECK(j["shape"]["rotation_deg"].get<double>() == Approx(45.0));
+  CHECK(j["dynamics"]["hold"] == true);
+  CHECK(j["tracking"]["enabled"] == true);
+  CHECK(j["integration"]["dt"] == 0.5);
+  // The command part of the config's JSON, exactly.
+  const nlohmann::json whole = app::config_json(c);
+  for (const auto& [section, value] : j.items()) CHECK(whole[section] == value);
 }

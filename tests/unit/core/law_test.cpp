@@ -44,3 +44,25 @@ TEST_CASE("agent velocity: feed-forward adds dC/dt, max_speed clamps", "[law][tr
   cmd.max_speed = 0.01;
   CHECK(agent_velocity(cmd, 0, x, {}, 20).norm() == Approx(0.01));
 }
+
+TEST_CASE("a held command moves nobody, with either law and integrator", "[law][hold]") {
+  Command c;
+  c.shape.kind = ShapeKind::Circle;
+  c.tracking.enabled = true;
+  c.tracking.feedforward = true;
+  c.tracking.path.kind = CentrePath::Kind::Line;
+  c.tracking.path.velocity = Vec2(0.5, 0);
+  c.hold = true;
+  const std::vector<Neighbour> nbrs = {{1, Vec2(2, 2)}, {2, Vec2(-1, 0.5)}};
+  for (const Law law : {Law::Paper, Law::Arc}) {
+    for (const Integrator integ : {Integrator::Euler, Integrator::RK4}) {
+      c.law = law;
+      c.integrator = integ;
+      const StepResult r = agent_step(compile(c), 0, Vec2(3.5, 1.25), nbrs, 7);
+      CHECK(r.x == Vec2(3.5, 1.25));
+      CHECK(r.v == Vec2::Zero());
+    }
+  }
+  c.hold = false;  // the same command released moves the agent
+  CHECK(agent_step(compile(c), 0, Vec2(3.5, 1.25), nbrs, 7).x != Vec2(3.5, 1.25));
+}

@@ -103,6 +103,9 @@ TEST_CASE("the command table writes the field it names", "[params]") {
   CHECK(c.tracking.path.velocity == core::Vec2(1, -2));
   params::find_key("shape.closed")->set(c, params::Value(false));
   CHECK_FALSE(c.shape.closed);
+  params::find_key("dynamics.hold")->set(c, params::Value(true));
+  CHECK(c.hold);
+  CHECK(params::find_wire("hold")->key == "dynamics.hold");
   // Every entry reads back what it wrote.
   core::Command other;
   for (const auto& p : params::command_table()) {

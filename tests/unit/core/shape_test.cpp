@@ -183,6 +183,31 @@ TEST_CASE("centre paths", "[shape][tracking]") {
   CHECK((shape_at(cmd, 100).centre - cmd.shape.centre).norm() == 0);
 }
 
+TEST_CASE("a path advanced by t starts where the path is at t", "[shape][tracking][hold]") {
+  CentrePath line;
+  line.kind = CentrePath::Kind::Line;
+  line.point = Vec2(-10, 4);
+  line.velocity = Vec2(0.1, -0.2);
+  CentrePath circ;
+  circ.kind = CentrePath::Kind::Circle;
+  circ.origin = Vec2(1, 2);
+  circ.radius = 6;
+  circ.period = 200;
+  circ.phase = 0.5;
+  CentrePath fixed;
+  fixed.point = Vec2(3, 3);
+  for (const CentrePath& p : {line, circ, fixed}) {
+    for (const double t : {0.0, 37.0, 450.0}) {
+      const CentrePath q = advanced(p, t);
+      for (const double s : {0.0, 1.0, 123.0}) {
+        CHECK((centre_at(q, s) - centre_at(p, t + s)).norm() < 1e-9);
+        CHECK((centre_velocity(q, s) - centre_velocity(p, t + s)).norm() < 1e-9);
+      }
+    }
+  }
+  CHECK(std::abs(advanced(circ, 1e6).phase) < 2 * M_PI);  // kept in one turn
+}
+
 TEST_CASE("shape and path names round-trip", "[shape]") {
   for (ShapeKind k : {ShapeKind::Line, ShapeKind::Circle, ShapeKind::Ellipse, ShapeKind::Square}) {
     ShapeKind out{};

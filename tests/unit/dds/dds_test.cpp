@@ -19,6 +19,7 @@
 #include "core/metric_table.hpp"
 #include "core/params.hpp"
 #include "dds/convert.hpp"
+#include "dds/discovery.hpp"
 #include "dds/node.hpp"
 #include "dds/participant.hpp"
 #include "dds/topics.hpp"
@@ -118,6 +119,7 @@ core::Command sample_command() {
   c.integrator = core::Integrator::RK4;
   c.dt = 0.5;
   c.max_speed = 3.0;
+  c.hold = true;  // not the default, so a field dropped on the way is seen
   return c;
 }
 
@@ -141,6 +143,7 @@ void require_same(const core::Command& a, const core::Command& b) {
   CHECK(a.arc.k_normal == b.arc.k_normal);
   CHECK(a.arc.k_tangent == b.arc.k_tangent);
   CHECK(a.arc.spacing == b.arc.spacing);
+  CHECK(a.hold == b.hold);
   CHECK(a.tracking.enabled == b.tracking.enabled);
   CHECK(a.tracking.path.kind == b.tracking.path.kind);
   CHECK(a.tracking.path.point == b.tracking.path.point);
@@ -227,6 +230,8 @@ TEST_CASE("ShapeCommand round trip keeps every field", "[dds][convert]") {
   CHECK(m.k_normal() == 0.75);
   CHECK(m.k_tangent() == 0.5);
   CHECK(m.spacing() == 1.25);
+  CHECK(m.hold());
+  CHECK_FALSE(dds::to_msg(core::Command{}, 1).hold());
   CHECK(dds::to_msg(core::Command{}, 1).law() == "paper");
 
   core::CompiledCommand out;
@@ -1303,6 +1308,65 @@ TEST_CASE("node refuses a topic of another type and handles survive their node",
   std::vector<dds::Received<msg::AgentStatus>> batch;
   CHECK(moved.drain(batch) == 0u);
   CHECK(moved.matched() == -1);
+}
+
+TEST_CASE("topic table lookup by name", "[dds][topics]") {
+  for (const dds::TopicId id : dds::kAllTopics) CHECK(dds::find_topic(dds::topic_name(id)) == id);
+  CHECK_FALSE(dds::find_topic("shapeform/nope"));
+  CHECK_FALSE(dds::find_topic("shapeform/State"));
+  CHECK_FALSE(dds::find_topic(""));
+}
+
+TEST_CASE("discovery lists the topics of other participants with name, host, pid and QoS", "[dds][discovery]") {
+  const auto cfg = loopback(test_domain(0));
+  // Named after this process, so that a test of another process on the same domain cannot confuse it.
+  const std::string name = "test-discovered-" + std::to_string(::getpid());
+  dds::Node node(cfg, name);
+  auto writer = node.writer<msg::ShapeCommand>(dds::TopicId::Command);
+  auto reader = node.reader<msg::AgentState>(dds::TopicId::State);
+  char host[256] = {};
+  REQUIRE(::gethostname(host, sizeof host - 1) == 0);
+
+  std::vector<dds::TopicSeen> topics;
+  const auto mine = [&](const std::vector<dds::EndpointSeen>& list) {
+    std::vector<dds::EndpointSeen> out;
+    for (const auto& e : list)
+      if (e.participant == name) out.push_back(e);
+    return out;
+  };
+  const auto find = [&](const char* topic) -> const dds::TopicSeen* {
+    for (const auto& t : topics)
+      if (t.name == topic) return &t;
+    return nullptr;
+  };
+  // Discovery takes a moment: listen again until both endpoints are seen (each call listens 1 s).
+  REQUIRE(wait_for([&] {
+    topics = dds::discover_topics(cfg, "test-discovery", 1.0);
+    return find("shapeform/command") && find("shapeform/state") && !mine(find("shapeform/command")->writers).empty() &&
+           !mine(find("shapeform/state")->readers).empty();
+  }, 20.0));
+  for (std::size_t i = 1; i < topics.size(); ++i) CHECK(topics[i - 1].name < topics[i].name);
+  const dds::TopicSeen& cmd = *find("shapeform/command");
+  CHECK(cmd.types == std::vector<std::string>{"shapeform::msg::ShapeCommand"});
+  CHECK(mine(cmd.readers).empty());
+  const auto w = mine(cmd.writers);
+  REQUIRE(w.size() == 1);
+  CHECK(w[0].host == host);
+  CHECK(w[0].pid == ::getpid());
+  CHECK(w[0].reliability == "reliable");
+  CHECK(w[0].durability == "transient_local");
+  CHECK(w[0].type == "shapeform::msg::ShapeCommand");
+  CHECK_FALSE(w[0].guid.empty());
+  const auto r = mine(find("shapeform/state")->readers);
+  REQUIRE(r.size() == 1);
+  CHECK(r[0].reliability == "best_effort");
+  CHECK(r[0].durability == "volatile");
+  CHECK(r[0].type == "shapeform::msg::AgentState");
+  // The listening participant itself has no endpoints, and a stop flag ends the wait at once.
+  std::atomic<bool> stop{true};
+  const auto t0 = std::chrono::steady_clock::now();
+  dds::discover_topics(cfg, "test-discovery", 30.0, &stop);
+  CHECK(std::chrono::steady_clock::now() - t0 < std::chrono::seconds(10));
 }
 
 }  // namespace shapeform

@@ -942,3 +942,38 @@ TEST_CASE("Tab completion: commands, second words, values, parameter names", "[s
   CHECK(cands("help sh") == V{"shape", "show"});
   CHECK(cands("bogus ") == V{});
 }
+
+TEST_CASE("hold, stop (its emergency alias) and resume", "[supervisor][parser][hold]") {
+  CHECK_FALSE(parse_as<Hold>("hold").emergency);
+  CHECK(parse_as<Hold>("stop").emergency);
+  parse_as<Resume>("resume");
+  parse_as<Hold>("  stop   # emergency");
+  CHECK(error_of("hold now") == "hold: unexpected argument 'now'");
+  CHECK(error_of("stop all=1") == "stop: unknown parameter 'all' (takes no key=value parameters)");
+  CHECK(error_of("resume 2") == "resume: unexpected argument '2'");
+  // `track stop` is not `stop`: it only ends tracking.
+  parse_as<TrackStop>("track stop");
+  // Commands typed while held build on the held command: they stay held until `resume`.
+  core::CompiledCommand held = current_command();
+  held.hold = true;
+  CHECK(parse_as<SetCommand>("shape circle r=3", held).command.hold);
+  CHECK(parse_as<SetCommand>("gains k1=0.2", held).command.hold);
+  CHECK(parse_as<SetCommand>("track point at=1,1 r=2", held).command.hold);
+  CHECK_FALSE(parse_as<SetCommand>("shape circle r=3").command.hold);
+  // Help: one overview line each; stop's page says it is hold's alias; resume's what it releases.
+  const std::string overview = help_text();
+  for (const char* syntax : {"\nhold ", "\nstop ", "\nresume "}) {
+    INFO(syntax);
+    CHECK(overview.find(syntax) != std::string::npos);
+  }
+  for (const char* word : {"hold", "stop", "resume"}) {
+    INFO(word);
+    CHECK(has_help(word));
+    CHECK(help_text(word).rfind(word, 0) == 0);
+    const ParseResult r = parse_command(std::string("help ") + word, current_command());
+    CHECK(r.ok());
+  }
+  CHECK(help_text("stop").find("exactly 'hold'") != std::string::npos);
+  CHECK(help_text("hold").find("late") != std::string::npos);
+  CHECK(help_text("resume").find("re-converges") != std::string::npos);
+}
