@@ -60,7 +60,7 @@ int run(int argc, char** argv) {
   const auto cfg = app.load_config();
   if (!cfg) return app::kExitUsage;
   util::install_stop_signals();
-  try {
+  return app.run([&] {
     switch (*id) {
       case dds::TopicId::State: return echo<msg::AgentState>(*cfg, *id, count, timeout_s);
       case dds::TopicId::Command: return echo<msg::ShapeCommand>(*cfg, *id, count, timeout_s);
@@ -68,11 +68,8 @@ int run(int argc, char** argv) {
       case dds::TopicId::Metrics: return echo<msg::SwarmMetrics>(*cfg, *id, count, timeout_s);
       case dds::TopicId::Status: return echo<msg::AgentStatus>(*cfg, *id, count, timeout_s);
     }
-  } catch (const std::exception& e) {
-    std::cerr << "shapeform_echo: " << e.what() << std::endl;
     return 1;
-  }
-  return 1;
+  });
 }
 
 }  // namespace

@@ -23,7 +23,7 @@ int run(int argc, char** argv) {
   const auto cfg = app.load_config();
   if (!cfg) return app::kExitUsage;
   util::install_stop_signals();
-  try {
+  return app.run([&] {
     const auto topics = dds::discover_topics(cfg->transport, "shapeform_topics", wait_s, &util::stop_flag());
     if (json) {
       for (const auto& t : topics) std::cout << tools::topic_json(t).dump() << '\n';
@@ -31,11 +31,8 @@ int run(int argc, char** argv) {
       std::cout << tools::topics_table(topics);
     }
     std::cout << std::flush;
-  } catch (const std::exception& e) {
-    std::cerr << "shapeform_topics: " << e.what() << std::endl;
-    return 1;
-  }
-  return 0;
+    return 0;
+  });
 }
 
 }  // namespace

@@ -44,6 +44,15 @@ std::optional<config::Config> App::load_config(const std::vector<std::string>& e
   }
 }
 
+int App::run(const std::function<int()>& body) const {
+  try {
+    return body();
+  } catch (const std::exception& e) {
+    std::cerr << prog_ << ": " << e.what() << std::endl;
+    return 1;
+  }
+}
+
 int App::usage_error(const std::string& message) const {
   std::cerr << prog_ << ": " << message << '\n';
   return kExitUsage;

@@ -8,6 +8,7 @@
 ///   const auto cfg = app.load_config();
 ///   if (!cfg) return app::kExitUsage;
 #include <CLI/CLI.hpp>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -43,6 +44,10 @@ class App {
   /// (program flags that override keys, e.g. "swarm.seed=3"). Problems go to stderr, one per line,
   /// as "prog: problem"; nullopt then (exit status kExitUsage).
   std::optional<config::Config> load_config(const std::vector<std::string>& extra = {}) const;
+
+  /// Runs the program's body: its exit status, or 1 (a runtime failure) after printing
+  /// "prog: what" on stderr when it throws.
+  int run(const std::function<int()>& body) const;
 
   /// Prints "prog: message" on stderr and returns kExitUsage.
   int usage_error(const std::string& message) const;

@@ -224,6 +224,15 @@ class SwarmTestCase(unittest.TestCase):
         poll(lambda: all(a.hears(n - 1) for a in agents), timeout, "the %d agents to hear each other" % n)
         return agents
 
+    def start_commanded_swarm(self, n, config, extra=(), seed=1, record=None):
+        """A supervisor and agents 0..n-1 (seeded start); once the supervisor hears all n, `start` publishes
+        epoch 1. Returns (supervisor, agents)."""
+        sup = self.start_supervisor(config, record=record, extra=extra)
+        agents = self.start_agents(n, config, seed=seed, extra=extra)
+        self.assertTrue(sup.wait_agents(n, 60), "the supervisor hears every agent")
+        self.assertEqual(sup.command("start"), 1)
+        return sup, agents
+
     def start_supervisor(self, config, domain=None, script=None, record=None, extra=(), console=True,
                          name="supervisor"):
         """A supervisor run with --json (every answer, event and the summary are JSON lines on stdout)."""

@@ -29,10 +29,7 @@ class CommandsTest(harness.SwarmTestCase):
     def converged_swarm(self, scenario="circle"):
         """10 agents on a scenario's shape, started and converged; returns (supervisor, agents)."""
         config = harness.scenario(scenario)
-        sup = self.start_supervisor(config, extra=SETS)
-        agents = self.start_agents(AGENTS, config, seed=1, extra=SETS)
-        self.assertTrue(sup.wait_agents(AGENTS, 60), "the supervisor hears every agent")
-        self.assertEqual(sup.command("start"), 1)
+        sup, agents = self.start_commanded_swarm(AGENTS, config, SETS)
         self.assertTrue(sup.wait_converged(60), "the %s scenario converges" % scenario)
         return sup, agents
 

@@ -193,6 +193,14 @@ class Tty:
     def until_screen_has(self, text, timeout=10.0):
         self.until("%r on the screen" % text, lambda: any(text in line for line in self.screen.text()), timeout)
 
+    def keys(self, text, line=None, screen=None):
+        """Types text, then waits until the cursor row reads `line` and/or `screen` is on the screen."""
+        self.type(text)
+        if screen is not None:
+            self.until_screen_has(screen)
+        if line is not None:
+            self.until_cursor_line(line)
+
     def type(self, text, pause=0.0):
         for ch in text:
             os.write(self.master, ch.encode())
@@ -293,19 +301,13 @@ class ConsoleTtyTest(harness.SwarmTestCase):
         tty.until_cursor_line(PROMPT.rstrip())
 
         # Tab completes a command word and a parameter name.
-        tty.type("sha\t")
-        tty.until_cursor_line(PROMPT + "shape ")
-        tty.type("ell\t")
-        tty.until_cursor_line(PROMPT + "shape ellipse ")
-        tty.type("\x03")
-        tty.until_cursor_line(PROMPT.rstrip())
+        tty.keys("sha\t", line=PROMPT + "shape ")
+        tty.keys("ell\t", line=PROMPT + "shape ellipse ")
+        tty.keys("\x03", line=PROMPT.rstrip())
 
         # `show`, `metrics`, `record stop` answer at the terminal too.
-        tty.type("show\r")
-        tty.until_screen_has("epoch 1, published by this supervisor")
-        tty.type("record stop\r")
-        tty.until_screen_has("record stop: nothing is being recorded")
-        tty.until_cursor_line(PROMPT.rstrip())
+        tty.keys("show\r", screen="epoch 1, published by this supervisor")
+        tty.keys("record stop\r", screen="record stop: nothing is being recorded", line=PROMPT.rstrip())
 
         # Ctrl-D on an empty line: status 0.
         tty.type("\x04")
@@ -315,12 +317,9 @@ class ConsoleTtyTest(harness.SwarmTestCase):
         # within a second on an empty line: status 130.
         tty = self.start_tty("second")
         self.assertTrue(os.path.exists(os.path.join(self.run_dir, "home", ".shapeform_history")))
-        tty.type("\x1b[A")
-        tty.until_cursor_line(PROMPT + "record stop")
-        tty.type("\x03")
-        tty.until_cursor_line(PROMPT.rstrip())
-        tty.type("\x03")
-        tty.until_screen_has("Ctrl-C again within 1 s")
+        tty.keys("\x1b[A", line=PROMPT + "record stop")
+        tty.keys("\x03", line=PROMPT.rstrip())
+        tty.keys("\x03", screen="Ctrl-C again within 1 s")
         tty.type("\x03")
         self.assertEqual(tty.wait_exit(), 130)
 

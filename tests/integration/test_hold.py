@@ -63,10 +63,7 @@ class HoldTest(harness.SwarmTestCase):
 
     def test_hold_resume_stop(self):
         config = harness.scenario("circle")
-        sup = self.start_supervisor(config, extra=SETS)
-        agents = self.start_agents(AGENTS, config, seed=1, extra=SETS)
-        self.assertTrue(sup.wait_agents(AGENTS, 60), "the supervisor hears every agent")
-        self.assertEqual(sup.command("start"), 1)
+        sup, agents = self.start_commanded_swarm(AGENTS, config, SETS)
         # Still forming: the agents move (so a frozen swarm below is the hold's doing).
         self.assertTrue(sup.wait_until("time", "wait time 3 timeout=30", 30))
         moving = positions(harness.status_rows(sup.ask("status", "status")))

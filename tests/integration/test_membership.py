@@ -37,10 +37,7 @@ class MembershipTest(harness.SwarmTestCase):
     def converged_swarm(self, extra=()):
         config = harness.scenario("circle")
         sets = ["--set", "swarm.agents=%d" % AGENTS] + list(extra)
-        sup = self.start_supervisor(config, extra=sets)
-        agents = self.start_agents(AGENTS, config, seed=1, extra=sets)
-        self.assertTrue(sup.wait_agents(AGENTS, 60), "the supervisor hears every agent")
-        self.assertEqual(sup.command("start"), 1)
+        sup, agents = self.start_commanded_swarm(AGENTS, config, sets)
         self.assertTrue(sup.wait_converged(60), "the circle converges")
         return config, sets, sup, agents
 
@@ -191,10 +188,7 @@ class MembershipTest(harness.SwarmTestCase):
     def test_agents_below_one_hertz(self):
         config = harness.scenario("circle")
         sets = ["--set", "agent.rate_hz=0.5", "--set", "swarm.agents=3", "--set", "agent.neighbour_timeout_periods=3"]
-        sup = self.start_supervisor(config, extra=sets)
-        agents = self.start_agents(3, config, seed=1, extra=sets)
-        self.assertTrue(sup.wait_agents(3, 60), "the supervisor hears every agent")
-        self.assertEqual(sup.command("start"), 1)
+        sup, agents = self.start_commanded_swarm(3, config, sets)
         # Each agent reports what it hears once per status period (here: every tick, 2 s apart).
         harness.poll(lambda: all(a.hears(2) for a in agents), 60,
                      "every agent to hear the other two")

@@ -52,10 +52,7 @@ class ToolsTest(harness.SwarmTestCase):
     def test_topics_and_echo_on_a_running_swarm(self):
         # A tracked scenario, so that the target topic has a writer too.
         config = harness.scenario("track_circle")
-        sup = self.start_supervisor(config, extra=SETS)
-        agents = self.start_agents(AGENTS, config, seed=1, extra=SETS)
-        self.assertTrue(sup.wait_agents(AGENTS, 60), "the supervisor hears every agent")
-        self.assertEqual(sup.command("start"), 1)
+        sup, agents = self.start_commanded_swarm(AGENTS, config, SETS)
 
         def complete():
             t = self.topics()
