@@ -39,6 +39,8 @@ struct MetricInfo {
   bool count;  ///< an integer (written without a decimal point)
   /// The value, nullopt when undefined.
   std::optional<double> (*get)(const Metrics&);
+  /// Sets the value (a count is rounded toward zero).
+  void (*set)(Metrics&, double);
 };
 
 namespace detail {
@@ -46,6 +48,11 @@ template <auto Member>
 std::optional<double> metric_value(const Metrics& m) {
   const auto& v = m.*Member;
   return v ? std::optional<double>(static_cast<double>(*v)) : std::nullopt;
+}
+template <auto Member>
+void set_metric(Metrics& m, double v) {
+  auto& field = m.*Member;
+  field = static_cast<typename std::decay_t<decltype(field)>::value_type>(v);
 }
 template <class T>
 struct is_count : std::false_type {};
@@ -55,7 +62,7 @@ struct is_count<std::optional<int>> : std::true_type {};
 
 #define SHAPEFORM_METRIC_INFO(name, unit, description)                                              \
   MetricInfo{#name, unit, description, detail::is_count<decltype(Metrics::name)>::value,            \
-             &detail::metric_value<&Metrics::name>},
+             &detail::metric_value<&Metrics::name>, &detail::set_metric<&Metrics::name>},
 inline constexpr MetricInfo kMetricTable[] = {SHAPEFORM_METRICS(SHAPEFORM_METRIC_INFO)};
 #undef SHAPEFORM_METRIC_INFO
 

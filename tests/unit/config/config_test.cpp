@@ -70,77 +70,8 @@ void require_vec(const core::Vec2& v, double x1, double x2) {
   CHECK(v.y() == x2);
 }
 
+/// Every key of the config table equal (a key the table gains is compared too).
 void require_equal(const Config& a, const Config& b) {
-  CHECK(a.schema_version == b.schema_version);
-  CHECK(a.name == b.name);
-  CHECK(a.swarm.agents == b.swarm.agents);
-  CHECK(a.swarm.seed == b.swarm.seed);
-  CHECK(a.swarm.init_half_width == b.swarm.init_half_width);
-  const auto& sa = a.command.shape;
-  const auto& sb = b.command.shape;
-  CHECK(sa.kind == sb.kind);
-  CHECK(sa.m == sb.m);
-  CHECK(sa.c == sb.c);
-  CHECK(sa.r0 == sb.r0);
-  CHECK(sa.a == sb.a);
-  CHECK(sa.b == sb.b);
-  CHECK(sa.centre == sb.centre);
-  CHECK(sa.rotation == sb.rotation);
-  CHECK(sa.scale == sb.scale);
-  CHECK(sa.r_expr == sb.r_expr);
-  CHECK(sa.x_expr == sb.x_expr);
-  CHECK(sa.y_expr == sb.y_expr);
-  CHECK(sa.f_expr == sb.f_expr);
-  CHECK(sa.vertices == sb.vertices);
-  CHECK(sa.closed == sb.closed);
-  const auto& ta = a.command.tracking;
-  const auto& tb = b.command.tracking;
-  CHECK(ta.enabled == tb.enabled);
-  CHECK(ta.feedforward == tb.feedforward);
-  CHECK(ta.path.kind == tb.path.kind);
-  CHECK(ta.path.point == tb.path.point);
-  CHECK(ta.path.velocity == tb.path.velocity);
-  CHECK(ta.path.origin == tb.path.origin);
-  CHECK(ta.path.radius == tb.path.radius);
-  CHECK(ta.path.period == tb.path.period);
-  CHECK(ta.path.phase == tb.path.phase);
-  const auto& ga = a.command.gains;
-  const auto& gb = b.command.gains;
-  CHECK(ga.k1 == gb.k1);
-  CHECK(ga.k2 == gb.k2);
-  CHECK(ga.sigma == gb.sigma);
-  CHECK(ga.beta == gb.beta);
-  CHECK(ga.r == gb.r);
-  CHECK(a.command.max_speed == b.command.max_speed);
-  CHECK(a.command.law == b.command.law);
-  CHECK(a.command.arc.k_normal == b.command.arc.k_normal);
-  CHECK(a.command.arc.k_tangent == b.command.arc.k_tangent);
-  CHECK(a.command.arc.spacing == b.command.arc.spacing);
-  CHECK(a.command.integrator == b.command.integrator);
-  CHECK(a.command.dt == b.command.dt);
-  CHECK(a.sim.steps == b.sim.steps);
-  CHECK(a.agent.rate_hz == b.agent.rate_hz);
-  CHECK(a.agent.neighbour_timeout_periods == b.agent.neighbour_timeout_periods);
-  CHECK(a.agent.status_rate_hz == b.agent.status_rate_hz);
-  CHECK(a.supervisor.metrics_rate_hz == b.supervisor.metrics_rate_hz);
-  CHECK(a.supervisor.target_rate_hz == b.supervisor.target_rate_hz);
-  CHECK(a.supervisor.agent_timeout_s == b.supervisor.agent_timeout_s);
-  CHECK(a.supervisor.flush_s == b.supervisor.flush_s);
-  CHECK(a.supervisor.converge.band_abs == b.supervisor.converge.band_abs);
-  CHECK(a.supervisor.converge.band_rel == b.supervisor.converge.band_rel);
-  CHECK(a.supervisor.converge.gap_cv_max == b.supervisor.converge.gap_cv_max);
-  CHECK(a.supervisor.converge.hold == b.supervisor.converge.hold);
-  CHECK(a.transport.profile == b.transport.profile);
-  CHECK(a.transport.domain == b.transport.domain);
-  CHECK(a.transport.max_participants == b.transport.max_participants);
-  CHECK(a.transport.interfaces == b.transport.interfaces);
-  CHECK(a.transport.peers == b.transport.peers);
-  CHECK(a.transport.discovery_server == b.transport.discovery_server);
-  CHECK(a.transport.lease_s == b.transport.lease_s);
-  CHECK(a.transport.announce_s == b.transport.announce_s);
-  CHECK(a.transport.socket_buffer_bytes == b.transport.socket_buffer_bytes);
-  CHECK(a.transport.multicast_data == b.transport.multicast_data);
-  // And every key the table declares, so a key added to the table is compared too.
   for (const auto& p : shapeform::config::config_table()) {
     INFO(p.key);
     CHECK(p.get(a) == p.get(b));

@@ -123,44 +123,12 @@ core::Command sample_command() {
   return c;
 }
 
+/// Every field of the command table equal (a field the table gains is compared too).
 void require_same(const core::Command& a, const core::Command& b) {
-  CHECK(a.shape.kind == b.shape.kind);
-  CHECK(a.shape.m == b.shape.m);
-  CHECK(a.shape.c == b.shape.c);
-  CHECK(a.shape.r0 == b.shape.r0);
-  CHECK(a.shape.a == b.shape.a);
-  CHECK(a.shape.b == b.shape.b);
-  CHECK(a.shape.centre == b.shape.centre);
-  CHECK(a.shape.rotation == b.shape.rotation);
-  CHECK(a.shape.scale == b.shape.scale);
-  CHECK(a.shape.r_expr == b.shape.r_expr);
-  CHECK(a.shape.x_expr == b.shape.x_expr);
-  CHECK(a.shape.y_expr == b.shape.y_expr);
-  CHECK(a.shape.f_expr == b.shape.f_expr);
-  CHECK(a.shape.vertices == b.shape.vertices);
-  CHECK(a.shape.closed == b.shape.closed);
-  CHECK(a.law == b.law);
-  CHECK(a.arc.k_normal == b.arc.k_normal);
-  CHECK(a.arc.k_tangent == b.arc.k_tangent);
-  CHECK(a.arc.spacing == b.arc.spacing);
-  CHECK(a.hold == b.hold);
-  CHECK(a.tracking.enabled == b.tracking.enabled);
-  CHECK(a.tracking.path.kind == b.tracking.path.kind);
-  CHECK(a.tracking.path.point == b.tracking.path.point);
-  CHECK(a.tracking.path.velocity == b.tracking.path.velocity);
-  CHECK(a.tracking.path.origin == b.tracking.path.origin);
-  CHECK(a.tracking.path.radius == b.tracking.path.radius);
-  CHECK(a.tracking.path.period == b.tracking.path.period);
-  CHECK(a.tracking.path.phase == b.tracking.path.phase);
-  CHECK(a.tracking.feedforward == b.tracking.feedforward);
-  CHECK(a.gains.k1 == b.gains.k1);
-  CHECK(a.gains.k2 == b.gains.k2);
-  CHECK(a.gains.sigma == b.gains.sigma);
-  CHECK(a.gains.beta == b.gains.beta);
-  CHECK(a.gains.r == b.gains.r);
-  CHECK(a.integrator == b.integrator);
-  CHECK(a.dt == b.dt);
-  CHECK(a.max_speed == b.max_speed);
+  for (const auto& p : core::params::command_table()) {
+    INFO(p.key);
+    CHECK(p.get(a) == p.get(b));
+  }
 }
 
 /// from_msg of a valid command with one mutation; returns the error ("" when accepted).
@@ -671,22 +639,14 @@ TEST_CASE("AgentStatus converts both ways; a negative id is refused", "[dds][con
 }
 
 TEST_CASE("SwarmMetrics carries every metric of the table under its name", "[dds][convert]") {
-  // Each metric a distinct value: a field crossed with another would come back wrong.
+  // Each metric a distinct value (k + 0.5, counts k + 1): a field crossed with another would come back wrong.
   core::Metrics m;
-  m.shape_error_mean = 0.5;
-  m.shape_error_max = 1.5;
-  m.gap_cv = 2.5;
-  m.nn_cv = 3.5;
-  m.min_separation = 4.5;
-  m.clusters = 6;
-  m.extent = 7.5;
-  m.centroid_error = 8.5;
-  m.ring_error = 9.5;
-  m.curve_error_mean = 10.5;
-  m.curve_error_max = 11.5;
-  m.arc_gap_cv = 12.5;
+  for (std::size_t k = 0; k < std::size(core::kMetricTable); ++k) {
+    const core::MetricInfo& info = core::kMetricTable[k];
+    info.set(m, static_cast<double>(k) + (info.count ? 1.0 : 0.5));
+  }
   const msg::SwarmMetrics w = dds::to_msg(m, 1, 0.0, 0, false);
-  CHECK((w.shape_error_mean() == 0.5 && w.gap_cv() == 2.5 && w.clusters() == 6 && w.arc_gap_cv() == 12.5));
+  CHECK((w.shape_error_mean() == 0.5 && w.gap_cv() == 2.5 && w.clusters() == 6 && w.arc_gap_cv() == 11.5));
   const core::Metrics back = dds::from_msg(w);
   for (const core::MetricInfo& info : core::kMetricTable) {
     INFO(info.name);
