@@ -38,31 +38,26 @@ TEST_CASE("a range contains exactly its values", "[params]") {
   CHECK(params::any().contains(-1e300));
 }
 
+namespace {
+/// Every name of `table` round-trips through core's to_string and `parse`.
+template <class E, std::size_t N, class Parse>
+void check_names(const params::Name<E> (&table)[N], Parse parse) {
+  for (const auto& n : table) {
+    INFO(n.name);
+    CHECK(core::to_string(n.value) == n.name);
+    E v{};
+    REQUIRE(parse(n.name, v));
+    CHECK(v == n.value);
+  }
+}
+}  // namespace
+
 TEST_CASE("core's to_string and parse functions use the one name table", "[params]") {
-  for (const auto& n : params::kShapeKindNames) {
-    CHECK(core::to_string(n.value) == n.name);
-    core::ShapeKind k{};
-    REQUIRE(core::parse_shape_kind(n.name, k));
-    CHECK(k == n.value);
-  }
-  for (const auto& n : params::kPathKindNames) {
-    CHECK(core::to_string(n.value) == n.name);
-    core::CentrePath::Kind k{};
-    REQUIRE(core::parse_path_kind(n.name, k));
-    CHECK(k == n.value);
-  }
-  for (const auto& n : params::kIntegratorNames) {
-    CHECK(core::to_string(n.value) == n.name);
-    core::Integrator i{};
-    REQUIRE(core::parse_integrator(n.name, i));
-    CHECK(i == n.value);
-  }
-  for (const auto& n : params::kLawNames) {
-    CHECK(core::to_string(n.value) == n.name);
-    core::Law l{};
-    REQUIRE(core::parse_law(n.name, l));
-    CHECK(l == n.value);
-  }
+  check_names(params::kShapeKindNames, [](std::string_view s, core::ShapeKind& k) { return core::parse_shape_kind(s, k); });
+  check_names(params::kPathKindNames,
+              [](std::string_view s, core::CentrePath::Kind& k) { return core::parse_path_kind(s, k); });
+  check_names(params::kIntegratorNames, [](std::string_view s, core::Integrator& i) { return core::parse_integrator(s, i); });
+  check_names(params::kLawNames, [](std::string_view s, core::Law& l) { return core::parse_law(s, l); });
   core::Law l = core::Law::Arc;
   CHECK_FALSE(core::parse_law("Paper", l));
   CHECK(l == core::Law::Arc);  // untouched
