@@ -1,3 +1,4 @@
+#!/usr/bin/python3
 """Starting, stopping and reading shapeform processes (standard library only).
 
 One library for everything that runs the project's programs from Python: the integration tests
@@ -318,3 +319,10 @@ def shm_files():
         return {f for f in os.listdir(SHM_DIR) if SHM_PATTERN.match(f)}
     except FileNotFoundError:
         return set()
+
+
+if __name__ == "__main__":
+    # A module, not a program: it only says so (scripts/ holds nothing that cannot answer --help).
+    import sys as _sys
+    print("usage: import shapeform_procs -- shapeform_procs.py is a module: the process library of the tests, the benchmarks and the reproduction; it runs nothing itself")
+    _sys.exit(0 if _sys.argv[1:] in ([], ["--help"], ["-h"]) else 2)

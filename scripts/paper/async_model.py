@@ -1,3 +1,4 @@
+#!/usr/bin/python3
 """A numpy model of the paper's law under the two schedules that matter for the comparison between
 the simulator and the agent processes (used by scripts/paper/run.py and report.py to explain the differences).
 
@@ -180,3 +181,10 @@ def run(start, shape, steps, schedule="sync", phases=None, g=GAINS, dt=1.0, trac
 
 SHAPES = {"line": dict(kind="line", m=-1.0, c=5.0), "circle": dict(kind="circle", r0=4.0),
           "ellipse": dict(kind="ellipse", a=4.0, b=2.0), "square": dict(kind="square", a=5.0)}
+
+
+if __name__ == "__main__":
+    # A module, not a program: it only says so (scripts/ holds nothing that cannot answer --help).
+    import sys as _sys
+    print("usage: import async_model -- async_model.py is a module: the numpy model of the reproduction (scripts/paper/run.py and report.py use it); it runs nothing itself")
+    _sys.exit(0 if _sys.argv[1:] in ([], ["--help"], ["-h"]) else 2)

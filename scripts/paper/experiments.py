@@ -1,3 +1,4 @@
+#!/usr/bin/python3
 """The experiments of Goswami et al. (arXiv 1410.3864) that scripts/paper/run.py runs on agent processes
 and in the simulator, and the simulator-only studies of the published law's limits (shared by run.py,
 analyse.py, report.py and scripts/plot_paper.py)."""
@@ -84,3 +85,9 @@ def limit_runs(quick):
         ("track_line_ff_long", "track_line", 10, 1000, ["--set", "tracking.feedforward=true"]),
     ]
 
+
+if __name__ == "__main__":
+    # A module, not a program: it only says so (scripts/ holds nothing that cannot answer --help).
+    import sys as _sys
+    print("usage: import experiments -- experiments.py is a module: the table of the reproduction's experiments (scripts/paper/run.py, analyse.py, report.py); it runs nothing itself")
+    _sys.exit(0 if _sys.argv[1:] in ([], ["--help"], ["-h"]) else 2)
