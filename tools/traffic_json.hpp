@@ -37,10 +37,12 @@ bool sample_json(const msg::AgentStatus& m, nlohmann::json& out, std::string& wh
 /// One line of shapeform_echo for a sample taken from `topic`:
 ///  {"event": "sample", "topic", "data": sample_json} for valid data;
 ///  {"event": "rejected", "topic", "why"} when the conversion refuses it;
-///  {"event": "disposed" | "no_writers", "topic", "id"} for an instance that left (keyed topics).
+///  {"event": "disposed" | "no_writers", "topic", "id"} for an instance that left (keyed topics);
+/// each with "source": the writer's participant (GUID prefix) when known.
 template <class Msg>
 nlohmann::json echo_line(const char* topic, const dds::Received<Msg>& r) {
   nlohmann::json line = {{"topic", topic}};
+  if (r.source.known()) line["source"] = dds::to_string(r.source);
   if (!r.valid_data) {
     line["event"] = r.instance == dds::InstanceState::Disposed ? "disposed" : "no_writers";
     line["id"] = r.key_id;

@@ -36,6 +36,13 @@ void delete_reader(Entities& e, fdds::DataReader* r) noexcept {
 
 bool is_ok(const ReturnCode_t& rc) { return rc == ReturnCode_t::RETCODE_OK; }
 
+SourceId source_of(const fdds::InstanceHandle_t& writer) {
+  const auto guid = eprosima::fastrtps::rtps::iHandle2GUID(writer);
+  SourceId s;
+  std::copy(std::begin(guid.guidPrefix.value), std::end(guid.guidPrefix.value), s.prefix.begin());
+  return s;
+}
+
 }  // namespace detail
 
 namespace {
@@ -75,6 +82,13 @@ Node::Node(const TransportConfig& cfg, const std::string& name)
   if (entities_->subscriber == nullptr) {
     throw std::runtime_error("create_subscriber failed (node " + name + ")");
   }
+}
+
+SourceId Node::source() const {
+  SourceId s;
+  const auto& prefix = entities_->participant->guid().guidPrefix.value;
+  std::copy(std::begin(prefix), std::end(prefix), s.prefix.begin());
+  return s;
 }
 
 Node::~Node() = default;  // entities_ (the last owner) deletes everything; handles only hold weak_ptrs

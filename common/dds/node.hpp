@@ -28,8 +28,9 @@
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
 
-#include "dds/transport.hpp"
 #include "dds/msg_traits.hpp"
+#include "dds/samples.hpp"
+#include "dds/transport.hpp"
 #include "dds/topics.hpp"
 #include "util/clock.hpp"
 
@@ -52,6 +53,8 @@ struct Received {
   /// Keyed types: the instance's id (from msg when valid, else remembered from an earlier valid sample
   /// of the same instance; -1 if never seen). Unkeyed types: -1.
   std::int32_t key_id = -1;
+  /// The participant whose writer sent it (for NoWriters samples: the writer that left).
+  SourceId source;
 };
 
 /// Default bound of a Reader's mailbox; samples beyond it (nobody draining) are dropped and counted.
@@ -79,6 +82,8 @@ struct Entities {
 void delete_writer(Entities& e, eprosima::fastdds::dds::DataWriter* w) noexcept;
 void delete_reader(Entities& e, eprosima::fastdds::dds::DataReader* r) noexcept;
 bool is_ok(const eprosima::fastrtps::types::ReturnCode_t& rc);
+/// The participant part of a writer's instance handle (a handle holds the writer's GUID).
+SourceId source_of(const eprosima::fastdds::dds::InstanceHandle_t& writer);
 
 /// The listener of one Reader: takes every sample into a mutex-protected mailbox. No maths here: it
 /// runs on Fast DDS's receive thread.
@@ -122,7 +127,8 @@ class Mailbox final : public eprosima::fastdds::dds::DataReaderListener {
         continue;
       }
       // An invalid sample carries no data (take leaves `sample` as it was): hand out a default Msg.
-      pending_.push_back(Received<Msg>{info.valid_data ? sample : Msg{}, now, info.valid_data, state, key});
+      pending_.push_back(Received<Msg>{info.valid_data ? sample : Msg{}, now, info.valid_data, state, key,
+                                       source_of(info.publication_handle)});
     }
   }
 
@@ -141,7 +147,8 @@ class Mailbox final : public eprosima::fastdds::dds::DataReaderListener {
           ++overflowed_;
           continue;
         }
-        pending_.push_back(Received<Msg>{Msg{}, now, false, InstanceState::NoWriters, inst.key});
+        pending_.push_back(Received<Msg>{Msg{}, now, false, InstanceState::NoWriters, inst.key,
+                                         source_of(inst.writer)});
       }
     }
   }
@@ -329,6 +336,8 @@ class Node {
 
   eprosima::fastdds::dds::DomainParticipant* participant() const { return entities_->participant; }
   const std::string& name() const { return entities_->name; }
+  /// This participant's identity, as its samples carry it in Received::source.
+  SourceId source() const;
 
  private:
   static void check_type(TopicId requested, TopicId of_type);

@@ -2,8 +2,10 @@
 /// What the messages carry, as plain structs the pure code (agent logic, supervisor monitor) takes:
 /// dds::to_msg / dds::from_msg (dds/convert.hpp) convert each both ways. No Fast DDS here.
 /// ShapeCommand <-> core::Command and SwarmMetrics <-> core::Metrics need no struct of their own.
+#include <array>
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "core/types.hpp"
@@ -11,6 +13,33 @@
 #include "util/stats.hpp"
 
 namespace shapeform::dds {
+
+/// Who wrote a sample: the GUID prefix of the writer's participant (12 bytes, unique per participant
+/// for its lifetime). Orders and compares bytewise; all zeros = unknown.
+struct SourceId {
+  std::array<std::uint8_t, 12> prefix{};
+  bool known() const {
+    for (const auto b : prefix)
+      if (b != 0) return true;
+    return false;
+  }
+  friend bool operator==(const SourceId& a, const SourceId& b) { return a.prefix == b.prefix; }
+  friend bool operator!=(const SourceId& a, const SourceId& b) { return a.prefix != b.prefix; }
+  friend bool operator<(const SourceId& a, const SourceId& b) { return a.prefix < b.prefix; }
+};
+
+/// As Fast DDS prints a GUID prefix: 12 lower-case hex bytes separated by dots ("01.0f.2a...").
+inline std::string to_string(const SourceId& s) {
+  static constexpr char kHex[] = "0123456789abcdef";
+  std::string out;
+  out.reserve(35);
+  for (std::size_t i = 0; i < s.prefix.size(); ++i) {
+    if (i > 0) out += '.';
+    out += kHex[s.prefix[i] >> 4];
+    out += kHex[s.prefix[i] & 0xf];
+  }
+  return out;
+}
 
 /// Largest |x|, |y| and speed accepted in a received AgentState or TrackingTarget (and as an agent's
 /// start): beyond it a sample is absurd and refused.

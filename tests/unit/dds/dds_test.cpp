@@ -1038,6 +1038,8 @@ TEST_CASE("loopback pub-sub delivers 12 keyed instances and a dispose", "[dds][n
   auto writer = pub.writer<msg::AgentState>(dds::TopicId::State);
   auto reader = sub.reader<msg::AgentState>(dds::TopicId::State);
   REQUIRE(wait_for([&] { return writer.matched() >= 1 && reader.matched() >= 1; }));
+  REQUIRE(pub.source().known());
+  REQUIRE(pub.source() != sub.source());
 
   constexpr int kAgents = 12;  // more than Fast DDS's default max_instances (10)
   std::set<std::int32_t> seen;
@@ -1061,6 +1063,7 @@ TEST_CASE("loopback pub-sub delivers 12 keyed instances and a dispose", "[dds][n
       CHECK(r.key_id == r.msg.id());
       CHECK(r.msg.x() == r.msg.id());
       CHECK(r.receive_stamp_ns >= r.msg.stamp_ns());
+      CHECK(r.source == pub.source());  // the sender's participant, not the reader's
       std::string why;
       CHECK(dds::valid_state(r.msg, why));
       seen.insert(r.msg.id());
@@ -1088,6 +1091,7 @@ TEST_CASE("loopback pub-sub delivers 12 keyed instances and a dispose", "[dds][n
       if (r.instance == dds::InstanceState::Disposed) {
         CHECK_FALSE(r.valid_data);
         CHECK(r.key_id == 5);
+        CHECK(r.source == pub.source());
         disposed = true;
       }
     }
@@ -1268,6 +1272,18 @@ TEST_CASE("node refuses a topic of another type and handles survive their node",
   std::vector<dds::Received<msg::AgentStatus>> batch;
   CHECK(moved.drain(batch) == 0u);
   CHECK(moved.matched() == -1);
+}
+
+TEST_CASE("a source id prints as Fast DDS prints a GUID prefix and orders bytewise", "[dds]") {
+  dds::SourceId a, b;
+  CHECK_FALSE(a.known());
+  a.prefix = {0x01, 0x0f, 0xab, 0, 0, 0, 0, 0, 0, 0, 0, 0xff};
+  b = a;
+  b.prefix[11] = 0xfe;
+  CHECK(a.known());
+  CHECK(dds::to_string(a) == "01.0f.ab.00.00.00.00.00.00.00.00.ff");
+  CHECK(b < a);
+  CHECK(b != a);
 }
 
 TEST_CASE("topic table lookup by name", "[dds][topics]") {

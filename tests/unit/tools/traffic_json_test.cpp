@@ -97,8 +97,9 @@ TEST_CASE("a state sample: every field, through the project's conversion", "[too
   bad.x(std::numeric_limits<double>::quiet_NaN());
   CHECK_FALSE(tools::sample_json(bad, j, why));
   CHECK(why.find("state.x") != std::string::npos);
-  dds::Received<msg::AgentState> r{bad, 0, true, dds::InstanceState::Alive, 3};
+  dds::Received<msg::AgentState> r{bad, 0, true, dds::InstanceState::Alive, 3, {}};
   const nlohmann::json line = tools::echo_line("shapeform/state", r);
+  CHECK_FALSE(line.contains("source"));  // unknown writer: not invented
   CHECK(line["event"] == "rejected");
   CHECK(line["topic"] == "shapeform/state");
   CHECK(line["why"].get<std::string>().find("state.x") != std::string::npos);
@@ -111,8 +112,11 @@ TEST_CASE("echo lines: a sample, a disposed instance, a writer gone", "[tools][e
   st.neighbours_heard = 11;
   st.cpu_percent = 2.5;
   st.epoch = 7;
-  dds::Received<msg::AgentStatus> r{dds::to_msg(st), 0, true, dds::InstanceState::Alive, 4};
+  dds::Received<msg::AgentStatus> r{dds::to_msg(st), 0, true, dds::InstanceState::Alive, 4, {}};
+  r.source.prefix[0] = 0x01;
+  r.source.prefix[11] = 0x2a;
   nlohmann::json line = tools::echo_line("shapeform/status", r);
+  CHECK(line["source"] == "01.00.00.00.00.00.00.00.00.00.00.2a");
   CHECK(line["event"] == "sample");
   CHECK(line["topic"] == "shapeform/status");
   CHECK(line["data"]["id"] == 4);
@@ -124,7 +128,8 @@ TEST_CASE("echo lines: a sample, a disposed instance, a writer gone", "[tools][e
   r.valid_data = false;
   r.instance = dds::InstanceState::Disposed;
   line = tools::echo_line("shapeform/status", r);
-  CHECK(line == nlohmann::json({{"event", "disposed"}, {"topic", "shapeform/status"}, {"id", 4}}));
+  CHECK(line == nlohmann::json({{"event", "disposed"}, {"topic", "shapeform/status"}, {"id", 4},
+                               {"source", "01.00.00.00.00.00.00.00.00.00.00.2a"}}));
   r.instance = dds::InstanceState::NoWriters;
   CHECK(tools::echo_line("shapeform/status", r)["event"] == "no_writers");
 }
