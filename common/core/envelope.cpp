@@ -14,19 +14,28 @@ using params::format_number;
 /// |v| without overflow (Eigen's norm() squares: 1e300 would read infinite).
 double length(const Vec2& v) { return std::hypot(v.x(), v.y()); }
 
-std::string pair_text(const Vec2& v) { return "(" + format_number(v.x()) + ", " + format_number(v.y()) + ")"; }
+std::string pair_text(const Vec2& v) {
+  return "(" + format_number(v.x()) + ", " + format_number(v.y()) + ")";
+}
 
 /// The key (and wire field) that sets the size of a shape of this kind.
 std::pair<const char*, const char*> size_key(ShapeKind k) {
   switch (k) {
-    case ShapeKind::Line: return {"shape.c", "c"};
-    case ShapeKind::Circle: return {"shape.r0", "r0"};
+    case ShapeKind::Line:
+      return {"shape.c", "c"};
+    case ShapeKind::Circle:
+      return {"shape.r0", "r0"};
     case ShapeKind::Ellipse:
-    case ShapeKind::Square: return {"shape.a", "a"};
-    case ShapeKind::Polar: return {"shape.r_expr", "r_expr"};
-    case ShapeKind::Parametric: return {"shape.x_expr", "x_expr"};
-    case ShapeKind::Implicit: return {"shape.f_expr", "f_expr"};
-    case ShapeKind::Polygon: return {"shape.vertices", "vertices"};
+    case ShapeKind::Square:
+      return {"shape.a", "a"};
+    case ShapeKind::Polar:
+      return {"shape.r_expr", "r_expr"};
+    case ShapeKind::Parametric:
+      return {"shape.x_expr", "x_expr"};
+    case ShapeKind::Implicit:
+      return {"shape.f_expr", "f_expr"};
+    case ShapeKind::Polygon:
+      return {"shape.vertices", "vertices"};
   }
   return {"shape", "shape_kind"};
 }
@@ -34,14 +43,21 @@ std::pair<const char*, const char*> size_key(ShapeKind k) {
 /// The value of the size key as text.
 std::string size_value(const ShapeSpec& s) {
   switch (s.kind) {
-    case ShapeKind::Line: return format_number(s.c);
-    case ShapeKind::Circle: return format_number(s.r0);
+    case ShapeKind::Line:
+      return format_number(s.c);
+    case ShapeKind::Circle:
+      return format_number(s.r0);
     case ShapeKind::Ellipse:
-    case ShapeKind::Square: return format_number(s.a);
-    case ShapeKind::Polar: return "'" + s.r_expr + "'";
-    case ShapeKind::Parametric: return "'" + s.x_expr + "'";
-    case ShapeKind::Implicit: return "'" + s.f_expr + "'";
-    case ShapeKind::Polygon: return std::to_string(s.vertices.size()) + " vertices";
+    case ShapeKind::Square:
+      return format_number(s.a);
+    case ShapeKind::Polar:
+      return "'" + s.r_expr + "'";
+    case ShapeKind::Parametric:
+      return "'" + s.x_expr + "'";
+    case ShapeKind::Implicit:
+      return "'" + s.f_expr + "'";
+    case ShapeKind::Polygon:
+      return std::to_string(s.vertices.size()) + " vertices";
   }
   return "?";
 }
@@ -54,7 +70,8 @@ struct CentreReach {
   std::string key, wire, value;
 };
 CentreReach centre_reach(const Command& cmd) {
-  if (!cmd.tracking.enabled) return {length(cmd.shape.centre), "shape.centre", "cx", pair_text(cmd.shape.centre)};
+  if (!cmd.tracking.enabled)
+    return {length(cmd.shape.centre), "shape.centre", "cx", pair_text(cmd.shape.centre)};
   const CentrePath& p = cmd.tracking.path;
   switch (p.kind) {
     case CentrePath::Kind::Circle:
@@ -85,7 +102,8 @@ double shape_reach(const CompiledCommand& cmd) {
     // points; their vertices between samples add at most the sagitta).
     constexpr int kReachSamples = 1024;
     const double len = curve.length();
-    for (int k = 0; k <= kReachSamples; ++k) local = std::max(local, length(curve.at(len * k / kReachSamples)));
+    for (int k = 0; k <= kReachSamples; ++k)
+      local = std::max(local, length(curve.at(len * k / kReachSamples)));
   }
   return cmd.shape.scale * local;
 }
@@ -103,19 +121,21 @@ std::vector<EnvelopeProblem> envelope_problems(const CompiledCommand& cmd) {
                        " units from the origin" + where});
   } else if (!(c.distance + reach <= w)) {
     const bool scaled = cmd.shape.scale != 1.0;
-    const auto [key, wire] = scaled ? std::pair<const char*, const char*>{"shape.scale", "scale"} : size_key(cmd.shape.kind);
+    const auto [key, wire] =
+        scaled ? std::pair<const char*, const char*>{"shape.scale", "scale"} : size_key(cmd.shape.kind);
     const std::string value = scaled ? format_number(cmd.shape.scale) : size_value(cmd.shape);
     out.push_back({key, wire,
-                   std::string(key) + " = " + value + ": the shape reaches " + format_number(c.distance + reach) +
-                       " units from the origin" + where});
+                   std::string(key) + " = " + value + ": the shape reaches " +
+                       format_number(c.distance + reach) + " units from the origin" + where});
   }
   // The gains: one step must not overshoot beyond what the speed limit can hold.
   const double limit = cmd.max_speed > 0.0 ? kStepGainMaxLimited : kStepGainMaxFree;
-  const std::string why = cmd.max_speed > 0.0
-                              ? " (a step overshoots its target " + format_number(limit - 1) +
-                                    " times over: nothing a formation can follow)"
-                              : " without a speed limit (dynamics.max_speed = 0: every step overshoots further and "
-                                "the swarm leaves the workspace)";
+  const std::string why =
+      cmd.max_speed > 0.0
+          ? " (a step overshoots its target " + format_number(limit - 1) +
+                " times over: nothing a formation can follow)"
+          : " without a speed limit (dynamics.max_speed = 0: every step overshoots further and "
+            "the swarm leaves the workspace)";
   const auto gain = [&](const char* key, const char* wire, double value, double g, const char* formula) {
     if (value == 0.0 || g <= limit) return;  // a zero gain is off, whatever sigma^(-2 beta) is
     out.push_back({key, wire,

@@ -16,7 +16,8 @@ config::Config scenario(const std::string& name, std::vector<std::string> sets =
 sim::SimResult run(const config::Config& c, long steps, std::uint64_t seed) {
   sim::SimOptions opt;
   opt.converge = c.supervisor.converge;
-  return sim::run_simulation(c.command, core::uniform_start(c.swarm.agents, seed, c.swarm.init_half_width), steps, opt);
+  return sim::run_simulation(c.command, core::uniform_start(c.swarm.agents, seed, c.swarm.init_half_width),
+                             steps, opt);
 }
 }  // namespace
 

@@ -1,8 +1,9 @@
+#include "core/envelope.hpp"
+
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <string>
 
-#include "core/envelope.hpp"
 #include "core/law.hpp"
 
 using namespace shapeform::core;
@@ -36,13 +37,15 @@ TEST_CASE("envelope: the defaults and the paper's scenarios are inside it", "[en
   CHECK(envelope_problems(compile(line)).empty());
 }
 
-TEST_CASE("envelope: a shape placed or sized out of the workspace is refused, naming key and value", "[envelope]") {
+TEST_CASE("envelope: a shape placed or sized out of the workspace is refused, naming key and value",
+          "[envelope]") {
   // The centre of the finding: `shape circle r=4 cx=1e300` (its norm would overflow: still named).
   const CompiledCommand far = circle(4.0, Vec2(1e300, 0));
   CHECK(keys_of(far) == "shape.centre");
-  CHECK(problems_of(far).rfind("shape.centre = (1e+300, 0): the shape's centre gets 1e+300 units from the origin, "
-                               "outside the workspace (safety.workspace = 1000)",
-                               0) == 0);
+  CHECK(problems_of(far).rfind(
+            "shape.centre = (1e+300, 0): the shape's centre gets 1e+300 units from the origin, "
+            "outside the workspace (safety.workspace = 1000)",
+            0) == 0);
   // Inside by its centre, outside by its reach: the radius is named, or the scale when scaled.
   CHECK(keys_of(circle(4.0, Vec2(997, 0))) == "shape.r0");
   CHECK(problems_of(circle(4.0, Vec2(997, 0))).find("shape.r0 = 4: the shape reaches 1001 units") == 0);
@@ -127,7 +130,7 @@ TEST_CASE("envelope: gains whose steps overshoot without bound are refused", "[e
 
 TEST_CASE("agent_step never leaves the workspace, and a swarm at its edge comes back", "[envelope][law]") {
   CompiledCommand c = circle();
-  c.max_speed = 0;  // let the law take as large a step as it likes
+  c.max_speed = 0;   // let the law take as large a step as it likes
   c.gains.k2 = 1e6;  // outside the envelope: as if it had been accepted
   c.workspace = 50;
   Vec2 x(3, 1);
