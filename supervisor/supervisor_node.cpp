@@ -162,7 +162,8 @@ void Supervisor::recover_from_stall() {
   const auto stall_s = node_->recover_if_stalled(1.0 / cfg_.supervisor.target_rate_hz);
   if (!stall_s) return;
   // The new command writer starts empty: offer the command in force (same epoch) to later joiners again.
-  if (epoch_ != 0 && !command_writer_.write(dds::to_msg(current_, epoch_))) util::log_warn("command write failed");
+  if (epoch_ != 0 && !command_writer_.write(dds::to_msg(current_, epoch_)))
+    util::log_warn("command write failed");
   out_.event("recovered", {{"stall_s", *stall_s}});
 }
 

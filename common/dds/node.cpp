@@ -96,7 +96,8 @@ void Node::open() {
 void Node::rebuild() {
   detail::Entities& e = *entities_;
   const auto live = [](auto& slots) {
-    slots.erase(std::remove_if(slots.begin(), slots.end(), [](const auto& w) { return w.expired(); }), slots.end());
+    const auto gone = [](const auto& w) { return w.expired(); };
+    slots.erase(std::remove_if(slots.begin(), slots.end(), gone), slots.end());
   };
   live(e.writers);
   live(e.readers);
@@ -138,7 +139,8 @@ std::optional<double> Node::recover_if_stalled(double period_s) {
   rebuild_pending_ = false;
   char text[160];
   std::snprintf(text, sizeof text,
-                "stalled for %.2f s (longer than the lease allows, %.2f s): participant recreated, rediscovering",
+                "stalled for %.2f s (longer than the lease allows, %.2f s): participant recreated, "
+                "rediscovering",
                 pending_stall_s_, stall_threshold_s(entities_->transport));
   util::log_warn(text);
   return pending_stall_s_;
@@ -162,8 +164,8 @@ void Node::check_type(TopicId requested, TopicId of_type) {
 
 fdds::Topic* Node::topic(TopicId id) {
   if (entities_->participant == nullptr) {
-    throw std::runtime_error(std::string("no participant for topic ") + topic_name(id) + " (node " + entities_->name +
-                             ": its rebuild failed)");
+    throw std::runtime_error(std::string("no participant for topic ") + topic_name(id) + " (node " +
+                             entities_->name + ": its rebuild failed)");
   }
   auto& slot = entities_->topics[static_cast<std::size_t>(id)];
   if (slot == nullptr) {

@@ -89,7 +89,8 @@ struct Entities {
   std::array<eprosima::fastdds::dds::Topic*, kAllTopics.size()> topics{};
   std::string name;
   TransportConfig transport;  ///< the profile the participant was built from (reader locators)
-  std::vector<std::weak_ptr<WriterSlot>> writers;  ///< the live handles' endpoints, rebuilt with the participant
+  /// The live handles' endpoints, recreated by Node::rebuild() on the new participant.
+  std::vector<std::weak_ptr<WriterSlot>> writers;
   std::vector<std::weak_ptr<ReaderSlot>> readers;
 
   Entities() = default;

@@ -1277,12 +1277,12 @@ TEST_CASE("node refuses a topic of another type and handles survive their node",
 
 TEST_CASE("a rebuilt node has a new participant and its handles carry on", "[dds][node]") {
   const auto cfg = loopback(test_domain(2));
-  dds::Node a(cfg, "test-rebuilt");
-  dds::Node b(cfg, "test-peer");
-  auto a_writer = a.writer<msg::AgentState>(dds::TopicId::State);
-  auto a_reader = a.reader<msg::AgentState>(dds::TopicId::State);
-  auto b_writer = b.writer<msg::AgentState>(dds::TopicId::State);
-  auto b_reader = b.reader<msg::AgentState>(dds::TopicId::State);
+  dds::Node a(cfg, "test-rebuilt"), b(cfg, "test-peer");
+  // Both publish and read the state topic: a is rebuilt, b is its peer.
+  using State = msg::AgentState;
+  constexpr auto kState = dds::TopicId::State;
+  auto a_writer = a.writer<State>(kState), b_writer = b.writer<State>(kState);
+  auto a_reader = a.reader<State>(kState), b_reader = b.reader<State>(kState);
   std::vector<dds::Received<msg::AgentState>> batch;
   bool a_saw_b_leave = false;
   // Each publishes its agent until each has heard the other's from the other's current participant.
