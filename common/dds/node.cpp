@@ -148,6 +148,7 @@ std::optional<double> Node::recover_if_stalled(double period_s) {
 
 SourceId Node::source() const {
   SourceId s;
+  if (entities_->participant == nullptr) return s;  // a failed rebuild: unknown until one succeeds
   const auto& prefix = entities_->participant->guid().guidPrefix.value;
   std::copy(std::begin(prefix), std::end(prefix), s.prefix.begin());
   return s;

@@ -361,7 +361,8 @@ class Node {
 
   eprosima::fastdds::dds::DomainParticipant* participant() const { return entities_->participant; }
   const std::string& name() const { return entities_->name; }
-  /// This participant's identity, as its samples carry it in Received::source (a rebuild changes it).
+  /// This participant's identity, as its samples carry it in Received::source. A rebuild changes it;
+  /// unknown while a rebuild has failed.
   SourceId source() const;
 
   /// Replaces the participant, publisher, subscriber and topics with new ones from the same transport
