@@ -2,7 +2,7 @@
 """Stall trials on a real swarm: how long after a stalled process resumes does everyone hear everyone?
 
   scripts/reliability.py [--build DIR | --bin DIR] [--trials N] [--stalls 3,5,20] [--targets agent,supervisor]
-                         [--agents 12] [--domain 60] [--out DIR] [--write-docs]
+                         [--agents 12] [--domain 60] [--set KEY=VALUE] [--out DIR] [--write-docs]
 
 For each target (an agent, the supervisor) and each stall length, one swarm (a supervisor and --agents
 agents on the circle scenario, every process run with --json) runs --trials trials in sequence:
@@ -202,6 +202,8 @@ def main():
     ap.add_argument("--hold", type=float, default=2.5, help="after everyone heard everyone, the window in which the whole membership must be seen complete "
                          "at once, s (default 2.5)")
     ap.add_argument("--timeout", type=float, default=30.0, help="a trial fails when not recovered by then, s (default 30)")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="a config override for every process (repeatable), e.g. transport.lease_s=0.5")
     ap.add_argument("--out", default=None, help="output folder (default runs/<UTC time>-reliability)")
     ap.add_argument("--write-docs", action="store_true", help="also write the table into docs/RELIABILITY.md")
     args = ap.parse_args()
@@ -218,7 +220,7 @@ def main():
                                                          "-reliability")
     out.mkdir(parents=True, exist_ok=True)
     # Statuses 4 times a second: the recovery is seen to within 0.25 s.
-    sets = ["agent.status_rate_hz=4"]
+    sets = ["agent.status_rate_hz=4"] + args.set
     trials = []
     t_start = time.monotonic()
     for target in targets:
