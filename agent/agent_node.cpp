@@ -113,6 +113,7 @@ class AgentNode {
 
  private:
   void tick() {
+    recover_from_stall();
     const std::int64_t now = util::steady_ns();
     drain_commands();
     drain_targets();
@@ -121,6 +122,8 @@ class AgentNode {
     publish();
     report();
   }
+  /// After a stall longer than the peers' lease the participant is recreated (dds::Node).
+  void recover_from_stall();
   void drain_commands();
   void drain_targets();
   void drain_states();
@@ -206,6 +209,11 @@ void AgentNode::reject(const char* what, const std::string& log_line, const std:
   if (always) util::log_warn(log_line);
   else shown = throttled_.warn(what, log_line);
   if (opt_.json && shown) emit({{"event", "rejected"}, {"what", what}, {"why", why}});
+}
+
+void AgentNode::recover_from_stall() {
+  const auto stall_s = node_.recover_if_stalled(1.0 / cfg_.agent.rate_hz);
+  if (stall_s && opt_.json) emit({{"event", "recovered"}, {"stall_s", *stall_s}});
 }
 
 void AgentNode::drain_commands() {
