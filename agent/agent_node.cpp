@@ -76,6 +76,10 @@ class AgentNode {
   dds::Writer<msg::AgentStatus> status_writer_;
   dds::Reader<msg::AgentState> state_reader_;
   dds::Reader<msg::ShapeCommand> command_reader_;
+  /// Re-offers the command this process follows (transient-local, KEEP_LAST 1): it outlives its
+  /// publisher, for a supervisor started later and for agents that join while nobody commands.
+  dds::Writer<msg::ShapeCommand> command_relay_;
+  dds::CommandId relayed_;  ///< what command_relay_ offers now
   dds::Reader<msg::TrackingTarget> target_reader_;
   std::vector<dds::Received<msg::AgentState>> states_;
   std::vector<dds::Received<msg::ShapeCommand>> commands_;
@@ -107,6 +111,7 @@ AgentNode::AgentNode(const std::vector<std::int32_t>& ids, const std::vector<cor
       status_writer_(node_.writer<msg::AgentStatus>(dds::TopicId::Status)),
       state_reader_(node_.reader<msg::AgentState>(dds::TopicId::State)),
       command_reader_(node_.reader<msg::ShapeCommand>(dds::TopicId::Command)),
+      command_relay_(node_.writer<msg::ShapeCommand>(dds::TopicId::Command)),
       target_reader_(node_.reader<msg::TrackingTarget>(dds::TopicId::Target)),
       loop_(cfg.agent.rate_hz),
       log_every_(ticks_per(cfg.agent.rate_hz, 1.0)),
@@ -140,24 +145,41 @@ void AgentNode::reject(const char* what, const std::string& log_line, const std:
 }
 
 void AgentNode::drain_commands() {
+  using Verdict = dds::CommandArbiter::Verdict;
   command_reader_.drain(commands_);
   for (const auto& c : commands_) {
-    if (!c.valid_data) continue;
-    core::CompiledCommand cmd;
+    if (!c.valid_data || c.source == node_.source()) continue;  // our own re-offer
+    dds::CommandSample cmd;
     std::string error;
-    if (!dds::from_msg(c.msg, cmd, error)) {
+    if (!dds::from_msg(c.msg, c.source, cmd, error)) {
       reject("command", "command epoch " + std::to_string(c.msg.epoch()) + " rejected: " + error, error, true);
       continue;
     }
-    bool adopted = false;
-    for (auto& l : logics_) adopted = l->on_command(cmd, c.msg.epoch()) || adopted;
-    if (!adopted) continue;
-    const std::string shape(core::to_string(cmd.shape.kind));
-    util::log_info("following command epoch " + std::to_string(c.msg.epoch()) + ": " + shape +
-                   (cmd.tracking.enabled ? " (tracking)" : ""));
-    if (opt_.json)
-      emit({{"event", "command"}, {"epoch", c.msg.epoch()}, {"shape", shape}, {"tracking", cmd.tracking.enabled}});
+    bool refused = false;
+    for (auto& l : logics_) refused = l->on_command(cmd) == Verdict::Refused || refused;  // each counts it
+    if (refused) {
+      const std::string why = "epoch " + std::to_string(cmd.id.epoch) + " of " +
+                              dds::describe_issuer(cmd.issuer_name, cmd.id.issuer) + " is more than " +
+                              std::to_string(dds::kMaxEpochJump) + " above epoch " +
+                              std::to_string(logics_.front()->command_id().epoch) + ": refused";
+      util::log_warn("command " + why);
+      if (opt_.json) emit({{"event", "rejected"}, {"what", "command"}, {"why", why}, {"epoch", cmd.id.epoch}});
+    }
   }
+  for (auto& l : logics_) l->recheck_commands();
+  const AgentLogic& first = *logics_.front();
+  if (first.command_id() == relayed_) return;
+  // A new command is followed: say so, and re-offer it as received (epoch, issuer and name kept).
+  const dds::CommandSample& s = first.command_sample();
+  relayed_ = s.id;
+  const std::string shape(core::to_string(s.command.shape.kind));
+  const std::string issuer = dds::describe_issuer(s.issuer_name, s.id.issuer);
+  util::log_info("following command epoch " + std::to_string(s.id.epoch) + " of " + issuer + ": " + shape +
+                 (s.command.tracking.enabled ? " (tracking)" : ""));
+  if (opt_.json)
+    emit({{"event", "command"}, {"epoch", s.id.epoch}, {"issuer", dds::to_string(s.id.issuer)},
+          {"publisher", issuer}, {"shape", shape}, {"tracking", s.command.tracking.enabled}});
+  if (!command_relay_.write(dds::to_msg(s.command, s.id, s.issuer_name))) util::log_warn("command re-offer failed");
 }
 
 void AgentNode::drain_targets() {
@@ -189,7 +211,7 @@ void AgentNode::drain_states() {
       continue;
     }
     for (auto& l : logics_)  // own id ignored
-      l->on_state(s.id, s.x, s.seq, r.receive_stamp_ns, s.epoch, s.arc, s.model_time, s.prev_x, s.prev_arc);
+      l->on_state(s.id, s.x, s.seq, r.receive_stamp_ns, s.command, s.arc, s.model_time, s.prev_x, s.prev_arc);
     // Data age of samples from agents hosted elsewhere (a process's own samples are not a delivery).
     if (!hosted(s.id) && ages_us_.size() < ages_us_.capacity())
       ages_us_.push_back(static_cast<double>(r.receive_stamp_ns - s.stamp_ns) * 1e-3);
@@ -215,7 +237,7 @@ void AgentNode::publish() {
     s.id = l->id();
     s.seq = seq_;
     s.stamp_ns = stamp_ns_;
-    s.epoch = l->epoch();
+    s.command = l->command_id();
     s.model_time = l->model_time();
     s.x = l->position();
     s.v = l->velocity();
@@ -250,7 +272,7 @@ void AgentNode::publish_status() {
     st.samples_rejected = k.samples_rejected;
     st.samples_received = k.samples_received;
     st.samples_lost = k.samples_lost;
-    st.epoch = l->epoch();
+    st.epoch = l->command_id().epoch;
     status_writer_.write(dds::to_msg(st));
     if (opt_.json)
       emit({{"event", "status"}, {"id", st.id}, {"neighbours_heard", st.neighbours_heard}, {"epoch", st.epoch},

@@ -11,6 +11,9 @@ struct SupervisorOptions {
   /// Machine output: stdout carries only JSON lines with an "event" key (epoch, wait, status, metrics,
   /// agent, record, summary); the human text goes to stderr.
   bool json = false;
+  /// `start` publishes the --config scenario even when a command is in force that this supervisor did
+  /// not publish (--command-on-start replace); by default it keeps that command.
+  bool replace_on_start = false;
 };
 
 /// Exit statuses.
