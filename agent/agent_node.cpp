@@ -80,6 +80,7 @@ class AgentNode {
   /// publisher, for a supervisor started later and for agents that join while nobody commands.
   dds::Writer<msg::ShapeCommand> command_relay_;
   dds::CommandId relayed_;  ///< what command_relay_ offers now
+  std::uint64_t last_refused_epoch_ = 0;  ///< the last epoch refused as an absurd jump
   dds::Reader<msg::TrackingTarget> target_reader_;
   std::vector<dds::Received<msg::AgentState>> states_;
   std::vector<dds::Received<msg::ShapeCommand>> commands_;
@@ -162,8 +163,12 @@ void AgentNode::drain_commands() {
                               dds::describe_issuer(cmd.issuer_name, cmd.id.issuer) + " is more than " +
                               std::to_string(dds::kMaxEpochJump) + " above epoch " +
                               std::to_string(logics_.front()->command_id().epoch) + ": refused";
-      util::log_warn("command " + why);
-      if (opt_.json) emit({{"event", "rejected"}, {"what", "command"}, {"why", why}, {"epoch", cmd.id.epoch}});
+      // Each new epoch refused is reported; a publisher repeating one is throttled.
+      const bool fresh = cmd.id.epoch != last_refused_epoch_;
+      last_refused_epoch_ = cmd.id.epoch;
+      if (fresh) util::log_warn("command " + why);
+      if ((fresh || throttled_.warn("command jump", "command " + why)) && opt_.json)
+        emit({{"event", "rejected"}, {"what", "command"}, {"why", why}, {"epoch", cmd.id.epoch}});
     }
   }
   for (auto& l : logics_) l->recheck_commands();

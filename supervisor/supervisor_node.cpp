@@ -156,6 +156,7 @@ class Supervisor {
   std::uint64_t own_epoch_ = 0;      ///< the epoch this supervisor published last (0: none yet)
   std::uint64_t superseded_ = 0;     ///< own_epoch_ once another participant's command replaced it
   std::uint64_t commands_refused_ = 0;
+  std::uint64_t last_refused_epoch_ = 0;
   std::string own_name_;             ///< how this supervisor names itself in its commands
   std::int64_t start_ns_ = util::steady_ns();
 
@@ -219,7 +220,11 @@ void Supervisor::drain_commands(std::int64_t now) {
       const std::string line = "command epoch " + std::to_string(c.id.epoch) + " of " + who + " refused: more than " +
                                std::to_string(dds::kMaxEpochJump) + " above epoch " +
                                std::to_string(arbiter_.reference(floor)) + "; the agents refuse it too";
-      if (throttled_.warn("command jump", line))
+      // Each new epoch refused is reported; a publisher repeating one is throttled.
+      const bool fresh = c.id.epoch != last_refused_epoch_;
+      last_refused_epoch_ = c.id.epoch;
+      if (fresh) util::log_warn(line);
+      if (fresh || throttled_.warn("command jump", line))
         out_.event("rejected", {{"what", "command"}, {"epoch", c.id.epoch}, {"issuer", dds::to_string(c.id.issuer)},
                                 {"publisher", who}, {"why", line}});
     }
@@ -494,7 +499,14 @@ void Supervisor::execute(const Action& a, std::int64_t now) {
           else out << metrics_table(sample, epoch()) << std::flush;
           out_.event("metrics", j);
         } else if constexpr (std::is_same_v<T, Show>) {
-          out << show_text(show_info(now)) << std::flush;
+          const ShowInfo info = show_info(now);
+          out << show_text(info) << std::flush;
+          nlohmann::json j = in_force_json();
+          j["command"] = app::command_json(info.command);
+          j["superseded"] = info.superseded != 0 ? nlohmann::json(info.superseded) : nlohmann::json();
+          j["following"] = info.following;
+          j["alive"] = info.alive;
+          out_.event("show", j);
         } else if constexpr (std::is_same_v<T, Progress>) {
           if (act.mode == Progress::Mode::Off) progress_.off();
           else if (act.mode == Progress::Mode::Every) progress_.every(act.every_s);
