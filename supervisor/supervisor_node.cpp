@@ -488,7 +488,9 @@ void Supervisor::execute(const Action& a, std::int64_t now) {
           const double t = model_time(now);
           const auto rows = agent_rows(monitor_, now, t);
           out << status_table(rows) << std::flush;
-          out_.event("status", status_json(rows, epoch(), t));
+          nlohmann::json j = status_json(rows, epoch(), t);
+          j.update(in_force_json());
+          out_.event("status", j);
         } else if constexpr (std::is_same_v<T, ShowMetrics>) {
           // A query: the detector sees only the metrics ticks.
           const SwarmMonitor::Sample sample = monitor_.measure(metrics_time(now), now);
