@@ -577,7 +577,7 @@ ShowInfo Supervisor::show_info(std::int64_t now) const {
   info.epoch = epoch();
   info.own = own();
   info.publisher = publisher();
-  info.superseded = superseded_;
+  info.superseded = own() ? 0 : superseded_;  // once it commands again, its old loss is history
   info.published_s_ago = static_cast<double>(now - epoch_start_ns_) * 1e-9;
   info.agents_epoch = monitor_.max_epoch_seen();
   info.alive = monitor_.alive_count(now);
