@@ -46,6 +46,7 @@ class AgentNode {
 
  private:
   void tick() {
+    recover_from_stall();
     const std::int64_t now = util::steady_ns();
     drain_commands();
     drain_targets();
@@ -54,6 +55,8 @@ class AgentNode {
     publish();
     report();
   }
+  /// After a stall longer than the peers' lease the participant is recreated (dds::Node).
+  void recover_from_stall();
   void drain_commands();
   void drain_targets();
   void drain_states();
@@ -143,6 +146,17 @@ void AgentNode::reject(const char* what, const std::string& log_line, const std:
   if (always) util::log_warn(log_line);
   else shown = throttled_.warn(what, log_line);
   if (opt_.json && shown) emit({{"event", "rejected"}, {"what", what}, {"why", why}});
+}
+
+void AgentNode::recover_from_stall() {
+  const auto stall_s = node_.recover_if_stalled(1.0 / cfg_.agent.rate_hz);
+  if (!stall_s) return;
+  // The new re-offer writer starts empty: offer the command followed again.
+  if (!relayed_.none()) {
+    const dds::CommandSample& s = logics_.front()->command_sample();
+    if (!command_relay_.write(dds::to_msg(s.command, s.id, s.issuer_name))) util::log_warn("command re-offer failed");
+  }
+  if (opt_.json) emit({{"event", "recovered"}, {"stall_s", *stall_s}});
 }
 
 void AgentNode::drain_commands() {

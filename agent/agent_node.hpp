@@ -10,7 +10,8 @@ namespace shapeform::agent {
 struct AgentOptions {
   /// Machine output on stdout, one JSON object per line with an "event" key: "status" once per status
   /// period per hosted agent (the AgentStatus numbers), "command" when a command is adopted,
-  /// "rejected" when a sample is refused (throttled like the log). Logs stay on stderr.
+  /// "rejected" when a sample is refused (throttled like the log), "recovered" (with "stall_s") when the
+  /// process recreated its participant after a stall (dds::Node::recover_if_stalled). Logs stay on stderr.
   bool json = false;
 };
 

@@ -84,6 +84,7 @@ class Supervisor {
  private:
   /// One period of the loop.
   void tick(std::int64_t now, bool metrics_due) {
+    recover_from_stall();
     drain(now);
     report_membership(now);
     publish_target(now);
@@ -93,7 +94,7 @@ class Supervisor {
   /// The epoch of the command in force (0: none known).
   std::uint64_t epoch() const { return arbiter_.id().epoch; }
   /// Whether the command in force is this supervisor's own publication.
-  bool own() const { return arbiter_.has_command() && arbiter_.id().issuer == node_->source(); }
+  bool own() const { return arbiter_.has_command() && arbiter_.id().issuer == own_issuer_; }
   /// Who published the command in force, in words ("" when none).
   std::string publisher() const;
   /// {"epoch", "issuer", "publisher", "own"} of the command in force, for the JSON events.
@@ -113,6 +114,8 @@ class Supervisor {
   /// Validates the whole --script before anything is sent; false (reported) on a bad line.
   bool load_script();
   void open_dds();
+  /// After a stall longer than the peers' lease the participant is recreated (dds::Node).
+  void recover_from_stall();
   void drain(std::int64_t now);
   /// Takes in the command topic: another participant's command that wins the order is the one in
   /// force from now (learnt); an absurd epoch jump is refused and counted.
@@ -158,6 +161,9 @@ class Supervisor {
   std::uint64_t commands_refused_ = 0;
   std::uint64_t last_refused_epoch_ = 0;
   std::string own_name_;             ///< how this supervisor names itself in its commands
+  /// The issuer of its commands: its first participant's GUID prefix, kept when a stall recreates the
+  /// participant, so that its commands stay its own (and keep their order) for it and for the agents.
+  dds::SourceId own_issuer_;
   std::int64_t start_ns_ = util::steady_ns();
 
   std::unique_ptr<dds::Node> node_;
@@ -280,6 +286,16 @@ bool Supervisor::foreign_command_in_force(std::int64_t now) const {
   return arbiter_.has_command() || monitor_.min_epoch_followed(now) != 0;
 }
 
+void Supervisor::recover_from_stall() {
+  const auto stall_s = node_->recover_if_stalled(1.0 / cfg_.supervisor.target_rate_hz);
+  if (!stall_s) return;
+  // The new command writer starts empty: offer this supervisor's command in force (same id) to later
+  // joiners again (the agents re-offer it too).
+  if (own() && !command_writer_.write(dds::to_msg(current_, arbiter_.id(), own_name_)))
+    util::log_warn("command write failed");
+  out_.event("recovered", {{"stall_s", *stall_s}});
+}
+
 void Supervisor::drain(std::int64_t now) {
   drain_commands(now);
   state_reader_.drain(states_);
@@ -340,7 +356,7 @@ void Supervisor::publish_command(const core::CompiledCommand& cmd, std::int64_t 
   std::uint64_t after = epoch();
   if (!dds::CommandArbiter::absurd(monitor_.max_epoch_seen(), arbiter_.reference(floor)))
     after = std::max(after, monitor_.max_epoch_seen());
-  const dds::CommandSample sample{cmd, dds::CommandId{after + 1, node_->source()}, own_name_};
+  const dds::CommandSample sample{cmd, dds::CommandId{after + 1, own_issuer_}, own_name_};
   if (arbiter_.offer(sample, floor) != dds::CommandArbiter::Verdict::Adopted) {  // cannot happen: it is greater
     util::log_error("command epoch " + std::to_string(after + 1) + " not adopted");
     return;
@@ -677,6 +693,7 @@ void Supervisor::open_dds() {
   char host[256] = {};
   if (gethostname(host, sizeof host - 1) != 0) host[0] = '\0';
   own_name_ = node_->name() + " on " + host + " pid " + std::to_string(getpid());
+  own_issuer_ = node_->source();
 }
 
 int Supervisor::run() {

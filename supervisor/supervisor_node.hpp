@@ -9,7 +9,7 @@ struct SupervisorOptions {
   std::string script;      ///< run this script's lines first (validated up front)
   std::string record_dir;  ///< start recording here at once
   /// Machine output: stdout carries only JSON lines with an "event" key (epoch, in_force, start_kept,
-  /// rejected, wait, status, metrics, show, agent, record, summary); the human text goes to stderr.
+  /// rejected, wait, status, metrics, show, agent, record, recovered, summary); the human text goes to stderr.
   /// The events about the command in force carry its "epoch", "issuer" (GUID prefix), "publisher"
   /// (name, host and pid as the publisher announced them, and the GUID prefix) and "own".
   bool json = false;
