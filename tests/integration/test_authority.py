@@ -2,13 +2,13 @@
 """Who commands the swarm: the order of commands, the command in force across a supervisor restart,
 and absurd epochs.
 
-- Two supervisors command at the same moment (both paused, their lines queued, both resumed: each
-  publishes before it hears the other, so both usually take the same epoch). Every agent ends on the
-  same command, the greatest by (epoch, issuer); the supervisor whose command lost says so at once
-  (an "in_force" event naming the winner's epoch and publisher, with its own epoch as superseded),
-  its `wait converged` on the lost command ends, and its metrics, `show` and summary are about the
-  command the agents follow, not its own shape. A second commander built from the project's types
-  then publishes the very epoch in force (a certain tie): the agents still agree.
+- Two supervisors command at the same moment (started together, each with a script that commands at
+  once: both publish epoch 1 before they hear each other). Every agent ends on the same command, the
+  greatest by (epoch, issuer); the supervisor whose command lost says so at once (an "in_force" event
+  naming the winner's epoch and publisher, with its own epoch as superseded), and its metrics, `show`
+  and summary are about the command the agents follow, not its own shape. A `wait converged` on a
+  command that the other supervisor then replaces ends at once, not met. A third commander built from
+  the project's types then publishes the very epoch in force (another tie): the agents still agree.
 - A supervisor killed and restarted learns the command in force (the operator's last one, not its
   config's) within 2 s from the copies the agents re-offer, shows metrics, `wait converged` succeeds,
   its `start` keeps the command, an agent started after it gets the command although nobody commands,
@@ -18,7 +18,6 @@ and absurd epochs.
   supervisor's later commands are obeyed.
 """
 import os
-import signal
 import sys
 import time
 
@@ -63,48 +62,35 @@ class AuthorityTest(harness.SwarmTestCase):
                        what="the supervisor to report epoch %d refused" % epoch)
 
     def test_rival_commanders(self):
-        a = self.start_supervisor(self.config, extra=self.sets, name="supervisor_a")
-        b = self.start_supervisor(self.config, extra=self.sets, name="supervisor_b")
-        agents = self.start_agents(AGENTS, self.config, seed=1, extra=self.sets)
-        self.assertTrue(a.wait_agents(AGENTS, 60) and b.wait_agents(AGENTS, 60), "both supervisors hear every agent")
-        self.assertEqual(a.command("start"), 1)
-        harness.poll(lambda: self.agents_follow(agents, 1), 20, "every agent to follow epoch 1")
-        # B did not publish: A's command is in force for it (learnt, not its own).
-        e = b.wait_event("in_force", 10, what="supervisor B to learn epoch 1")
-        self.assertEqual((e["epoch"], e["own"], e["superseded"]), (1, False, None))
-
-        # The same moment: both paused, both lines queued, both resumed together. Each usually publishes
-        # before it hears the other, so both take the same epoch; a few rounds make a tie likely.
-        for round_ in range(1, 6):
-            marks = {p: p.mark() for p in (a, b)}
-            for p in (a, b):
-                p.signal(signal.SIGSTOP)
-            a.send("shape circle r=3")
-            b.send("shape square a=5")
-            for p in (a, b):
-                p.signal(signal.SIGCONT)
-            pub = {p: p.wait_event("epoch", 10, marks[p], what="%s to publish its command" % p.name) for p in (a, b)}
-            if pub[a]["epoch"] == pub[b]["epoch"]:
-                break
+        # The agents first, hearing each other; then two supervisors started at the same moment, each
+        # with a script whose first line commands: neither has heard the other when it publishes, so
+        # both publish epoch 1.
+        agents = self.start_meshed_agents(AGENTS, self.config, extra=self.sets)
+        a_script = self.write("a.script", "shape circle r=3\n")
+        b_script = self.write("b.script", "shape square a=5\n")
+        a = self.start_supervisor(self.config, script=a_script, extra=self.sets, name="supervisor_a")
+        b = self.start_supervisor(self.config, script=b_script, extra=self.sets, name="supervisor_b")
+        pub = {p: p.wait_event("epoch", 10, what="%s to publish its command" % p.name) for p in (a, b)}
+        sys.stderr.write("rival commands: %s epoch %d [%s], %s epoch %d [%s]\n" % (
+            a.name, pub[a]["epoch"], pub[a]["issuer"], b.name, pub[b]["epoch"], pub[b]["issuer"]))
+        self.assertEqual((pub[a]["epoch"], pub[b]["epoch"]), (1, 1), "both commanded epoch 1 at the same moment")
+        self.assertNotEqual(pub[a]["issuer"], pub[b]["issuer"])
         winner, loser = (a, b) if command_key(pub[a]) > command_key(pub[b]) else (b, a)
         w, lo = pub[winner], pub[loser]
-        sys.stderr.write("rival commands, round %d: %s epoch %d [%s], %s epoch %d [%s]: %s\n" % (
-            round_, a.name, pub[a]["epoch"], pub[a]["issuer"], b.name, pub[b]["epoch"], pub[b]["issuer"],
-            "a tie of epochs, broken by the issuer" if pub[a]["epoch"] == pub[b]["epoch"] else "no tie"))
         self.assertTrue(w["own"] and lo["own"])
 
         # Every agent ends on the winner's command; no agent stays on the loser's.
         harness.poll(lambda: self.agents_follow(agents, w["epoch"], w["issuer"]), 20,
                      "every agent to follow %s's epoch %d" % (winner.name, w["epoch"]))
         # The loser says so at once, measures the command followed and shows it.
-        e = loser.wait_event("in_force", 10, marks[loser], where=lambda e: e["superseded"] == lo["epoch"],
+        e = loser.wait_event("in_force", 10, where=lambda e: e["superseded"] == lo["epoch"],
                              what="%s to report its epoch superseded" % loser.name)
         self.assertEqual((e["epoch"], e["issuer"], e["own"]), (w["epoch"], w["issuer"], False))
         self.assertIn("shapeform_supervisor on ", e["publisher"])
         self.assertIn("pid %d" % winner.pid, e["publisher"])
-        m = loser.metrics()
+        m = harness.poll(lambda: (lambda m: m if m["agents"] == AGENTS else None)(loser.metrics()), 20,
+                         "%s to measure the %d agents" % (loser.name, AGENTS), 0.2)
         self.assertEqual((m["epoch"], m["issuer"], m["own"]), (w["epoch"], w["issuer"], False))
-        self.assertEqual(m["agents"], AGENTS)
         show = loser.ask("show", "show")
         self.assertEqual((show["epoch"], show["own"], show["superseded"]), (w["epoch"], False, lo["epoch"]))
         self.assertEqual(show["command"]["shape"]["kind"], w["shape"])
