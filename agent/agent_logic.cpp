@@ -10,10 +10,29 @@ AgentLogic::AgentLogic(std::int32_t id, core::Vec2 start, std::int64_t timeout_n
                        int max_wait_ticks)
     : id_(id), x_(start), x_prev_(start), timeout_ns_(timeout_ns), lockstep_(lockstep), max_wait_ticks_(max_wait_ticks) {}
 
-bool AgentLogic::on_command(const core::CompiledCommand& cmd, std::uint32_t epoch) {
-  if (epoch <= epoch_) return false;
-  cmd_ = cmd;
-  epoch_ = epoch;
+dds::CommandArbiter::Verdict AgentLogic::on_command(const dds::CommandSample& c) {
+  const auto v = arbiter_.offer(c, peer_floor());
+  if (v == dds::CommandArbiter::Verdict::Refused) ++counters_.samples_rejected;
+  if (v == dds::CommandArbiter::Verdict::Adopted) adopt();
+  return v;
+}
+
+bool AgentLogic::recheck_commands() {
+  if (!arbiter_.has_refused() || !arbiter_.recheck(peer_floor())) return false;
+  adopt();
+  return true;
+}
+
+std::uint64_t AgentLogic::peer_floor() const {
+  std::uint64_t floor = 0;
+  for (const auto& [id, e] : table_)
+    if (!e.cur.command.none() && (floor == 0 || e.cur.command.epoch < floor)) floor = e.cur.command.epoch;
+  return floor;
+}
+
+void AgentLogic::adopt() {
+  const dds::CommandId command = arbiter_.id();
+  cmd_ = arbiter_.current().command;
   t_ = 0.0;
   waited_ = 0;
   x_prev_ = x_;
@@ -22,15 +41,14 @@ bool AgentLogic::on_command(const core::CompiledCommand& cmd, std::uint32_t epoc
     // A late joiner starts at the step the swarm is at, so nobody waits for its past.
     long k0 = 0;
     for (const auto& [id, e] : table_)
-      if (e.cur.epoch == epoch) k0 = std::max(k0, step_of(e.cur.model_time));
+      if (e.cur.command == command) k0 = std::max(k0, step_of(e.cur.model_time));
     t_ = static_cast<double>(k0) * cmd_.dt;
   }
-  if (target_ && target_->epoch != epoch) target_.reset();
-  return true;
+  if (target_ && target_->command != command) target_.reset();
 }
 
 void AgentLogic::on_target(const TargetSample& t, std::int64_t now_ns) {
-  if (t.epoch != epoch_) return;  // a target of another command (older, or not adopted yet)
+  if (t.command != arbiter_.id()) return;  // a target of another command (older, or not adopted yet)
   if (target_ && t.model_time < target_->model_time) return;  // out of order
   target_ = t;
   target_age_ = 0.0;
@@ -38,13 +56,13 @@ void AgentLogic::on_target(const TargetSample& t, std::int64_t now_ns) {
 }
 
 void AgentLogic::on_state(std::int32_t id, const core::Vec2& x, std::uint64_t seq, std::int64_t now_ns,
-                          std::uint32_t epoch, std::optional<double> arc, double model_time,
+                          dds::CommandId command, std::optional<double> arc, double model_time,
                           std::optional<core::Vec2> prev_x, std::optional<double> prev_arc) {
   if (id == id_) return;
-  const Snapshot snap{x, epoch, model_time, arc};
+  const Snapshot snap{x, command, model_time, arc};
   // The sender's previous step comes with the sample: a lost sample never leaves a hole in lockstep.
   const std::optional<Snapshot> before =
-      prev_x ? std::optional<Snapshot>(Snapshot{*prev_x, epoch, model_time - cmd_.dt, prev_arc}) : std::nullopt;
+      prev_x ? std::optional<Snapshot>(Snapshot{*prev_x, command, model_time - cmd_.dt, prev_arc}) : std::nullopt;
   auto it = table_.find(id);
   if (it == table_.end()) {
     table_.emplace(id, Entry{now_ns, seq, snap, before.value_or(snap)});
@@ -53,7 +71,7 @@ void AgentLogic::on_state(std::int32_t id, const core::Vec2& x, std::uint64_t se
     if (seq <= e.seq) return;  // duplicate or reordered: keep the newest
     counters_.samples_lost += seq - e.seq - 1;
     if (before) e.prev = *before;
-    else if (snap.epoch != e.cur.epoch || snap.model_time != e.cur.model_time) e.prev = e.cur;
+    else if (snap.command != e.cur.command || snap.model_time != e.cur.model_time) e.prev = e.cur;
     e.cur = snap;
     e.seq = seq;
     e.last_seen_ns = now_ns;
@@ -112,6 +130,7 @@ bool AgentLogic::step() {
     return false;
   }
   const bool arc_law = cmd_.law == core::Law::Arc;
+  const dds::CommandId followed = arbiter_.id();
   const long k = step_of(t_);
   nbrs_.clear();
   bool ready = true;
@@ -121,11 +140,11 @@ bool AgentLogic::step() {
     const Snapshot* use = &e.cur;
     if (lockstep_) {
       const long cur = step_of(e.cur.model_time);
-      if (e.cur.epoch != epoch_ || cur < k) ready = false;
-      else if (cur > k && e.prev.epoch == epoch_ && step_of(e.prev.model_time) == k) use = &e.prev;
+      if (e.cur.command != followed || cur < k) ready = false;
+      else if (cur > k && e.prev.command == followed && step_of(e.prev.model_time) == k) use = &e.prev;
     }
     core::Neighbour n{id, use->x};
-    if (arc_law && use->epoch == epoch_ && use->arc) n.s = *use->arc;
+    if (arc_law && use->command == followed && use->arc) n.s = *use->arc;
     nbrs_.push_back(n);
   }
   if (lockstep_ && !ready) {

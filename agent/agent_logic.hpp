@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/compiled_command.hpp"
+#include "dds/command_arbiter.hpp"
 #include "dds/samples.hpp"
 
 namespace shapeform::agent {
@@ -34,18 +35,23 @@ class AgentLogic {
   AgentLogic(std::int32_t id, core::Vec2 start, std::int64_t timeout_ns, bool lockstep = false,
              int max_wait_ticks = 50);
 
-  /// Adopts cmd if epoch is newer than the one followed; returns whether it did. Model time restarts.
-  bool on_command(const core::CompiledCommand& cmd, std::uint32_t epoch);
-  /// Keeps the newest target of the followed epoch, received at now_ns.
+  /// A received command, judged by dds::CommandArbiter (commands ordered by epoch then issuer; an
+  /// absurd epoch jump refused and counted); before its first command this agent judges jumps from the
+  /// lowest epoch its neighbours follow. When adopted, model time restarts.
+  dds::CommandArbiter::Verdict on_command(const dds::CommandSample& c);
+  /// Re-judges the commands refused as absurd jumps against the neighbours heard now (an agent that
+  /// joined a swarm whose epoch is far above 0 adopts its command once it hears it); true if it adopted.
+  bool recheck_commands();
+  /// Keeps the newest target of the followed command, received at now_ns.
   void on_target(const TargetSample& t, std::int64_t now_ns);
-  /// A valid neighbour state received at now_ns. Own samples are ignored. epoch and arc: the command
+  /// A valid neighbour state received at now_ns. Own samples are ignored. command and arc: the command
   /// the neighbour follows and its arc length along that command's shape (used by the arc law only
-  /// when the epoch is the one this agent follows).
+  /// when the command is the one this agent follows).
   /// model_time: the neighbour's model time after its last step (its step tag, for lockstep).
   /// prev_x / prev_arc: the sender's state one step earlier (carried in every sample so that a lost
   /// sample does not break lockstep).
   void on_state(std::int32_t id, const core::Vec2& x, std::uint64_t seq, std::int64_t now_ns,
-                std::uint32_t epoch = 0, std::optional<double> arc = std::nullopt, double model_time = 0.0,
+                dds::CommandId command = {}, std::optional<double> arc = std::nullopt, double model_time = 0.0,
                 std::optional<core::Vec2> prev_x = std::nullopt, std::optional<double> prev_arc = std::nullopt);
   /// The neighbour left (its instance was disposed or lost its writer): drop it now.
   void on_gone(std::int32_t id);
@@ -70,9 +76,11 @@ class AgentLogic {
   std::int32_t id() const { return id_; }
   const core::Vec2& position() const { return x_; }
   const core::Vec2& velocity() const { return v_; }
-  std::uint32_t epoch() const { return epoch_; }
+  /// The command followed (epoch 0: none yet), and that command's sample (only when has_command()).
+  dds::CommandId command_id() const { return arbiter_.id(); }
+  const dds::CommandSample& command_sample() const { return arbiter_.current(); }
   double model_time() const { return t_; }
-  bool has_command() const { return epoch_ != 0; }
+  bool has_command() const { return arbiter_.has_command(); }
   const core::CompiledCommand& command() const { return cmd_; }
   int neighbours() const { return static_cast<int>(table_.size()); }
   const AgentCounters& counters() const { return counters_; }
@@ -88,7 +96,7 @@ class AgentLogic {
  private:
   struct Snapshot {
     core::Vec2 x;
-    std::uint32_t epoch;
+    dds::CommandId command;
     double model_time;  ///< the sender's model time after its step (step tag = model_time / dt)
     std::optional<double> arc;
   };
@@ -109,8 +117,12 @@ class AgentLogic {
   bool lockstep_;
   int max_wait_ticks_;
   int waited_ = 0;
-  core::CompiledCommand cmd_;
-  std::uint32_t epoch_ = 0;
+  /// Makes the arbiter's command the one integrated.
+  void adopt();
+  /// The lowest non-zero epoch the neighbours follow (0: none), the floor of a fresh agent's judgement.
+  std::uint64_t peer_floor() const;
+  dds::CommandArbiter arbiter_;
+  core::CompiledCommand cmd_;  ///< the arbiter's command (the default one before any)
   double t_ = 0.0;  ///< model time since the command was adopted
   std::optional<TargetSample> target_;
   double target_age_ = 0.0;  ///< model time since the target was received

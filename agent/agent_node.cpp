@@ -46,9 +46,9 @@ void emit(const nlohmann::json& j) { std::cout << j.dump() << std::endl; }
 class CommandCompiler {
  public:
   struct Result {
-    std::uint32_t epoch = 0;
+    std::uint64_t epoch = 0;
     bool ok = false;
-    core::CompiledCommand cmd;  ///< when ok
+    dds::CommandSample sample;  ///< when ok
     std::string error;          ///< when not ok
   };
   CommandCompiler() : worker_([this] { work(); }) {}
@@ -63,10 +63,11 @@ class CommandCompiler {
   CommandCompiler(const CommandCompiler&) = delete;
   CommandCompiler& operator=(const CommandCompiler&) = delete;
 
-  void submit(const msg::ShapeCommand& m) {
+  /// m as received from the participant `source` (its issuer when the command names none).
+  void submit(const msg::ShapeCommand& m, const dds::SourceId& source) {
     {
       const std::lock_guard<std::mutex> lock(mutex_);
-      todo_.push_back(m);
+      todo_.emplace_back(m, source);
     }
     wake_.notify_one();
   }
@@ -83,12 +84,12 @@ class CommandCompiler {
     while (true) {
       wake_.wait(lock, [this] { return stop_ || !todo_.empty(); });
       if (stop_) return;
-      const msg::ShapeCommand m = std::move(todo_.front());
+      const auto [m, source] = std::move(todo_.front());
       todo_.pop_front();
       lock.unlock();
       Result r;
       r.epoch = m.epoch();
-      r.ok = dds::from_msg(m, r.cmd, r.error);
+      r.ok = dds::from_msg(m, source, r.sample, r.error);
       lock.lock();
       done_.push_back(std::move(r));
     }
@@ -96,7 +97,7 @@ class CommandCompiler {
 
   std::mutex mutex_;
   std::condition_variable wake_;
-  std::deque<msg::ShapeCommand> todo_;
+  std::deque<std::pair<msg::ShapeCommand, dds::SourceId>> todo_;
   std::vector<Result> done_;
   bool stop_ = false;
   std::thread worker_;  ///< last: starts once the rest is built
@@ -146,6 +147,11 @@ class AgentNode {
   dds::Writer<msg::AgentStatus> status_writer_;
   dds::Reader<msg::AgentState> state_reader_;
   dds::Reader<msg::ShapeCommand> command_reader_;
+  /// Re-offers the command this process follows (transient-local, KEEP_LAST 1): it outlives its
+  /// publisher, for a supervisor started later and for agents that join while nobody commands.
+  dds::Writer<msg::ShapeCommand> command_relay_;
+  dds::CommandId relayed_;  ///< what command_relay_ offers now
+  std::uint64_t last_refused_epoch_ = 0;  ///< the last epoch refused as an absurd jump
   dds::Reader<msg::TrackingTarget> target_reader_;
   std::vector<dds::Received<msg::AgentState>> states_;
   std::vector<dds::Received<msg::ShapeCommand>> commands_;
@@ -179,6 +185,7 @@ AgentNode::AgentNode(const std::vector<std::int32_t>& ids, const std::vector<cor
       status_writer_(node_.writer<msg::AgentStatus>(dds::TopicId::Status)),
       state_reader_(node_.reader<msg::AgentState>(dds::TopicId::State)),
       command_reader_(node_.reader<msg::ShapeCommand>(dds::TopicId::Command)),
+      command_relay_(node_.writer<msg::ShapeCommand>(dds::TopicId::Command)),
       target_reader_(node_.reader<msg::TrackingTarget>(dds::TopicId::Target)),
       loop_(cfg.agent.rate_hz),
       log_every_(ticks_per(cfg.agent.rate_hz, 1.0)),
@@ -213,30 +220,57 @@ void AgentNode::reject(const char* what, const std::string& log_line, const std:
 
 void AgentNode::recover_from_stall() {
   const auto stall_s = node_.recover_if_stalled(1.0 / cfg_.agent.rate_hz);
-  if (stall_s && opt_.json) emit({{"event", "recovered"}, {"stall_s", *stall_s}});
+  if (!stall_s) return;
+  // The new re-offer writer starts empty: offer the command followed again.
+  if (!relayed_.none()) {
+    const dds::CommandSample& s = logics_.front()->command_sample();
+    if (!command_relay_.write(dds::to_msg(s.command, s.id, s.issuer_name))) util::log_warn("command re-offer failed");
+  }
+  if (opt_.json) emit({{"event", "recovered"}, {"stall_s", *stall_s}});
 }
 
 void AgentNode::drain_commands() {
-  // New commands go to the compiler; those it has finished are applied (compilation never runs here).
+  using Verdict = dds::CommandArbiter::Verdict;
+  // New commands go to the compiler; those it has finished are judged (compilation never runs here).
   command_reader_.drain(commands_);
   for (const auto& c : commands_)
-    if (c.valid_data) compiler_.submit(c.msg);
+    if (c.valid_data && c.source != node_.source()) compiler_.submit(c.msg, c.source);  // not our own re-offer
   compiler_.take(compiled_);
   for (const auto& c : compiled_) {
     if (!c.ok) {
       reject("command", "command epoch " + std::to_string(c.epoch) + " rejected: " + c.error, c.error, true);
       continue;
     }
-    const core::CompiledCommand& cmd = c.cmd;
-    bool adopted = false;
-    for (auto& l : logics_) adopted = l->on_command(cmd, c.epoch) || adopted;
-    if (!adopted) continue;
-    const std::string shape(core::to_string(cmd.shape.kind));
-    util::log_info("following command epoch " + std::to_string(c.epoch) + ": " + shape +
-                   (cmd.tracking.enabled ? " (tracking)" : ""));
-    if (opt_.json)
-      emit({{"event", "command"}, {"epoch", c.epoch}, {"shape", shape}, {"tracking", cmd.tracking.enabled}});
+    const dds::CommandSample& cmd = c.sample;
+    bool refused = false;
+    for (auto& l : logics_) refused = l->on_command(cmd) == Verdict::Refused || refused;  // each counts it
+    if (refused) {
+      const std::string why = "epoch " + std::to_string(cmd.id.epoch) + " of " +
+                              dds::describe_issuer(cmd.issuer_name, cmd.id.issuer) + " is more than " +
+                              std::to_string(dds::kMaxEpochJump) + " above epoch " +
+                              std::to_string(logics_.front()->command_id().epoch) + ": refused";
+      // Each new epoch refused is reported; a publisher repeating one is throttled.
+      const bool fresh = cmd.id.epoch != last_refused_epoch_;
+      last_refused_epoch_ = cmd.id.epoch;
+      if (fresh) util::log_warn("command " + why);
+      if ((fresh || throttled_.warn("command jump", "command " + why)) && opt_.json)
+        emit({{"event", "rejected"}, {"what", "command"}, {"why", why}, {"epoch", cmd.id.epoch}});
+    }
   }
+  for (auto& l : logics_) l->recheck_commands();
+  const AgentLogic& first = *logics_.front();
+  if (first.command_id() == relayed_) return;
+  // A new command is followed: say so, and re-offer it as received (epoch, issuer and name kept).
+  const dds::CommandSample& s = first.command_sample();
+  relayed_ = s.id;
+  const std::string shape(core::to_string(s.command.shape.kind));
+  const std::string issuer = dds::describe_issuer(s.issuer_name, s.id.issuer);
+  util::log_info("following command epoch " + std::to_string(s.id.epoch) + " of " + issuer + ": " + shape +
+                 (s.command.tracking.enabled ? " (tracking)" : ""));
+  if (opt_.json)
+    emit({{"event", "command"}, {"epoch", s.id.epoch}, {"issuer", dds::to_string(s.id.issuer)},
+          {"publisher", issuer}, {"shape", shape}, {"tracking", s.command.tracking.enabled}});
+  if (!command_relay_.write(dds::to_msg(s.command, s.id, s.issuer_name))) util::log_warn("command re-offer failed");
 }
 
 void AgentNode::drain_targets() {
@@ -268,7 +302,7 @@ void AgentNode::drain_states() {
       continue;
     }
     for (auto& l : logics_)  // own id ignored
-      l->on_state(s.id, s.x, s.seq, r.receive_stamp_ns, s.epoch, s.arc, s.model_time, s.prev_x, s.prev_arc);
+      l->on_state(s.id, s.x, s.seq, r.receive_stamp_ns, s.command, s.arc, s.model_time, s.prev_x, s.prev_arc);
     // Data age of samples from agents hosted elsewhere (a process's own samples are not a delivery).
     if (!hosted(s.id) && ages_us_.size() < ages_us_.capacity())
       ages_us_.push_back(static_cast<double>(r.receive_stamp_ns - s.stamp_ns) * 1e-3);
@@ -299,7 +333,7 @@ void AgentNode::publish() {
     s.id = l->id();
     s.seq = seq_;
     s.stamp_ns = stamp_ns_;
-    s.epoch = l->epoch();
+    s.command = l->command_id();
     s.model_time = l->model_time();
     s.x = l->position();
     s.v = l->velocity();
@@ -334,7 +368,7 @@ void AgentNode::publish_status() {
     st.samples_rejected = k.samples_rejected;
     st.samples_received = k.samples_received;
     st.samples_lost = k.samples_lost;
-    st.epoch = l->epoch();
+    st.epoch = l->command_id().epoch;
     status_writer_.write(dds::to_msg(st));
     if (opt_.json)
       emit({{"event", "status"}, {"id", st.id}, {"neighbours_heard", st.neighbours_heard}, {"epoch", st.epoch},

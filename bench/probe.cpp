@@ -66,21 +66,22 @@ int run(const config::Config& cfg, const std::filesystem::path& dir) {
         dds::StatusSample s;
         std::string why;
         if (!r.valid_data || !dds::from_msg(r.msg, s, why)) continue;
-        std::fprintf(status_csv, "%lld,%d,%lld,%llu,%llu,%.1f,%.1f,%d,%llu,%llu,%llu,%llu,%.1f,%.1f,%.2f,%.2f,%u\n",
+        std::fprintf(status_csv, "%lld,%d,%lld,%llu,%llu,%.1f,%.1f,%d,%llu,%llu,%llu,%llu,%.1f,%.1f,%.2f,%.2f,%llu\n",
                      static_cast<long long>(r.receive_stamp_ns), s.id, static_cast<long long>(s.stamp_ns),
                      static_cast<unsigned long long>(s.ticks), static_cast<unsigned long long>(s.overruns),
                      s.lateness_max_us, s.lateness_p99_us, s.neighbours_heard,
                      static_cast<unsigned long long>(s.stale_dropped), static_cast<unsigned long long>(s.samples_rejected),
                      static_cast<unsigned long long>(s.samples_received),
                      static_cast<unsigned long long>(s.samples_lost), s.age_p50_us, s.age_p99_us, s.cpu_percent,
-                     s.rss_mb, s.epoch);
+                     s.rss_mb, static_cast<unsigned long long>(s.epoch));
       }
       metrics_reader.drain(metrics);
       for (const auto& r : metrics) {
         if (!r.valid_data) continue;
         const auto& m = r.msg;
         const core::Metrics values = dds::from_msg(m);
-        std::fprintf(metrics_csv, "%lld,%u,%.3f,%d", static_cast<long long>(r.receive_stamp_ns), m.epoch(),
+        std::fprintf(metrics_csv, "%lld,%llu,%.3f,%d", static_cast<long long>(r.receive_stamp_ns),
+                     static_cast<unsigned long long>(m.epoch()),
                      m.model_time(), m.agents_alive());
         for (const auto* info : kProbeMetrics) std::fprintf(metrics_csv, ",%.6f", info->get(values).value_or(-1.0));
         std::fprintf(metrics_csv, ",%d\n", m.converged() ? 1 : 0);

@@ -551,9 +551,14 @@ Action parse_tokens(const Tokens& t, const core::CompiledCommand& current) {
     if (word == "resume") return Resume{};
     return Hold{word == "stop"};
   }
-  if (word == "status" || word == "quit" || word == "exit" || word == "start" || word == "show") {
+  if (word == "start") {
+    const Args a(word, t, 1, {}, 1);
+    if (a.positionals() == 1 && a.positional(0) != "replace")
+      fail("start: unexpected argument '" + a.positional(0) + "' (expected replace)");
+    return StartScenario{a.positionals() == 1};
+  }
+  if (word == "status" || word == "quit" || word == "exit" || word == "show") {
     const Args a(word, t, 1, {}, 0);
-    if (word == "start") return StartScenario{};
     if (word == "status") return Status{};
     if (word == "show") return Show{};
     return Quit{};
@@ -686,10 +691,13 @@ const std::vector<HelpEntry>& help_entries() {
    field("dynamics.k_tangent").bounds() + ")\n"
    "  spacing    gap between agents on an unbounded curve such as the line " + in("dynamics.spacing") + "\n"},
   {"start",
-   "start                                                       publish the scenario of --config\n",
-   "start\n"
+   "start [replace]                                             publish the scenario of --config\n",
+   "start [replace]\n"
    "  Publishes the command of the supervisor's --config file (shape, tracking, gains,\n"
-   "  integrator) as a new epoch. The launcher runs it once every agent is heard.\n"},
+   "  integrator) as a new epoch. The launcher runs it once every agent is heard. When a command\n"
+   "  is in force already (published before this supervisor started, by it or by another\n"
+   "  participant), plain 'start' keeps it and says so, unless the supervisor was started with\n"
+   "  --command-on-start replace; 'start replace' publishes the scenario anyway.\n"},
   {"hold",
    "hold                                                        freeze the swarm where it is\n",
    "hold\n"

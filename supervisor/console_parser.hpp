@@ -75,8 +75,11 @@ struct Help {
 };
 /// `quit` or `exit`.
 struct Quit {};
-/// Publish the supervisor's configured scenario (its --config command) as a new epoch.
-struct StartScenario {};
+/// `start [replace]`: publish the supervisor's configured scenario (its --config command) as a new
+/// epoch; without `replace`, a command already in force is kept (unless --command-on-start replace).
+struct StartScenario {
+  bool replace = false;
+};
 /// `hold`, or `stop` (the emergency alias, same effect): the caller publishes the command in force
 /// with Command::hold set (a new epoch): every agent keeps its position, model time stands still.
 struct Hold {

@@ -14,7 +14,14 @@ int main(int argc, char** argv) {
   app.cli().add_flag("--json", opt.json,
                      "machine output: stdout carries only JSON lines, one event each (epoch, wait, status, metrics, "
                      "agent, record, and the exit summary); human text goes to stderr");
+  std::string on_start = "keep";
+  app.cli()
+      .add_option("--command-on-start", on_start,
+                   "what `start` does when a command is in force that this supervisor did not publish (one "
+                   "published before it started): keep it (default) or replace it with the --config scenario")
+      ->check(CLI::IsMember({"keep", "replace"}));
   if (const auto rc = app.parse(argc, argv)) return *rc;
+  opt.replace_on_start = on_start == "replace";
   const auto cfg = app.load_config();
   if (!cfg) return supervisor::kExitBadInput;
   return supervisor::run_supervisor(*cfg, opt);

@@ -88,8 +88,8 @@ std::vector<AgentRow> agent_rows(const SwarmMonitor& monitor, std::int64_t now_n
     r.departed = a.departed;
     r.last_seen_s = static_cast<double>(now_ns - a.last_seen_ns) * 1e-9;
     r.x = a.x;
-    r.epoch = a.epoch;
-    if (shape && a.epoch == monitor.epoch()) r.shape_error = (a.x - core::target_point(*shape, cmd->curve(), a.x)).norm();
+    r.epoch = a.command.epoch;
+    if (shape && a.command == monitor.command_id()) r.shape_error = (a.x - core::target_point(*shape, cmd->curve(), a.x)).norm();
     r.neighbours_heard = a.neighbours_heard;
     rows.push_back(r);
   }
@@ -103,8 +103,8 @@ std::string status_table(const std::vector<AgentRow>& rows) {
                 "x1", "x2", "epoch", "shape_error", "heard");
   o << line;
   for (const AgentRow& r : rows) {
-    std::snprintf(line, sizeof line, "%6d %-6s %9.2fs %10.4f %10.4f %6u %11s %6s\n", r.id,
-                  r.alive ? "yes" : (r.departed ? "left" : "DEAD"), r.last_seen_s, r.x.x(), r.x.y(), r.epoch,
+    std::snprintf(line, sizeof line, "%6d %-6s %9.2fs %10.4f %10.4f %6llu %11s %6s\n", r.id,
+                  r.alive ? "yes" : (r.departed ? "left" : "DEAD"), r.last_seen_s, r.x.x(), r.x.y(), static_cast<unsigned long long>(r.epoch),
                   fmt_opt(r.shape_error).c_str(), count_or_dash(r.neighbours_heard).c_str());
     o << line;
   }
@@ -112,7 +112,7 @@ std::string status_table(const std::vector<AgentRow>& rows) {
   return o.str();
 }
 
-nlohmann::json status_json(const std::vector<AgentRow>& rows, std::uint32_t epoch, double model_time) {
+nlohmann::json status_json(const std::vector<AgentRow>& rows, std::uint64_t epoch, double model_time) {
   nlohmann::json agents = nlohmann::json::array();
   for (const AgentRow& r : rows)
     agents.push_back({{"id", r.id},
@@ -141,7 +141,7 @@ std::string progress_line(const SwarmMonitor::Sample& s, const core::Command& cu
   return o.str();
 }
 
-nlohmann::json metrics_answer(const SwarmMonitor::Sample& s, std::uint32_t epoch) {
+nlohmann::json metrics_answer(const SwarmMonitor::Sample& s, std::uint64_t epoch) {
   nlohmann::json j = app::metrics_json(s.metrics);
   j["epoch"] = epoch;
   j["model_time"] = s.model_time;
@@ -150,7 +150,7 @@ nlohmann::json metrics_answer(const SwarmMonitor::Sample& s, std::uint32_t epoch
   return j;
 }
 
-std::string metrics_table(const SwarmMonitor::Sample& s, std::uint32_t epoch) {
+std::string metrics_table(const SwarmMonitor::Sample& s, std::uint64_t epoch) {
   std::ostringstream o;
   o << "epoch " << epoch << ", model time t=" << fmt_opt(s.model_time, "%.4g") << ", " << s.alive << " agents alive, "
     << s.following << " following, " << (s.converged ? std::string("converged") : std::string("not converged (") + core::to_string(s.why) + ")") << '\n';
@@ -170,7 +170,7 @@ void ProgressFilter::every(double seconds) {
   every_ns_ = static_cast<std::int64_t>(std::min(seconds, 1e9) * 1e9);
 }
 
-bool ProgressFilter::changed(const SwarmMonitor::Sample& s, std::uint32_t epoch) const {
+bool ProgressFilter::changed(const SwarmMonitor::Sample& s, std::uint64_t epoch) const {
   if (!last_) return true;
   const SwarmMonitor::Sample& l = *last_;
   if (s.alive != l.alive || s.following != l.following || epoch != last_epoch_ || s.converged != l.converged)
@@ -185,7 +185,7 @@ bool ProgressFilter::changed(const SwarmMonitor::Sample& s, std::uint32_t epoch)
   return false;
 }
 
-bool ProgressFilter::due(const SwarmMonitor::Sample& s, std::uint32_t epoch, std::int64_t now_ns) {
+bool ProgressFilter::due(const SwarmMonitor::Sample& s, std::uint64_t epoch, std::int64_t now_ns) {
   bool print = false;
   switch (mode_) {
     case Mode::Off: print = false; break;
@@ -205,14 +205,18 @@ std::string show_text(const ShowInfo& info) {
   const core::ShapeSpec& sh = c.shape;
   std::ostringstream o;
   if (info.epoch == 0) {
-    o << "nothing published by this supervisor yet; below is its --config scenario (`start` publishes it)\n";
+    o << "no command in force yet; below is this supervisor's --config scenario (`start` publishes it)\n";
     if (info.agents_epoch != 0)
-      o << "the agents follow epoch " << info.agents_epoch << ", published by another participant\n";
+      o << "the agents follow epoch " << info.agents_epoch << ", published by another participant (not heard yet)\n";
   } else {
-    o << "epoch " << info.epoch << ", published by this supervisor " << fmt_opt(info.published_s_ago, "%.1f")
-      << " s ago; " << info.following << " of " << info.alive << " agents follow it\n";
+    o << "epoch " << info.epoch << ", published by "
+      << (info.own ? std::string("this supervisor ") : info.publisher + " (another participant), learnt ")
+      << fmt_opt(info.published_s_ago, "%.1f") << " s ago; " << info.following << " of " << info.alive
+      << " agents follow it\n";
+    if (info.superseded != 0)
+      o << "this supervisor's epoch " << info.superseded << " was superseded by it\n";
     if (info.agents_epoch > info.epoch)
-      o << "the agents follow epoch " << info.agents_epoch << ", published by another participant since\n";
+      o << "some agents follow epoch " << info.agents_epoch << ", not heard on the command topic yet\n";
   }
   std::ostringstream shape;
   shape << shape_parameters(sh);
@@ -265,6 +269,7 @@ nlohmann::json summary_json(const Summary& s) {
   }
   j["final_model_times"] = s.final_model_times;  // each agent's own model time
   j["samples_rejected"] = s.samples_rejected;
+  j["commands_refused"] = s.commands_refused;
   j["recording"] = or_null(s.recording);
   j["exit_status"] = s.exit_status;
   return j;

@@ -27,7 +27,7 @@ struct AgentRow {
   bool departed = false;      ///< not alive because it left cleanly (else: silent, "DEAD")
   double last_seen_s = 0.0;   ///< seconds since its last state
   core::Vec2 x = core::Vec2::Zero();
-  std::uint32_t epoch = 0;    ///< command epoch it follows
+  std::uint64_t epoch = 0;    ///< command epoch it follows
   std::optional<double> shape_error;    ///< |x - x_T(x)| when it follows the current command
   std::optional<int> neighbours_heard;  ///< from its latest AgentStatus
 };
@@ -42,17 +42,18 @@ std::string status_table(const std::vector<AgentRow>& rows);
 
 /// {"event":"status","epoch":E,"model_time":T,"agents":[{"id","alive","last_seen_s","x","y","epoch",
 /// "shape_error" (null when unknown),"neighbours_heard" (null when unknown)}, ...]}.
-nlohmann::json status_json(const std::vector<AgentRow>& rows, std::uint32_t epoch, double model_time);
+nlohmann::json status_json(const std::vector<AgentRow>& rows, std::uint64_t epoch, double model_time);
 
 /// The progress line logged about once a second.
 std::string progress_line(const SwarmMonitor::Sample& s, const core::Command& current);
 
-/// The `metrics` answer: every metric (app::metrics_json), epoch, model_time, converged, verdict (core::to_string(ConvergenceDetector::Why): why not converged).
-nlohmann::json metrics_answer(const SwarmMonitor::Sample& s, std::uint32_t epoch);
+/// The `metrics` answer: every metric (app::metrics_json), epoch, model_time, converged, verdict
+/// (core::to_string(ConvergenceDetector::Why): why not converged).
+nlohmann::json metrics_answer(const SwarmMonitor::Sample& s, std::uint64_t epoch);
 
 /// The `metrics` table: a heading line (epoch, model time, agents, converged), then one row per metric
 /// of the metric table: name, value to 4 significant digits ("-" when undefined), unit.
-std::string metrics_table(const SwarmMonitor::Sample& s, std::uint32_t epoch);
+std::string metrics_table(const SwarmMonitor::Sample& s, std::uint64_t epoch);
 
 /// Decides when the progress line is printed: on change (the default), every S seconds, or never.
 /// "Changed" means: the agents alive or following, the epoch, the converged flag or the cluster count
@@ -71,37 +72,40 @@ class ProgressFilter {
   void every(double seconds);
   /// True when the line for `s` (epoch `epoch`) should be printed at `now_ns`; it is then the
   /// reference for the next decision.
-  bool due(const SwarmMonitor::Sample& s, std::uint32_t epoch, std::int64_t now_ns);
+  bool due(const SwarmMonitor::Sample& s, std::uint64_t epoch, std::int64_t now_ns);
 
  private:
   enum class Mode { OnChange, Every, Off };
-  bool changed(const SwarmMonitor::Sample& s, std::uint32_t epoch) const;
+  bool changed(const SwarmMonitor::Sample& s, std::uint64_t epoch) const;
   Mode mode_ = Mode::OnChange;
   std::int64_t every_ns_ = 0;
   std::optional<SwarmMonitor::Sample> last_;
-  std::uint32_t last_epoch_ = 0;
+  std::uint64_t last_epoch_ = 0;
   std::int64_t last_ns_ = 0;
 };
 
 /// What `show` knows about the command in force.
 struct ShowInfo {
-  core::Command command;           ///< this supervisor's current command (or its --config one)
-  std::uint32_t epoch = 0;         ///< the epoch this supervisor published last; 0: none yet
-  double published_s_ago = 0.0;    ///< wall seconds since it published that epoch
-  std::uint32_t agents_epoch = 0;  ///< the newest epoch any agent follows (0: none heard)
+  core::Command command;           ///< the command in force (before any: the --config one)
+  std::uint64_t epoch = 0;         ///< its epoch; 0: none in force yet
+  bool own = true;                 ///< published by this supervisor (else learnt from the command topic)
+  std::string publisher;           ///< who published it, when not this supervisor ("NAME [GUID prefix]")
+  double published_s_ago = 0.0;    ///< wall seconds since it was published (own) or learnt (another's)
+  std::uint64_t superseded = 0;    ///< this supervisor's own last epoch when another's replaced it; 0: none
+  std::uint64_t agents_epoch = 0;  ///< the newest epoch any agent follows (0: none heard)
   int alive = 0;
-  int following = 0;               ///< alive agents on `epoch`
+  int following = 0;               ///< alive agents on the command in force
 };
 
-/// The `show` answer: who published the command in force and when, then one line each for the
-/// shape, tracking, law, gains, integrator and speed limit.
+/// The `show` answer: the epoch in force, who published it and when, how many agents follow it,
+/// then one line each for the shape, tracking, law, gains, integrator and speed limit.
 std::string show_text(const ShowInfo& info);
 
 /// What the exit summary reports.
 struct Summary {
   std::string name;             ///< the config's name
   core::Command command;        ///< in force at the end
-  std::uint32_t epoch = 0;
+  std::uint64_t epoch = 0;
   SwarmMonitor::Sample sample;  ///< measured at the end (its model_time is the summary's)
   std::size_t agents_seen = 0;
   std::optional<double> settle_time;  ///< model time the current epoch settled at
@@ -109,13 +113,15 @@ struct Summary {
   std::vector<std::pair<std::int32_t, core::Vec2>> final_positions;
   std::vector<double> final_model_times;
   std::uint64_t samples_rejected = 0;
+  std::uint64_t commands_refused = 0;  ///< commands refused: invalid, or an absurd epoch jump
   std::optional<std::string> recording;  ///< the folder being recorded into
   int exit_status = 0;
 };
 
 /// The summary as one JSON object: every metric (centroid_error and ring_error only when tracking),
 /// name, shape, law, tracking, epoch, model_time, dt, steps, agents_seen, converged, verdict, settle_step,
-/// final_ids, final_positions, final_model_times, samples_rejected, recording, exit_status, and
+/// final_ids, final_positions, final_model_times, samples_rejected, commands_refused, recording,
+/// exit_status, and
 /// "event":"summary".
 nlohmann::json summary_json(const Summary& s);
 

@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <string>
 #include <system_error>
+#include <type_traits>
 
 #include "core/metric_table.hpp"
 
@@ -19,7 +20,8 @@ void append(std::string& out, double v) {
   out.append(buf, res.ptr);
 }
 
-void append(std::string& out, std::int64_t v) {
+template <class Int, class = std::enable_if_t<std::is_integral_v<Int>>>
+void append(std::string& out, Int v) {
   char buf[24];
   const auto res = std::to_chars(buf, buf + sizeof buf, v);
   out.append(buf, res.ptr);

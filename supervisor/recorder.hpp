@@ -17,7 +17,7 @@ namespace shapeform::supervisor {
 struct MetricsRow {
   double wall_s = 0.0;      ///< seconds since the supervisor started (steady clock)
   double model_time = 0.0;  ///< model time of the sample
-  std::int64_t epoch = 0;   ///< command epoch (incremented with every new command)
+  std::uint64_t epoch = 0;  ///< epoch of the command measured against (the one in force)
   int agents_alive = 0;
   core::Metrics metrics;   ///< metrics.agents is not written (agents_alive is)
   bool converged = false;  ///< written as 0 / 1

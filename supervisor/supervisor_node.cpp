@@ -10,11 +10,14 @@
 #include <memory>
 #include <set>
 
+#include <unistd.h>
+
 #include <nlohmann/json.hpp>
 
 #include "app/json.hpp"
 #include "console_input.hpp"
 #include "console_parser.hpp"
+#include "dds/command_arbiter.hpp"
 #include "dds/convert.hpp"
 #include "dds/node.hpp"
 #include "dds/participant.hpp"
@@ -88,9 +91,17 @@ class Supervisor {
     if (metrics_due) metrics_tick(now);
     run_input(now);
   }
+  /// The epoch of the command in force (0: none known).
+  std::uint64_t epoch() const { return arbiter_.id().epoch; }
+  /// Whether the command in force is this supervisor's own publication.
+  bool own() const { return arbiter_.has_command() && arbiter_.id().issuer == own_issuer_; }
+  /// Who published the command in force, in words ("" when none).
+  std::string publisher() const;
+  /// {"epoch", "issuer", "publisher", "own"} of the command in force, for the JSON events.
+  nlohmann::json in_force_json() const;
   /// Model time of the epoch in force by the supervisor's clock; it stands still while held.
   double model_time(std::int64_t now) const {
-    if (epoch_ == 0 || current_.hold) return 0.0;
+    if (epoch() == 0 || current_.hold) return 0.0;
     return static_cast<double>(now - epoch_start_ns_) * 1e-9 * cfg_.agent.rate_hz * current_.dt;
   }
   /// The model time the metrics are taken at: the supervisor's clock, or, in lockstep, where the agents
@@ -106,6 +117,14 @@ class Supervisor {
   /// After a stall longer than the peers' lease the participant is recreated (dds::Node).
   void recover_from_stall();
   void drain(std::int64_t now);
+  /// Takes in the command topic: another participant's command that wins the order is the one in
+  /// force from now (learnt); an absurd epoch jump is refused and counted.
+  void drain_commands(std::int64_t now);
+  /// The arbiter adopted another participant's command: measure against it, say so, end the waits
+  /// that were on the command it replaced.
+  void learnt(std::int64_t now);
+  /// `start`: whether a command is in force that this supervisor did not publish (it then keeps it).
+  bool foreign_command_in_force(std::int64_t now) const;
   /// --json: an "agent" event for every agent that became alive or stopped being alive.
   void report_membership(std::int64_t now);
   void publish_target(std::int64_t now);
@@ -131,9 +150,20 @@ class Supervisor {
   Output out_;
   SwarmMonitor monitor_;
   Recorder recorder_;
-  core::CompiledCommand current_;  ///< the command in force (or the config's, before any)
-  std::uint32_t epoch_ = 0;
-  std::int64_t epoch_start_ns_ = 0;
+  /// The command in force, as this supervisor knows it: its own or another participant's, heard on
+  /// the command topic (the publisher's sample, or the copy every agent re-offers).
+  dds::CommandArbiter arbiter_;
+  core::CompiledCommand current_;  ///< the arbiter's command (or the config's, before any)
+  std::int64_t epoch_start_ns_ = 0;  ///< when the command in force was published (own) or learnt
+  bool clock_synced_ = true;         ///< false: a learnt command whose model clock is still to take from the agents
+  std::uint64_t own_epoch_ = 0;      ///< the epoch this supervisor published last (0: none yet)
+  std::uint64_t superseded_ = 0;     ///< own_epoch_ once another participant's command replaced it
+  std::uint64_t commands_refused_ = 0;
+  std::uint64_t last_refused_epoch_ = 0;
+  std::string own_name_;             ///< how this supervisor names itself in its commands
+  /// The issuer of its commands: its first participant's GUID prefix, kept when a stall recreates the
+  /// participant, so that its commands stay its own (and keep their order) for it and for the agents.
+  dds::SourceId own_issuer_;
   std::int64_t start_ns_ = util::steady_ns();
 
   std::unique_ptr<dds::Node> node_;
@@ -142,6 +172,8 @@ class Supervisor {
   dds::Writer<msg::SwarmMetrics> metrics_writer_;
   dds::Reader<msg::AgentState> state_reader_;
   dds::Reader<msg::AgentStatus> status_reader_;
+  dds::Reader<msg::ShapeCommand> command_reader_;
+  std::vector<dds::Received<msg::ShapeCommand>> commands_;
   std::vector<dds::Received<msg::AgentState>> states_;
   std::vector<dds::Received<msg::AgentStatus>> statuses_;
   std::uint64_t rejected_ = 0;
@@ -152,22 +184,120 @@ class Supervisor {
   std::unique_ptr<ConsoleInput> console_;
   std::optional<Action> pending_;
   std::int64_t pending_deadline_ns_ = 0;
+  dds::CommandId pending_on_;  ///< the command in force when the pending wait began
   bool quit_ = false;
   int exit_status_ = kExitOk;
   ProgressFilter progress_;
   std::int64_t armed_quit_ns_ = -1;  ///< when Ctrl-C last found nothing to cancel (-1: not armed)
 };
 
+std::string Supervisor::publisher() const {
+  if (!arbiter_.has_command()) return "";
+  if (own()) return own_name_;
+  return dds::describe_issuer(arbiter_.current().issuer_name, arbiter_.id().issuer);
+}
+
+nlohmann::json Supervisor::in_force_json() const {
+  return {{"epoch", epoch()},
+          {"issuer", arbiter_.has_command() ? nlohmann::json(dds::to_string(arbiter_.id().issuer)) : nlohmann::json()},
+          {"publisher", arbiter_.has_command() ? nlohmann::json(publisher()) : nlohmann::json()},
+          {"own", own()}};
+}
+
+void Supervisor::drain_commands(std::int64_t now) {
+  using Verdict = dds::CommandArbiter::Verdict;
+  command_reader_.drain(commands_);
+  const std::uint64_t floor = monitor_.min_epoch_followed(now);
+  for (const auto& r : commands_) {
+    if (!r.valid_data || r.source == node_->source()) continue;  // our own publications are known
+    dds::CommandSample c;
+    std::string why;
+    if (!dds::from_msg(r.msg, r.source, c, why)) {
+      ++commands_refused_;
+      throttled_.warn("command", "command epoch " + std::to_string(r.msg.epoch()) + " rejected: " + why);
+      continue;
+    }
+    const Verdict v = arbiter_.offer(c, floor);
+    if (v == Verdict::Adopted) {
+      learnt(now);
+    } else if (v == Verdict::Refused) {
+      ++commands_refused_;
+      const std::string who = dds::describe_issuer(c.issuer_name, c.id.issuer);
+      const std::string line = "command epoch " + std::to_string(c.id.epoch) + " of " + who + " refused: more than " +
+                               std::to_string(dds::kMaxEpochJump) + " above epoch " +
+                               std::to_string(arbiter_.reference(floor)) + "; the agents refuse it too";
+      // Each new epoch refused is reported; a publisher repeating one is throttled.
+      const bool fresh = c.id.epoch != last_refused_epoch_;
+      last_refused_epoch_ = c.id.epoch;
+      if (fresh) util::log_warn(line);
+      if (fresh || throttled_.warn("command jump", line))
+        out_.event("rejected", {{"what", "command"}, {"epoch", c.id.epoch}, {"issuer", dds::to_string(c.id.issuer)},
+                                {"publisher", who}, {"why", line}});
+    }
+  }
+  if (arbiter_.has_refused() && arbiter_.recheck(floor)) learnt(now);
+}
+
+void Supervisor::learnt(std::int64_t now) {
+  const dds::CommandSample& c = arbiter_.current();
+  current_ = c.command;
+  epoch_start_ns_ = now;
+  clock_synced_ = false;
+  monitor_.set_command(current_, c.id, now);
+  const bool replaced_own = own_epoch_ != 0 && superseded_ != own_epoch_;
+  if (replaced_own) superseded_ = own_epoch_;
+  const std::string who = publisher();
+  std::ostream& out = out_.human();
+  if (replaced_own)
+    out << "epoch " << own_epoch_ << " of this supervisor was superseded by ";
+  else
+    out << "command in force: ";
+  out << "epoch " << c.id.epoch << " of " << who << " (another participant): " << describe_command(current_)
+      << "; the metrics measure against it" << std::endl;
+  util::log_warn((replaced_own ? "superseded: the agents follow epoch " : "command in force: epoch ") +
+                 std::to_string(c.id.epoch) + " of " + who);
+  nlohmann::json j = in_force_json();
+  j["superseded"] = replaced_own ? nlohmann::json(own_epoch_) : nlohmann::json();
+  j["shape"] = std::string(core::to_string(current_.shape.kind));
+  j["law"] = std::string(core::to_string(current_.law));
+  j["tracking"] = current_.tracking.enabled;
+  j["hold"] = current_.hold;
+  out_.event("in_force", j);
+  // A wait on the command just replaced would measure a command nobody follows any more: it ends.
+  if (pending_ && !pending_on_.none() &&
+      (std::holds_alternative<WaitConverged>(*pending_) || std::holds_alternative<WaitTime>(*pending_))) {
+    out << "wait " << wait_name(*pending_) << ": ended, epoch " << pending_on_.epoch << " was superseded by epoch "
+        << c.id.epoch << " of " << who << std::endl;
+    out_.event("wait", {{"wait", wait_name(*pending_)},
+                        {"ok", false},
+                        {"superseded", true},
+                        {"epoch", c.id.epoch},
+                        {"publisher", who},
+                        {"model_time", metrics_time(now)},
+                        {"alive", monitor_.alive_count(now)}});
+    exit_status_ = kExitWaitTimedOut;
+    pending_.reset();
+  }
+}
+
+bool Supervisor::foreign_command_in_force(std::int64_t now) const {
+  if (own_epoch_ != 0) return false;  // this supervisor commands already: `start` is its own choice
+  // The agents' states may show it before its sample arrives: it is in force all the same.
+  return arbiter_.has_command() || monitor_.min_epoch_followed(now) != 0;
+}
+
 void Supervisor::recover_from_stall() {
   const auto stall_s = node_->recover_if_stalled(1.0 / cfg_.supervisor.target_rate_hz);
   if (!stall_s) return;
-  // The new command writer starts empty: offer the command in force (same epoch) to later joiners again.
-  if (epoch_ != 0 && !command_writer_.write(dds::to_msg(current_, epoch_)))
+  // The new command writer starts empty: offer this supervisor's command in force (same id) to later
+  // joiners again (the agents re-offer it too).
+  if (own() && !command_writer_.write(dds::to_msg(current_, arbiter_.id(), own_name_)))
     util::log_warn("command write failed");
   out_.event("recovered", {{"stall_s", *stall_s}});
 }
 
 void Supervisor::drain(std::int64_t now) {
+  drain_commands(now);
   state_reader_.drain(states_);
   for (const auto& r : states_) {
     if (!r.valid_data) {
@@ -188,7 +318,7 @@ void Supervisor::drain(std::int64_t now) {
       throttled_.warn("state", "agent state rejected: " + why);
       continue;
     }
-    monitor_.on_state(s.id, s.x, s.prev_x, s.epoch, s.model_time, now);
+    monitor_.on_state(s.id, s.x, s.prev_x, s.command, s.model_time, now);
   }
   status_reader_.drain(statuses_);
   for (const auto& r : statuses_) {
@@ -212,37 +342,58 @@ void Supervisor::report_membership(std::int64_t now) {
 }
 
 void Supervisor::publish_target(std::int64_t now) {
-  if (epoch_ == 0 || !current_.tracking.enabled || current_.hold) return;
+  // Another participant's command: its publisher publishes the target (or the agents follow its path).
+  if (!own() || !current_.tracking.enabled || current_.hold) return;
   const double t = model_time(now);
-  target_writer_.write(dds::to_msg(dds::TargetSample{epoch_, t, core::centre_at(current_.tracking.path, t),
+  target_writer_.write(dds::to_msg(dds::TargetSample{arbiter_.id(), t, core::centre_at(current_.tracking.path, t),
                                                      core::centre_velocity(current_.tracking.path, t), now}));
 }
 
 void Supervisor::publish_command(const core::CompiledCommand& cmd, std::int64_t now) {
-  // A restarted supervisor continues after the newest epoch the agents follow.
-  epoch_ = std::max(epoch_, monitor_.max_epoch_seen()) + 1;
+  // After every epoch seen: on the command topic (the arbiter's), and in the agents' states unless
+  // that is an absurd jump (the agents refuse one such command too).
+  const std::uint64_t floor = monitor_.min_epoch_followed(now);
+  std::uint64_t after = epoch();
+  if (!dds::CommandArbiter::absurd(monitor_.max_epoch_seen(), arbiter_.reference(floor)))
+    after = std::max(after, monitor_.max_epoch_seen());
+  const dds::CommandSample sample{cmd, dds::CommandId{after + 1, own_issuer_}, own_name_};
+  if (arbiter_.offer(sample, floor) != dds::CommandArbiter::Verdict::Adopted) {  // cannot happen: it is greater
+    util::log_error("command epoch " + std::to_string(after + 1) + " not adopted");
+    return;
+  }
+  own_epoch_ = sample.id.epoch;
   current_ = cmd;
   epoch_start_ns_ = now;
-  monitor_.set_command(cmd, epoch_, now);
-  if (!command_writer_.write(dds::to_msg(cmd, epoch_))) util::log_warn("command write failed");
-  out_.human() << "epoch " << epoch_ << ": " << describe_command(cmd) << std::endl;
-  out_.event("epoch", {{"epoch", epoch_},
-                       {"shape", std::string(core::to_string(cmd.shape.kind))},
-                       {"law", std::string(core::to_string(cmd.law))},
-                       {"tracking", cmd.tracking.enabled},
-                       {"hold", cmd.hold}});
+  clock_synced_ = true;
+  monitor_.set_command(cmd, sample.id, now);
+  if (!command_writer_.write(dds::to_msg(cmd, sample.id, own_name_))) util::log_warn("command write failed");
+  out_.human() << "epoch " << own_epoch_ << ": " << describe_command(cmd) << std::endl;
+  nlohmann::json j = in_force_json();
+  j["shape"] = std::string(core::to_string(cmd.shape.kind));
+  j["law"] = std::string(core::to_string(cmd.law));
+  j["tracking"] = cmd.tracking.enabled;
+  j["hold"] = cmd.hold;
+  out_.event("epoch", j);
 }
 
 void Supervisor::metrics_tick(std::int64_t now) {
+  if (!clock_synced_) {
+    // A learnt command: its model clock is where the agents following it are.
+    if (const auto at = monitor_.min_following_model_time(now)) {
+      const double ticks = *at / current_.dt;  // agent ticks since the command was adopted
+      epoch_start_ns_ = now - static_cast<std::int64_t>(std::llround(ticks / cfg_.agent.rate_hz * 1e9));
+      clock_synced_ = true;
+    }
+  }
   const double t = metrics_time(now);
   // Held, no model time passes: nothing is fed to the convergence detector (it would pile up samples
   // at one instant).
   const SwarmMonitor::Sample s = current_.hold ? monitor_.measure(t, now) : monitor_.update(t, now);
-  if (epoch_ != 0) metrics_writer_.write(dds::to_msg(s.metrics, epoch_, t, now, s.converged));
+  if (epoch() != 0) metrics_writer_.write(dds::to_msg(s.metrics, epoch(), t, now, s.converged));
   const double wall = static_cast<double>(now - start_ns_) * 1e-9;
   if (recorder_.is_open()) {
     try {
-      recorder_.write_metrics({wall, t, epoch_, s.alive, s.metrics, s.converged});
+      recorder_.write_metrics({wall, t, epoch(), s.alive, s.metrics, s.converged});
       const auto step = static_cast<std::int64_t>(std::llround(t / current_.dt));
       for (const auto& [id, x] : monitor_.alive_positions(now, t)) recorder_.write_positions(wall, t, step, id, x.x(), x.y());
       recorder_.flush_if_due(Recorder::Clock::now());
@@ -250,17 +401,17 @@ void Supervisor::metrics_tick(std::int64_t now) {
       throttled_.error("record", std::string("recording: ") + e.what());
     }
   }
-  if (progress_.due(s, epoch_, now)) util::log_info(progress_line(s, current_));
+  if (progress_.due(s, epoch(), now)) util::log_info(progress_line(s, current_));
 }
 
 std::optional<bool> Supervisor::wait_outcome(const Action& a, std::int64_t now) {
   std::ostream& out = out_.human();
   const bool timed_out = now >= pending_deadline_ns_;
   if (const auto* w = std::get_if<WaitConverged>(&a)) {
-    if (epoch_ != 0 && monitor_.converged()) {
+    if (epoch() != 0 && monitor_.converged()) {
       out << "converged at t=" << fmt(model_time(now), "%.0f") << " ("
-          << fmt(static_cast<double>(now - epoch_start_ns_) * 1e-9, "%.1f") << " s after epoch " << epoch_ << ")"
-          << std::endl;
+          << fmt(static_cast<double>(now - epoch_start_ns_) * 1e-9, "%.1f") << " s after epoch " << epoch()
+          << (own() ? std::string() : " of " + publisher()) << ")" << std::endl;
       return true;
     }
     if (!timed_out) return std::nullopt;
@@ -305,6 +456,7 @@ void Supervisor::start_recording(const std::string& dir) {
 void Supervisor::execute(const Action& a, std::int64_t now) {
   const auto block = [&](double seconds) {
     pending_ = a;
+    pending_on_ = arbiter_.id();
     // Capped at 10^9 s (32 years), so that any accepted number of seconds stays inside int64 ns.
     pending_deadline_ns_ = now + static_cast<std::int64_t>(std::min(seconds, 1e9) * 1e9);
   };
@@ -315,9 +467,19 @@ void Supervisor::execute(const Action& a, std::int64_t now) {
         if constexpr (std::is_same_v<T, SetCommand>) {
           publish_command(act.command, now);
         } else if constexpr (std::is_same_v<T, StartScenario>) {
-          core::CompiledCommand c = cfg_.command;
-          c.hold = c.hold || current_.hold;  // only `resume` releases a hold
-          publish_command(c, now);
+          if (!act.replace && !opt_.replace_on_start && foreign_command_in_force(now)) {
+            // The operator's last command outlives a supervisor restart: it is not replaced unasked.
+            out << "start: epoch " << (epoch() != 0 ? epoch() : monitor_.max_epoch_seen()) << " of "
+                << (arbiter_.has_command() ? publisher() : std::string("another participant"))
+                << " is in force; kept ('start replace' publishes the --config scenario)" << std::endl;
+            nlohmann::json j = in_force_json();
+            j["kept"] = true;
+            out_.event("start_kept", j);
+          } else {
+            core::CompiledCommand c = cfg_.command;
+            c.hold = c.hold || current_.hold;  // only `resume` releases a hold
+            publish_command(c, now);
+          }
         } else if constexpr (std::is_same_v<T, Hold>) {
           // The tracked path restarts where the agents are (a no-op when already held: model time
           // stands still then), so that `resume` continues from here.
@@ -342,17 +504,27 @@ void Supervisor::execute(const Action& a, std::int64_t now) {
           const double t = model_time(now);
           const auto rows = agent_rows(monitor_, now, t);
           out << status_table(rows) << std::flush;
-          out_.event("status", status_json(rows, epoch_, t));
+          nlohmann::json j = status_json(rows, epoch(), t);
+          j.update(in_force_json());
+          out_.event("status", j);
         } else if constexpr (std::is_same_v<T, ShowMetrics>) {
           // A query: the detector sees only the metrics ticks.
           const SwarmMonitor::Sample sample = monitor_.measure(metrics_time(now), now);
-          const nlohmann::json j = metrics_answer(sample, epoch_);
+          nlohmann::json j = metrics_answer(sample, epoch());
+          j.update(in_force_json());
           // With --json the human copy stays the JSON object (scripts filter it like the event).
           if (act.json || out_.json()) out << j.dump() << std::endl;
-          else out << metrics_table(sample, epoch_) << std::flush;
+          else out << metrics_table(sample, epoch()) << std::flush;
           out_.event("metrics", j);
         } else if constexpr (std::is_same_v<T, Show>) {
-          out << show_text(show_info(now)) << std::flush;
+          const ShowInfo info = show_info(now);
+          out << show_text(info) << std::flush;
+          nlohmann::json j = in_force_json();
+          j["command"] = app::command_json(info.command);
+          j["superseded"] = info.superseded != 0 ? nlohmann::json(info.superseded) : nlohmann::json();
+          j["following"] = info.following;
+          j["alive"] = info.alive;
+          out_.event("show", j);
         } else if constexpr (std::is_same_v<T, Progress>) {
           if (act.mode == Progress::Mode::Off) progress_.off();
           else if (act.mode == Progress::Mode::Every) progress_.every(act.every_s);
@@ -418,7 +590,10 @@ void Supervisor::interrupt(std::int64_t now) {
 ShowInfo Supervisor::show_info(std::int64_t now) const {
   ShowInfo info;
   info.command = current_;
-  info.epoch = epoch_;
+  info.epoch = epoch();
+  info.own = own();
+  info.publisher = publisher();
+  info.superseded = own() ? 0 : superseded_;  // once it commands again, its old loss is history
   info.published_s_ago = static_cast<double>(now - epoch_start_ns_) * 1e-9;
   info.agents_epoch = monitor_.max_epoch_seen();
   info.alive = monitor_.alive_count(now);
@@ -470,7 +645,8 @@ Summary Supervisor::summary(std::int64_t now) const {
   Summary s;
   s.name = cfg_.name;
   s.command = current_;
-  s.epoch = epoch_;
+  s.epoch = epoch();
+  s.commands_refused = commands_refused_;
   s.sample = monitor_.measure(metrics_time(now), now);
   s.agents_seen = monitor_.agents().size();
   const auto& cv = cfg_.supervisor.converge;
@@ -513,6 +689,11 @@ void Supervisor::open_dds() {
   metrics_writer_ = node_->writer<msg::SwarmMetrics>(dds::TopicId::Metrics);
   state_reader_ = node_->reader<msg::AgentState>(dds::TopicId::State);
   status_reader_ = node_->reader<msg::AgentStatus>(dds::TopicId::Status);
+  command_reader_ = node_->reader<msg::ShapeCommand>(dds::TopicId::Command);
+  char host[256] = {};
+  if (gethostname(host, sizeof host - 1) != 0) host[0] = '\0';
+  own_name_ = node_->name() + " on " + host + " pid " + std::to_string(getpid());
+  own_issuer_ = node_->source();
 }
 
 int Supervisor::run() {
@@ -556,7 +737,11 @@ int Supervisor::run() {
   const std::int64_t now = util::steady_ns();
   drain(now);
   const Summary s = summary(now);
-  if (opt_.json) std::cout << summary_json(s).dump() << std::endl;
+  if (opt_.json) {
+    nlohmann::json j = summary_json(s);
+    j.update(in_force_json());  // who published the command the summary measured against
+    std::cout << j.dump() << std::endl;
+  }
   else std::cout << summary_text(s) << std::flush;
   recorder_.close();
   return exit_status_;

@@ -8,9 +8,14 @@ namespace shapeform::supervisor {
 struct SupervisorOptions {
   std::string script;      ///< run this script's lines first (validated up front)
   std::string record_dir;  ///< start recording here at once
-  /// Machine output: stdout carries only JSON lines with an "event" key (epoch, wait, status, metrics,
-  /// agent, record, recovered, summary); the human text goes to stderr.
+  /// Machine output: stdout carries only JSON lines with an "event" key (epoch, in_force, start_kept,
+  /// rejected, wait, status, metrics, show, agent, record, recovered, summary); the human text goes to stderr.
+  /// The events about the command in force carry its "epoch", "issuer" (GUID prefix), "publisher"
+  /// (name, host and pid as the publisher announced them, and the GUID prefix) and "own".
   bool json = false;
+  /// `start` publishes the --config scenario even when a command is in force that this supervisor did
+  /// not publish (--command-on-start replace); by default it keeps that command.
+  bool replace_on_start = false;
 };
 
 /// Exit statuses.

@@ -9,16 +9,16 @@ namespace shapeform::supervisor {
 SwarmMonitor::SwarmMonitor(std::int64_t agent_timeout_ns, core::ConvergenceDetector::Params converge, bool lockstep)
     : agent_timeout_ns_(agent_timeout_ns), detector_(converge), lockstep_(lockstep) {}
 
-void SwarmMonitor::on_state(std::int32_t id, const core::Vec2& x, const core::Vec2& prev_x, std::uint32_t epoch,
+void SwarmMonitor::on_state(std::int32_t id, const core::Vec2& x, const core::Vec2& prev_x, dds::CommandId command,
                             double model_time, std::int64_t now_ns) {
   AgentView& a = agents_[id];
   a.x = x;
   a.prev_x = prev_x;
-  a.epoch = epoch;
+  a.command = command;
   a.model_time = model_time;
   a.last_seen_ns = now_ns;
   a.departed = false;
-  if (epoch > max_epoch_seen_) max_epoch_seen_ = epoch;
+  if (command.epoch > max_epoch_seen_) max_epoch_seen_ = command.epoch;
 }
 
 void SwarmMonitor::on_status(std::int32_t id, int neighbours_heard, std::uint64_t samples_rejected) {
@@ -33,9 +33,9 @@ void SwarmMonitor::on_departed(std::int32_t id) {
   if (it != agents_.end()) it->second.departed = true;
 }
 
-void SwarmMonitor::set_command(const core::CompiledCommand& cmd, std::uint32_t epoch, std::int64_t) {
+void SwarmMonitor::set_command(const core::CompiledCommand& cmd, dds::CommandId id, std::int64_t) {
   command_ = cmd;
-  epoch_ = epoch;
+  id_ = id;
   detector_.set_command(cmd);  // judged against this command's shape from now on
   last_.reset();
   hist_t_.clear();
@@ -55,8 +55,15 @@ int SwarmMonitor::alive_count(std::int64_t now_ns) const {
 
 int SwarmMonitor::following_count(std::int64_t now_ns) const {
   int n = 0;
-  for (const auto& [id, a] : agents_) n += (alive(a, now_ns) && a.epoch == epoch_ && epoch_ != 0) ? 1 : 0;
+  for (const auto& [id, a] : agents_) n += (alive(a, now_ns) && a.command == id_ && !id_.none()) ? 1 : 0;
   return n;
+}
+
+std::uint64_t SwarmMonitor::min_epoch_followed(std::int64_t now_ns) const {
+  std::uint64_t floor = 0;
+  for (const auto& [id, a] : agents_)
+    if (alive(a, now_ns) && !a.command.none() && (floor == 0 || a.command.epoch < floor)) floor = a.command.epoch;
+  return floor;
 }
 
 bool SwarmMonitor::all_hear(int count, std::int64_t now_ns) const {
@@ -68,7 +75,7 @@ bool SwarmMonitor::all_hear(int count, std::int64_t now_ns) const {
 std::optional<double> SwarmMonitor::min_following_model_time(std::int64_t now_ns) const {
   std::optional<double> t;
   for (const auto& [id, a] : agents_)
-    if (alive(a, now_ns) && epoch_ != 0 && a.epoch == epoch_) t = t ? std::min(*t, a.model_time) : a.model_time;
+    if (alive(a, now_ns) && !id_.none() && a.command == id_) t = t ? std::min(*t, a.model_time) : a.model_time;
   return t;
 }
 
@@ -78,7 +85,7 @@ std::vector<std::pair<std::int32_t, core::Vec2>> SwarmMonitor::alive_positions(s
   for (const auto& [id, a] : agents_) {
     if (!alive(a, now_ns)) continue;
     // In lockstep an agent is at most one step past the slowest one: its previous state is at `at`.
-    const bool ahead = lockstep_ && at && a.epoch == epoch_ && a.model_time > *at;
+    const bool ahead = lockstep_ && at && a.command == id_ && a.model_time > *at;
     out.emplace_back(id, ahead ? a.prev_x : a.x);
   }
   return out;

@@ -9,13 +9,14 @@
 #include <vector>
 
 #include "core/metrics.hpp"
+#include "dds/samples.hpp"
 
 namespace shapeform::supervisor {
 
 struct AgentView {
   core::Vec2 x = core::Vec2::Zero();
   core::Vec2 prev_x = core::Vec2::Zero();  ///< position one step earlier (AgentState.prev_x/prev_y)
-  std::uint32_t epoch = 0;      ///< command epoch the agent follows
+  dds::CommandId command;       ///< the command the agent follows (epoch 0: none yet)
   double model_time = 0.0;      ///< the agent's model time
   std::int64_t last_seen_ns = 0;
   bool departed = false;        ///< disposed its instance (clean exit)
@@ -30,17 +31,22 @@ class SwarmMonitor {
   /// every agent at step t, the previous position of those already one step further.
   SwarmMonitor(std::int64_t agent_timeout_ns, core::ConvergenceDetector::Params converge, bool lockstep = false);
 
-  void on_state(std::int32_t id, const core::Vec2& x, const core::Vec2& prev_x, std::uint32_t epoch,
+  void on_state(std::int32_t id, const core::Vec2& x, const core::Vec2& prev_x, dds::CommandId command,
                 double model_time, std::int64_t now_ns);
   void on_status(std::int32_t id, int neighbours_heard, std::uint64_t samples_rejected);
   void on_departed(std::int32_t id);
 
-  /// A new command is in force from now (its epoch's model clock starts at 0).
-  void set_command(const core::CompiledCommand& cmd, std::uint32_t epoch, std::int64_t now_ns);
+  /// A new command is in force from now (its epoch's model clock starts at 0): the metrics measure
+  /// against it, and "following" means following it.
+  void set_command(const core::CompiledCommand& cmd, dds::CommandId id, std::int64_t now_ns);
   const std::optional<core::CompiledCommand>& command() const { return command_; }
-  std::uint32_t epoch() const { return epoch_; }
+  std::uint64_t epoch() const { return id_.epoch; }
+  const dds::CommandId& command_id() const { return id_; }
   /// The highest epoch any agent was seen following (a restarted supervisor continues after it).
-  std::uint32_t max_epoch_seen() const { return max_epoch_seen_; }
+  std::uint64_t max_epoch_seen() const { return max_epoch_seen_; }
+  /// The lowest non-zero epoch an alive agent follows (0: none): what a supervisor that knows no command
+  /// yet judges epoch jumps from (dds::CommandArbiter).
+  std::uint64_t min_epoch_followed(std::int64_t now_ns) const;
 
   bool alive(const AgentView& a, std::int64_t now_ns) const;
   int alive_count(std::int64_t now_ns) const;
@@ -85,8 +91,8 @@ class SwarmMonitor {
   bool lockstep_;
   std::map<std::int32_t, AgentView> agents_;
   std::optional<core::CompiledCommand> command_;
-  std::uint32_t epoch_ = 0;
-  std::uint32_t max_epoch_seen_ = 0;
+  dds::CommandId id_;
+  std::uint64_t max_epoch_seen_ = 0;
   std::optional<Sample> last_;
   std::vector<double> hist_t_, hist_err_;
   std::vector<std::optional<double>> hist_gap_;

@@ -72,7 +72,8 @@ bool sample_json(const msg::AgentState& m, nlohmann::json& out, std::string& why
   out = {{"id", s.id},
          {"seq", s.seq},
          {"stamp_ns", s.stamp_ns},
-         {"epoch", s.epoch},
+         {"epoch", s.command.epoch},
+         {"issuer", dds::to_string(s.command.issuer)},
          {"model_time", s.model_time},
          {"x", vec(s.x)},
          {"v", vec(s.v)},
@@ -85,7 +86,7 @@ bool sample_json(const msg::AgentState& m, nlohmann::json& out, std::string& why
 bool sample_json(const msg::ShapeCommand& m, nlohmann::json& out, std::string& why) {
   core::CompiledCommand c;
   if (!dds::from_msg(m, c, why)) return false;
-  out = {{"epoch", m.epoch()}};
+  out = {{"epoch", m.epoch()}, {"issuer", dds::to_string(dds::SourceId{m.issuer()})}, {"issuer_name", m.issuer_name()}};
   out.update(app::command_json(c));
   return true;
 }
@@ -93,7 +94,8 @@ bool sample_json(const msg::ShapeCommand& m, nlohmann::json& out, std::string& w
 bool sample_json(const msg::TrackingTarget& m, nlohmann::json& out, std::string& why) {
   dds::TargetSample t;
   if (!dds::from_msg(m, t, why)) return false;
-  out = {{"epoch", t.epoch},
+  out = {{"epoch", t.command.epoch},
+         {"issuer", dds::to_string(t.command.issuer)},
          {"model_time", t.model_time},
          {"centre", vec(t.centre)},
          {"velocity", vec(t.velocity)},

@@ -68,9 +68,11 @@ Optional defined_or_null(T v) {
 
 }  // namespace
 
-msg::ShapeCommand to_msg(const core::Command& cmd, std::uint32_t epoch) {
+msg::ShapeCommand to_msg(const core::Command& cmd, const CommandId& id, const std::string& issuer_name) {
   msg::ShapeCommand m;
-  m.epoch(epoch);
+  m.epoch(id.epoch);
+  m.issuer(id.issuer.prefix);
+  m.issuer_name(issuer_name);
   const core::ShapeSpec& s = cmd.shape;
   m.shape_kind(std::string(core::to_string(s.kind)));
   m.m(s.m);
@@ -240,6 +242,21 @@ bool from_msg(const msg::ShapeCommand& m, core::CompiledCommand& out, std::strin
   return true;
 }
 
+bool from_msg(const msg::ShapeCommand& m, const SourceId& source, CommandSample& out, std::string& error) {
+  core::CompiledCommand cmd;
+  const bool ok = from_msg(m, cmd, error);
+  if (m.epoch() == 0) error = "command.epoch: must be >= 1, got 0" + (ok ? std::string() : "; " + error);
+  if (!ok || m.epoch() == 0) return false;
+  out.command = std::move(cmd);
+  out.id.epoch = m.epoch();
+  out.id.issuer.prefix = m.issuer();
+  if (!out.id.issuer.known()) out.id.issuer = source;
+  out.issuer_name.clear();
+  for (const char ch : m.issuer_name().substr(0, kIssuerNameMax))
+    out.issuer_name += (static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f) ? '?' : ch;
+  return true;
+}
+
 bool valid_state(const msg::AgentState& s, std::string& why) {
   Problems p("state");
   if (s.id() < 0) p.add("id", "must be >= 0, got " + std::to_string(s.id()));
@@ -269,7 +286,8 @@ msg::AgentState to_msg(const StateSample& s) {
   m.id(s.id);
   m.seq(s.seq);
   m.stamp_ns(s.stamp_ns);
-  m.epoch(s.epoch);
+  m.epoch(s.command.epoch);
+  m.issuer(s.command.issuer.prefix);
   m.model_time(s.model_time);
   m.x(s.x.x());
   m.y(s.x.y());
@@ -288,7 +306,7 @@ bool from_msg(const msg::AgentState& m, StateSample& out, std::string& why) {
   out.id = m.id();
   out.seq = m.seq();
   out.stamp_ns = m.stamp_ns();
-  out.epoch = m.epoch();
+  out.command = CommandId{m.epoch(), SourceId{m.issuer()}};
   out.model_time = m.model_time();
   out.x = core::Vec2(m.x(), m.y());
   out.v = core::Vec2(m.vx(), m.vy());
@@ -300,7 +318,8 @@ bool from_msg(const msg::AgentState& m, StateSample& out, std::string& why) {
 
 msg::TrackingTarget to_msg(const TargetSample& t) {
   msg::TrackingTarget m;
-  m.epoch(t.epoch);
+  m.epoch(t.command.epoch);
+  m.issuer(t.command.issuer.prefix);
   m.model_time(t.model_time);
   m.cx(t.centre.x());
   m.cy(t.centre.y());
@@ -320,7 +339,7 @@ bool from_msg(const msg::TrackingTarget& m, TargetSample& out, std::string& why)
     why = p.joined();
     return false;
   }
-  out = TargetSample{m.epoch(), m.model_time(), core::Vec2(m.cx(), m.cy()), core::Vec2(m.vx(), m.vy()), m.stamp_ns()};
+  out = TargetSample{CommandId{m.epoch(), SourceId{m.issuer()}}, m.model_time(), core::Vec2(m.cx(), m.cy()), core::Vec2(m.vx(), m.vy()), m.stamp_ns()};
   return true;
 }
 
@@ -357,7 +376,7 @@ bool from_msg(const msg::AgentStatus& m, StatusSample& out, std::string& why) {
   return true;
 }
 
-msg::SwarmMetrics to_msg(const core::Metrics& m, std::uint32_t epoch, double model_time,
+msg::SwarmMetrics to_msg(const core::Metrics& m, std::uint64_t epoch, double model_time,
                          std::int64_t stamp_ns, bool converged) {
   msg::SwarmMetrics w;
   w.epoch(epoch);

@@ -18,9 +18,10 @@
 namespace shapeform::dds {
 
 
-/// core::Command -> wire message with the given epoch (every field, the law by name; polygon
-/// vertices flattened x0, y0, x1, y1, ...; the compiled curve is not sent: receivers compile).
-msg::ShapeCommand to_msg(const core::Command& cmd, std::uint32_t epoch);
+/// core::Command -> wire message with the given id (epoch and issuer) and issuer name (every field,
+/// the law by name; polygon vertices flattened x0, y0, x1, y1, ...; the compiled curve is not sent:
+/// receivers compile).
+msg::ShapeCommand to_msg(const core::Command& cmd, const CommandId& id, const std::string& issuer_name = {});
 
 /// Wire message -> core::CompiledCommand, its shape compiled (shapes::compile).
 /// On failure returns false, leaves `out` untouched and sets `error` to every problem found,
@@ -34,6 +35,12 @@ msg::ShapeCommand to_msg(const core::Command& cmd, std::uint32_t epoch);
 /// config loader and the console do), e.g. "command.k1: dynamics.k1 = 1e+300: the step gain ...".
 /// The epoch is not part of core::Command: read m.epoch().
 bool from_msg(const msg::ShapeCommand& m, core::CompiledCommand& out, std::string& error);
+
+/// Wire message sent by participant `source` -> CommandSample: the command as above, its id (the
+/// issuer field, or `source` when that is all zero: a writer that does not fill it issued the command
+/// itself) and the issuer's name (control characters replaced by '?', cut to kIssuerNameMax). Also
+/// refuses epoch 0 ("command.epoch: must be >= 1, got 0").
+bool from_msg(const msg::ShapeCommand& m, const SourceId& source, CommandSample& out, std::string& error);
 
 /// True when s is plausible: id >= 0, model_time, x, y, vx, vy, arc finite, |x|, |y| <=
 /// kStateLimit and speed |(vx, vy)| <= kStateLimit. Otherwise false with `why` naming the field
@@ -63,7 +70,7 @@ bool from_msg(const msg::AgentStatus& m, StatusSample& out, std::string& why);
 
 /// core::Metrics -> wire message (agents as agents_alive, every metric of core::kMetricTable under its
 /// name); undefined (nullopt) values become -1.
-msg::SwarmMetrics to_msg(const core::Metrics& m, std::uint32_t epoch, double model_time,
+msg::SwarmMetrics to_msg(const core::Metrics& m, std::uint64_t epoch, double model_time,
                          std::int64_t stamp_ns, bool converged);
 
 /// Wire message -> core::Metrics; negative (-1) or non-finite values become nullopt.

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "core/compiled_command.hpp"
 #include "core/types.hpp"
 #include "util/rate_loop.hpp"
 #include "util/stats.hpp"
@@ -41,6 +42,39 @@ inline std::string to_string(const SourceId& s) {
   return out;
 }
 
+/// Which command: its epoch and its issuer, the participant that published it first (a re-offered copy
+/// keeps both). Commands are totally ordered by (epoch, issuer bytewise), so every receiver that sees
+/// the same two commands follows the same one, even when two commanders publish one epoch at once.
+/// Epochs are 64-bit: a counter that steps by one per command never wraps. epoch 0 = no command.
+struct CommandId {
+  std::uint64_t epoch = 0;
+  SourceId issuer;
+  CommandId() = default;
+  /// An epoch of an unknown (all-zero) issuer: what a bare epoch number names.
+  CommandId(std::uint64_t e, SourceId i = {}) : epoch(e), issuer(i) {}  // NOLINT: implicit on purpose
+  bool none() const { return epoch == 0; }
+  friend bool operator==(const CommandId& a, const CommandId& b) { return a.epoch == b.epoch && a.issuer == b.issuer; }
+  friend bool operator!=(const CommandId& a, const CommandId& b) { return !(a == b); }
+  friend bool operator<(const CommandId& a, const CommandId& b) {
+    return a.epoch != b.epoch ? a.epoch < b.epoch : a.issuer < b.issuer;
+  }
+  friend bool operator>(const CommandId& a, const CommandId& b) { return b < a; }
+};
+
+/// A received ShapeCommand: the compiled command, which one it is, and who issued it (in words, as
+/// the issuer announced itself; at most kIssuerNameMax printable characters, empty when unknown).
+struct CommandSample {
+  core::CompiledCommand command;
+  CommandId id;
+  std::string issuer_name;
+};
+inline constexpr std::size_t kIssuerNameMax = 120;
+
+/// "NAME [GUID prefix]", or the GUID prefix alone when the issuer gave no name.
+inline std::string describe_issuer(const std::string& name, const SourceId& issuer) {
+  return name.empty() ? to_string(issuer) : name + " [" + to_string(issuer) + "]";
+}
+
 /// Largest |x|, |y| and speed accepted in a received AgentState or TrackingTarget (and as an agent's
 /// start): beyond it a sample is absurd and refused.
 inline constexpr double kStateLimit = 1e6;
@@ -50,7 +84,7 @@ struct StateSample {
   std::int32_t id = 0;
   std::uint64_t seq = 0;       ///< +1 per publication
   std::int64_t stamp_ns = 0;   ///< sender's steady clock at publication, ns
-  std::uint32_t epoch = 0;     ///< command followed; 0 = none yet
+  CommandId command;           ///< the command followed (epoch 0: none yet)
   double model_time = 0.0;     ///< after the step
   core::Vec2 x = core::Vec2::Zero();
   core::Vec2 v = core::Vec2::Zero();  ///< velocity over the last step
@@ -61,7 +95,7 @@ struct StateSample {
 
 /// TrackingTarget: the tracked centre C and its velocity at the supervisor's model time.
 struct TargetSample {
-  std::uint32_t epoch = 0;
+  CommandId command;  ///< the command whose path this is
   double model_time = 0.0;
   core::Vec2 centre = core::Vec2::Zero();
   core::Vec2 velocity = core::Vec2::Zero();
@@ -85,7 +119,7 @@ struct StatusSample {
   double age_p99_us = -1.0;
   double cpu_percent = 0.0;
   double rss_mb = 0.0;
-  std::uint32_t epoch = 0;
+  std::uint64_t epoch = 0;
 };
 
 /// The process-wide part of a status sample, as of stamp_ns: the loop's timing, the data ages of the

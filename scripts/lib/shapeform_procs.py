@@ -248,9 +248,14 @@ def summary(text):
     return found[-1] if found else last_json_line(text)
 
 
+# CSV columns read as Python integers: command epochs are 64-bit counters.
+INT_COLUMNS = ("epoch",)
+
+
 def read_csv(path, numeric=False):
     """Rows of a CSV file as dicts ([] when the file is missing). numeric: values as floats (empty
-    field -> None) and rows that do not parse (a line cut by a kill) skipped."""
+    field -> None), except the integer columns of INT_COLUMNS (a 64-bit epoch does not fit a float),
+    and rows that do not parse (a line cut by a kill) skipped."""
     try:
         with open(str(path), newline="") as f:
             rows = list(csv.DictReader(f))
@@ -263,7 +268,7 @@ def read_csv(path, numeric=False):
         try:
             if None in r or None in r.values():
                 continue  # too many or too few fields
-            out.append({k: (float(v) if v != "" else None) for k, v in r.items()})
+            out.append({k: (None if v == "" else int(v) if k in INT_COLUMNS else float(v)) for k, v in r.items()})
         except ValueError:
             continue
     return out

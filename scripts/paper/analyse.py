@@ -76,7 +76,7 @@ def load_positions(run_dir, kind):
     t_first = None
     with open(run_dir / "metrics.csv", newline="") as f:
         for r in csv.DictReader(f):
-            if r["epoch"] and int(float(r["epoch"])) >= 1:
+            if r["epoch"] and int(r["epoch"]) >= 1:
                 t_first = float(r["wall_s"])
                 break
     if t_first is None:

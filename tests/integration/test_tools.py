@@ -58,7 +58,8 @@ class ToolsTest(harness.SwarmTestCase):
             t = self.topics()
             writers = {n: {w["participant"] for w in t[n]["writers"]} for n in t}
             return t if set(t) == set(TOPICS) and writers["shapeform/state"] == AGENT_NAMES \
-                and writers["shapeform/target"] == {"shapeform_supervisor"} else None
+                and writers["shapeform/target"] == {"shapeform_supervisor"} \
+                and writers["shapeform/command"] == AGENT_NAMES | {"shapeform_supervisor"} else None
         topics = harness.poll(complete, 60, "shapeform_topics to see the five topics and every writer", 0.5)
         host = socket.gethostname()
         pids = {"shapeform_supervisor": sup.pid}
@@ -75,7 +76,8 @@ class ToolsTest(harness.SwarmTestCase):
                         for n, t in topics.items()}
         sup_name = {"shapeform_supervisor"}
         self.assertEqual(participants["shapeform/state"], (AGENT_NAMES, AGENT_NAMES | sup_name))
-        self.assertEqual(participants["shapeform/command"], (sup_name, AGENT_NAMES))
+        # Every agent re-offers the command it follows; the supervisor reads the topic for the command in force.
+        self.assertEqual(participants["shapeform/command"], (sup_name | AGENT_NAMES, AGENT_NAMES | sup_name))
         self.assertEqual(participants["shapeform/target"], (sup_name, AGENT_NAMES))
         self.assertEqual(participants["shapeform/metrics"], (sup_name, set()))
         self.assertEqual(participants["shapeform/status"], (AGENT_NAMES, sup_name))
@@ -85,8 +87,8 @@ class ToolsTest(harness.SwarmTestCase):
             self.assertEqual((line["event"], line["topic"]), ("sample", "shapeform/state"), line)
             d = line["data"]
             self.assertIn(d["id"], range(AGENTS))
-            self.assertEqual(sorted(d), sorted(["id", "seq", "stamp_ns", "epoch", "model_time", "x", "v", "arc",
-                                                "prev_x", "prev_arc"]))
+            self.assertEqual(sorted(d), sorted(["id", "seq", "stamp_ns", "epoch", "issuer", "model_time", "x", "v",
+                                                "arc", "prev_x", "prev_arc"]))
             self.assertEqual(len(d["x"]), 2)
         # The command in force at once (transient-local), with its keys as the config file has them.
         [command] = self.echo("shapeform/command", 1)

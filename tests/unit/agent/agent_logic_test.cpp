@@ -18,6 +18,11 @@ core::CompiledCommand circle() {
   c.shape.r0 = 4;
   return core::compile(c);
 }
+/// Offers `cmd` as epoch `epoch` of an unknown issuer; true when adopted.
+bool adopt(AgentLogic& a, const core::CompiledCommand& cmd, std::uint64_t epoch, dds::SourceId issuer = {}) {
+  return a.on_command(dds::CommandSample{cmd, dds::CommandId{epoch, issuer}, ""}) ==
+         dds::CommandArbiter::Verdict::Adopted;
+}
 }  // namespace
 
 TEST_CASE("before the first command the agent holds its position", "[agent]") {
@@ -26,22 +31,22 @@ TEST_CASE("before the first command the agent holds its position", "[agent]") {
   for (int k = 0; k < 5; ++k) a.step();
   CHECK(a.position() == Vec2(1, 2));
   CHECK(a.velocity() == Vec2::Zero());
-  CHECK(a.epoch() == 0);
+  CHECK(a.command_id().none());
 }
 
 TEST_CASE("commands: newer epochs only; model time restarts", "[agent]") {
   AgentLogic a(0, Vec2(1, 2), 60 * kMs);
-  CHECK(a.on_command(circle(), 3));
+  CHECK(adopt(a, circle(), 3));
   a.step();
   a.step();
   CHECK(a.model_time() == 2.0);
   core::CompiledCommand sq = circle();
   sq.shape.kind = core::ShapeKind::Square;
   sq = core::compile(sq);
-  CHECK_FALSE(a.on_command(sq, 3));  // same epoch: ignored
-  CHECK_FALSE(a.on_command(sq, 2));  // older: ignored
+  CHECK_FALSE(adopt(a, sq, 3));  // same epoch: ignored
+  CHECK_FALSE(adopt(a, sq, 2));  // older: ignored
   CHECK(a.command().shape.kind == core::ShapeKind::Circle);
-  CHECK(a.on_command(sq, 4));
+  CHECK(adopt(a, sq, 4));
   CHECK(a.model_time() == 0.0);
   CHECK(a.command().shape.kind == core::ShapeKind::Square);
 }
@@ -52,7 +57,7 @@ TEST_CASE("a tick of the agent is exactly the simulator's step", "[agent]") {
   core::Swarm swarm(circle(), start);
   std::vector<AgentLogic> agents;
   for (int i = 0; i < 3; ++i) agents.emplace_back(i, start[i], 60 * kMs);
-  for (auto& a : agents) a.on_command(circle(), 1);
+  for (auto& a : agents) adopt(a, circle(), 1);
   std::uint64_t seq = 0;
   for (int k = 0; k < 50; ++k) {
     ++seq;
@@ -95,7 +100,7 @@ TEST_CASE("tracking follows the latest target, extrapolated over model time", "[
   c.tracking.path.point = Vec2(-10, -10);
   c.tracking.path.velocity = Vec2(0.1, 0.1);
   AgentLogic a(0, Vec2(0, 0), 60 * kMs);
-  a.on_command(c, 1);
+  adopt(a, c, 1);
   // Without a target yet: the command's own path at the agent's model time.
   CHECK((*a.tracked_centre() - Vec2(-10, -10)).norm() < 1e-12);
   a.on_target({2, 0.0, Vec2(50, 50), Vec2(0, 0)}, 0);  // another epoch: ignored
@@ -136,22 +141,22 @@ TEST_CASE("arc law: agents exchanging their arc lengths reproduce the simulator"
   core::Swarm swarm(cmd, start);
   std::vector<AgentLogic> agents;
   for (int i = 0; i < 5; ++i) agents.emplace_back(i, start[i], 60 * kMs);
-  for (auto& a : agents) a.on_command(cmd, 1);
+  for (auto& a : agents) adopt(a, cmd, 1);
   std::uint64_t seq = 0;
   for (int k = 0; k < 40; ++k) {
     ++seq;
     for (auto& a : agents)
-      for (const auto& b : agents) a.on_state(b.id(), b.position(), seq, 0, b.epoch(), b.arc());
+      for (const auto& b : agents) a.on_state(b.id(), b.position(), seq, 0, b.command_id(), b.arc());
     for (auto& a : agents) a.step();
     swarm.step();
   }
   for (int i = 0; i < 5; ++i) CHECK((agents[i].position() - swarm.positions()[i]).norm() < 1e-12);
   // A neighbour's arc length from another epoch is not used (it would belong to another shape).
   AgentLogic a(0, Vec2(4, 0), 60 * kMs);
-  a.on_command(cmd, 2);
+  adopt(a, cmd, 2);
   a.on_state(1, Vec2(-4, 0), 1, 0, 1, 123.0);  // epoch 1: arc ignored, position projected instead
   AgentLogic b(0, Vec2(4, 0), 60 * kMs);
-  b.on_command(cmd, 2);
+  adopt(b, cmd, 2);
   b.on_state(1, Vec2(-4, 0), 1, 0);
   a.step();
   b.step();
@@ -173,14 +178,14 @@ std::vector<Vec2> run_shuffled(const core::CompiledCommand& cmd, const std::vect
     ++seq[i];
     for (auto& b : agents)
       if (!lost(rng))  // a best-effort sample may not arrive
-        b.on_state(i, agents[i].position(), seq[i], 0, agents[i].epoch(), agents[i].arc(), agents[i].model_time(),
+        b.on_state(i, agents[i].position(), seq[i], 0, agents[i].command_id(), agents[i].arc(), agents[i].model_time(),
                    agents[i].previous_position(), agents[i].previous_arc());
   };
   // As processes do: agents publish while they hold, before the first command, so they know each other
   // (the supervisor's `wait agents N` precedes `start`); a lockstep barrier waits only for known agents.
   for (int round = 0; round < 20; ++round)
     for (int i = 0; i < static_cast<int>(agents.size()); ++i) publish(i);
-  for (auto& a : agents) a.on_command(cmd, 1);
+  for (auto& a : agents) adopt(a, cmd, 1);
   for (int i = 0; i < static_cast<int>(agents.size()); ++i) publish(i);
   std::vector<int> order(agents.size());
   std::iota(order.begin(), order.end(), 0);
@@ -228,7 +233,7 @@ TEST_CASE("lockstep agents in any tick order reproduce the simulator exactly", "
 TEST_CASE("lockstep: wait for a lagging neighbour, a late joiner starts at the swarm's step", "[agent][lockstep]") {
   const core::CompiledCommand cmd;
   AgentLogic a(0, Vec2(1, 0), 60 * kMs, true, 3);
-  a.on_command(cmd, 1);
+  adopt(a, cmd, 1);
   a.on_state(1, Vec2(-1, 0), 1, 0, 1, std::nullopt, 0.0);
   CHECK(a.step());  // neighbour at step 0: step 0 -> 1
   CHECK_FALSE(a.step());  // the neighbour has not published step 1 yet: hold
@@ -243,7 +248,7 @@ TEST_CASE("lockstep: wait for a lagging neighbour, a late joiner starts at the s
   // A late joiner adopts the step of the swarm it joins.
   AgentLogic late(5, Vec2(0, 3), 60 * kMs, true);
   late.on_state(0, a.position(), 9, 0, 1, std::nullopt, a.model_time());
-  late.on_command(cmd, 1);
+  adopt(late, cmd, 1);
   CHECK(late.model_time() == a.model_time());
 }
 
@@ -256,14 +261,14 @@ TEST_CASE("a held command: the agent keeps its position, model time stands still
     c.tracking.path.velocity = Vec2(0.1, 0);
     AgentLogic a(0, Vec2(9, 9), 60 * kMs, lockstep);
     a.on_state(1, Vec2(-9, 9), 1, 0, 1, std::nullopt, 0.0);
-    REQUIRE(a.on_command(c, 1));
+    REQUIRE(adopt(a, c, 1));
     REQUIRE(a.step());
     const Vec2 moved = a.position();
     CHECK(moved != Vec2(9, 9));
     // The same command held, as the supervisor's `hold` publishes it (a new epoch).
     core::CompiledCommand held = c;
     held.hold = true;
-    REQUIRE(a.on_command(held, 2));
+    REQUIRE(adopt(a, held, 2));
     a.on_state(1, Vec2(-9, 9), 2, 0, 2, std::nullopt, 0.0);
     for (int k = 0; k < 20; ++k) CHECK_FALSE(a.step());
     CHECK(a.position() == moved);  // exactly: not even rounding
@@ -276,10 +281,118 @@ TEST_CASE("a held command: the agent keeps its position, model time stands still
     CHECK_FALSE(a.step());
     CHECK(a.position() == moved);
     // resume: the same command with hold off, a new epoch: the agent moves again.
-    REQUIRE(a.on_command(c, 3));
+    REQUIRE(adopt(a, c, 3));
     a.on_state(1, Vec2(-9, 9), 3, 0, 3, std::nullopt, 0.0);
     CHECK(a.step());
     CHECK(a.position() != moved);
     CHECK(a.model_time() == c.dt);
   }
+}
+
+namespace {
+dds::SourceId issuer(std::uint8_t first) {
+  dds::SourceId s;
+  s.prefix[0] = first;
+  s.prefix[11] = 7;
+  return s;
+}
+core::CompiledCommand square() {
+  core::Command c;
+  c.shape.kind = core::ShapeKind::Square;
+  c.shape.a = 5;
+  return core::compile(c);
+}
+}  // namespace
+
+TEST_CASE("commands: one epoch from two issuers, every agent ends on the greater issuer", "[agent][order]") {
+  // Two commanders publish epoch 5 at once; agents receive the two in either order.
+  AgentLogic a(0, Vec2(1, 2), 60 * kMs), b(1, Vec2(3, 4), 60 * kMs);
+  const dds::CommandSample low{circle(), dds::CommandId{5, issuer(1)}, "low"};
+  const dds::CommandSample high{square(), dds::CommandId{5, issuer(2)}, "high"};
+  using V = dds::CommandArbiter::Verdict;
+  CHECK(a.on_command(low) == V::Adopted);
+  CHECK(a.on_command(high) == V::Adopted);
+  CHECK(b.on_command(high) == V::Adopted);
+  CHECK(b.on_command(low) == V::Older);
+  for (const AgentLogic* x : {&a, &b}) {
+    CHECK(x->command_id() == high.id);
+    CHECK(x->command().shape.kind == core::ShapeKind::Square);
+    CHECK(x->command_sample().issuer_name == "high");
+  }
+  // The re-offered copy of the command followed changes nothing; a later epoch of the loser wins.
+  CHECK(a.on_command(high) == V::Same);
+  const dds::CommandSample next{circle(), dds::CommandId{6, issuer(1)}, "low"};
+  CHECK(a.on_command(next) == V::Adopted);
+  CHECK(b.on_command(next) == V::Adopted);
+  CHECK((a.command_id() == b.command_id() && a.command_id().epoch == 6));
+  CHECK(a.counters().samples_rejected == 0);
+}
+
+TEST_CASE("commands: the order is (epoch, issuer bytewise)", "[agent][order]") {
+  CHECK(dds::CommandId{5, issuer(9)} < dds::CommandId{6, issuer(1)});
+  CHECK(dds::CommandId{5, issuer(1)} < dds::CommandId{5, issuer(2)});
+  dds::SourceId last_byte = issuer(1);
+  last_byte.prefix[11] = 8;
+  CHECK(dds::CommandId{5, issuer(1)} < dds::CommandId{5, last_byte});
+  CHECK_FALSE(dds::CommandId{5, issuer(1)} < dds::CommandId{5, issuer(1)});
+  CHECK(dds::CommandId{1ULL << 32, {}} > dds::CommandId{(1ULL << 32) - 1, issuer(0xff)});  // 64-bit: no wrap
+}
+
+TEST_CASE("commands: an absurd epoch jump is refused and counted, later commands are obeyed", "[agent][order]") {
+  AgentLogic a(0, Vec2(1, 2), 60 * kMs);
+  REQUIRE(adopt(a, circle(), 5));
+  using V = dds::CommandArbiter::Verdict;
+  for (const std::uint64_t rogue : {std::uint64_t{(1ULL << 32) - 1}, std::uint64_t{~0ULL}, 5 + dds::kMaxEpochJump + 1}) {
+    INFO(rogue);
+    CHECK(a.on_command(dds::CommandSample{square(), dds::CommandId{rogue, issuer(3)}, "rogue"}) == V::Refused);
+    CHECK(a.command_id().epoch == 5);
+    CHECK(a.command().shape.kind == core::ShapeKind::Circle);
+  }
+  CHECK(a.counters().samples_rejected == 3);
+  CHECK_FALSE(a.recheck_commands());  // the neighbours change nothing for an agent that follows a command
+  CHECK(adopt(a, square(), 6));        // the supervisor's next command
+  CHECK(a.command().shape.kind == core::ShapeKind::Square);
+  CHECK(adopt(a, circle(), 6 + dds::kMaxEpochJump));  // the largest step accepted
+  CHECK(a.command_id().epoch == 6 + dds::kMaxEpochJump);
+}
+
+TEST_CASE("commands: a fresh agent judges jumps from the epoch its neighbours follow", "[agent][order]") {
+  using V = dds::CommandArbiter::Verdict;
+  const std::uint64_t swarm = 3 * dds::kMaxEpochJump;  // an epoch far above 0, reached step by step
+  const dds::CommandSample in_force{circle(), dds::CommandId{swarm, issuer(1)}, "supervisor"};
+  const dds::CommandSample rogue{square(), dds::CommandId{~0ULL, issuer(9)}, "rogue"};
+  SECTION("no neighbour heard yet: judged from 0, refused, then adopted once they are heard") {
+    AgentLogic a(0, Vec2(1, 2), 60 * kMs);
+    CHECK(a.on_command(rogue) == V::Refused);
+    CHECK(a.on_command(in_force) == V::Refused);
+    CHECK_FALSE(a.has_command());
+    CHECK_FALSE(a.recheck_commands());
+    a.on_state(1, Vec2(0, 0), 1, 0, in_force.id);
+    a.on_state(2, Vec2(0, 1), 1, 0, in_force.id);
+    CHECK(a.recheck_commands());
+    CHECK(a.command_id() == in_force.id);  // the swarm's command, not the rogue's
+    CHECK_FALSE(a.recheck_commands());
+  }
+  SECTION("neighbours heard first: the swarm's command at once, the rogue's refused") {
+    AgentLogic a(0, Vec2(1, 2), 60 * kMs);
+    a.on_state(1, Vec2(0, 0), 1, 0, in_force.id);
+    CHECK(a.on_command(rogue) == V::Refused);
+    CHECK(a.on_command(in_force) == V::Adopted);
+    CHECK(a.command_id() == in_force.id);
+  }
+  SECTION("a fresh swarm: the first epochs are small and adopted at once") {
+    AgentLogic a(0, Vec2(1, 2), 60 * kMs);
+    CHECK(adopt(a, circle(), 1));
+  }
+}
+
+TEST_CASE("tracking targets of another command with the same epoch are ignored", "[agent][order]") {
+  AgentLogic a(0, Vec2(1, 2), 60 * kMs);
+  core::Command c = circle();
+  c.tracking.enabled = true;
+  REQUIRE(adopt(a, core::compile(c), 5, issuer(2)));
+  a.on_target(dds::TargetSample{dds::CommandId{5, issuer(1)}, 0.0, Vec2(9, 9), Vec2::Zero(), 0}, 0);
+  CHECK_FALSE(a.following_target());
+  a.on_target(dds::TargetSample{dds::CommandId{5, issuer(2)}, 0.0, Vec2(9, 9), Vec2::Zero(), 0}, 0);
+  CHECK(a.following_target());
 }

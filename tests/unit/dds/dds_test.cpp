@@ -183,6 +183,32 @@ bool is_loopback_locator(const frtps::Locator_t& l) {
 // ---------------------------------------------------------------------------------------------------
 // Conversions and validation
 
+TEST_CASE("ShapeCommand carries a 64-bit epoch, its issuer and the issuer's name", "[dds][convert][order]") {
+  const dds::SourceId issuer{{1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12}};
+  const dds::SourceId writer{{7, 7, 7, 7, 7, 7, 7, 7, 7, 7, 7, 7}};
+  const std::uint64_t epoch = (1ULL << 32) + 5;  // beyond 32 bits
+  msg::ShapeCommand m = dds::to_msg(sample_command(), dds::CommandId{epoch, issuer}, "shapeform_supervisor on h pid 1");
+  CHECK(m.epoch() == epoch);
+  dds::CommandSample c;
+  std::string error;
+  REQUIRE(dds::from_msg(m, writer, c, error));
+  CHECK(c.id == dds::CommandId{epoch, issuer});  // a re-offered copy keeps the issuer, not its writer
+  CHECK(c.issuer_name == "shapeform_supervisor on h pid 1");
+  CHECK(dds::describe_issuer(c.issuer_name, c.id.issuer) ==
+        "shapeform_supervisor on h pid 1 [01.02.03.04.05.06.07.08.09.0a.0b.0c]");
+  // A writer that leaves the issuer empty issued the command itself; its name is cleaned and cut.
+  m.issuer({});
+  m.issuer_name("rogue\n" + std::string(500, 'x'));
+  REQUIRE(dds::from_msg(m, writer, c, error));
+  CHECK(c.id == dds::CommandId{epoch, writer});
+  CHECK(c.issuer_name.size() == dds::kIssuerNameMax);
+  CHECK(c.issuer_name.rfind("rogue?x", 0) == 0);
+  CHECK(dds::describe_issuer("", writer) == "07.07.07.07.07.07.07.07.07.07.07.07");
+  m.epoch(0);
+  CHECK_FALSE(dds::from_msg(m, writer, c, error));
+  CHECK(error == "command.epoch: must be >= 1, got 0");
+}
+
 TEST_CASE("ShapeCommand round trip keeps every field", "[dds][convert]") {
   const core::Command in = sample_command();
   const msg::ShapeCommand m = dds::to_msg(in, 7);
@@ -532,7 +558,7 @@ TEST_CASE("AgentState converts both ways; a refused sample leaves the output unt
   s.id = 7;
   s.seq = 99;
   s.stamp_ns = 123;
-  s.epoch = 3;
+  s.command = dds::CommandId{(1ULL << 40) + 3, dds::SourceId{{1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12}}};
   s.model_time = 12.5;
   s.x = Vec2(1.0, -2.0);
   s.v = Vec2(0.5, 0.25);
@@ -540,13 +566,14 @@ TEST_CASE("AgentState converts both ways; a refused sample leaves the output unt
   s.prev_x = Vec2(0.75, -1.5);
   s.prev_arc = 3.5;
   const msg::AgentState m = dds::to_msg(s);
-  CHECK((m.id() == 7 && m.seq() == 99u && m.stamp_ns() == 123 && m.epoch() == 3u && m.model_time() == 12.5));
+  CHECK((m.id() == 7 && m.seq() == 99u && m.stamp_ns() == 123 && m.epoch() == (1ULL << 40) + 3 && m.model_time() == 12.5));
+  CHECK(m.issuer() == s.command.issuer.prefix);
   CHECK((m.x() == 1.0 && m.y() == -2.0 && m.vx() == 0.5 && m.vy() == 0.25));
   CHECK((m.has_arc() && m.arc() == 4.0 && m.prev_arc() == 3.5 && m.prev_x() == 0.75 && m.prev_y() == -1.5));
   dds::StateSample back;
   std::string why;
   REQUIRE(dds::from_msg(m, back, why));
-  CHECK((back.id == s.id && back.seq == s.seq && back.stamp_ns == s.stamp_ns && back.epoch == s.epoch));
+  CHECK((back.id == s.id && back.seq == s.seq && back.stamp_ns == s.stamp_ns && back.command == s.command));
   CHECK((back.model_time == s.model_time && back.x == s.x && back.v == s.v && back.prev_x == s.prev_x));
   CHECK((back.arc == s.arc && back.prev_arc == s.prev_arc));
 
@@ -567,14 +594,14 @@ TEST_CASE("AgentState converts both ways; a refused sample leaves the output unt
 }
 
 TEST_CASE("TrackingTarget converts both ways and refuses non-finite or absurd values", "[dds][convert]") {
-  const dds::TargetSample t{4, 20.0, Vec2(1.0, 2.0), Vec2(-0.5, 0.125), 777};
+  const dds::TargetSample t{dds::CommandId{4, dds::SourceId{{9}}}, 20.0, Vec2(1.0, 2.0), Vec2(-0.5, 0.125), 777};
   const msg::TrackingTarget m = dds::to_msg(t);
   CHECK((m.epoch() == 4u && m.model_time() == 20.0 && m.cx() == 1.0 && m.cy() == 2.0));
   CHECK((m.vx() == -0.5 && m.vy() == 0.125 && m.stamp_ns() == 777));
   dds::TargetSample back;
   std::string why;
   REQUIRE(dds::from_msg(m, back, why));
-  CHECK((back.epoch == t.epoch && back.model_time == t.model_time && back.centre == t.centre &&
+  CHECK((back.command == t.command && back.model_time == t.model_time && back.centre == t.centre &&
          back.velocity == t.velocity && back.stamp_ns == t.stamp_ns));
 
   const auto problem = [&](auto mutate) {
@@ -584,7 +611,7 @@ TEST_CASE("TrackingTarget converts both ways and refuses non-finite or absurd va
     std::string error;
     const bool ok = dds::from_msg(w, out, error);
     CHECK(ok == error.empty());
-    if (!ok) CHECK(out.epoch == 0u);  // untouched
+    if (!ok) CHECK(out.command.none());  // untouched
     return error;
   };
   CHECK(problem([](msg::TrackingTarget&) {}).empty());
@@ -1207,7 +1234,7 @@ TEST_CASE("a large polygon command crosses the wire; a bad shape or step is refu
 
   // What an agent does: apply what from_msg accepts, count what it refuses.
   core::CompiledCommand in_force;
-  std::uint32_t epoch = 0;
+  std::uint64_t epoch = 0;
   int refused = 0;
   std::string last_error;
   std::vector<dds::Received<msg::ShapeCommand>> batch;

@@ -494,7 +494,8 @@ TEST_CASE("integrator and max_speed", "[supervisor][parser]") {
 
 TEST_CASE("status, metrics, start, quit, exit", "[supervisor][parser]") {
   parse_as<Status>("status");
-  parse_as<StartScenario>("start");
+  CHECK_FALSE(parse_as<StartScenario>("start").replace);
+  CHECK(parse_as<StartScenario>("start replace").replace);
   parse_as<ShowMetrics>("metrics");
   parse_as<Quit>("quit");
   parse_as<Quit>("exit");
@@ -646,7 +647,8 @@ TEST_CASE("errors: unknown and duplicate parameters, stray arguments", "[supervi
   CHECK(error_of("status now") == "status: unexpected argument 'now'");
   CHECK(error_of("metrics all") == "metrics: unexpected argument 'all'");
   CHECK(error_of("quit now") == "quit: unexpected argument 'now'");
-  CHECK(error_of("start now") == "start: unexpected argument 'now'");
+  CHECK(error_of("start now") == "start: unexpected argument 'now' (expected replace)");
+  CHECK(error_of("start replace now") == "start: unexpected argument 'now'");
   CHECK(error_of("start shape=circle") ==
         "start: unknown parameter 'shape' (takes no key=value parameters)");
   CHECK(error_of("exit 0") == "exit: unexpected argument '0'");

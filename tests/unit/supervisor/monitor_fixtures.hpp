@@ -20,7 +20,7 @@ inline core::CompiledCommand circle() {
 }
 
 /// Agents 0..n-1 evenly on a ring of `radius` about the origin, following `epoch`, heard at now.
-inline void ring(supervisor::SwarmMonitor& m, int n, double radius, std::uint32_t epoch, std::int64_t now) {
+inline void ring(supervisor::SwarmMonitor& m, int n, double radius, std::uint64_t epoch, std::int64_t now) {
   for (int i = 0; i < n; ++i) {
     const double a = 2 * M_PI * i / n;
     const core::Vec2 x = radius * core::Vec2(std::cos(a), std::sin(a));

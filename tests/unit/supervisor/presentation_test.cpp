@@ -128,8 +128,9 @@ TEST_CASE("summary JSON keeps every key, tracking errors only when tracking", "[
   std::set<std::string> keys;
   for (const auto& [k, v] : j.items()) keys.insert(k);
   std::set<std::string> want = {"event", "agents", "name", "shape", "law", "tracking", "epoch", "model_time", "dt",
-                                "steps", "agents_seen", "converged", "verdict", "settle_step", "final_ids", "final_positions",
-                                "final_model_times", "samples_rejected", "recording", "exit_status"};
+                                "steps", "agents_seen", "converged", "verdict", "settle_step", "final_ids",
+                                "final_positions", "final_model_times", "samples_rejected", "commands_refused",
+                                "recording", "exit_status"};
   for (const core::MetricInfo& info : core::kMetricTable)
     if (info.name != "centroid_error" && info.name != "ring_error") want.insert(std::string(info.name));
   CHECK(keys == want);
@@ -242,11 +243,25 @@ TEST_CASE("show: the command in force and who published it", "[supervisor][prese
                           "  max_speed   off\n"})
     CHECK(t.find(row) != std::string::npos);
   CHECK(t.find("another participant") == std::string::npos);
-  info.agents_epoch = 6;  // someone else published since
+  CHECK(t.find("superseded") == std::string::npos);
+  // Another participant's command, which replaced this supervisor's epoch 4: shown with its publisher.
+  info.epoch = 6;
+  info.own = false;
+  info.publisher = "shapeform_supervisor on box pid 42 [01.02.03.04.05.06.07.08.09.0a.0b.0c]";
+  info.superseded = 4;
+  info.published_s_ago = 0.5;
+  info.agents_epoch = 6;
   t = supervisor::show_text(info);
-  CHECK(t.find("the agents follow epoch 6, published by another participant") != std::string::npos);
-  info.epoch = 0;  // nothing published here
+  CHECK(t.rfind("epoch 6, published by shapeform_supervisor on box pid 42 [01.02.03.04.05.06.07.08.09.0a.0b.0c] "
+                "(another participant), learnt 0.5 s ago; 7 of 8 agents follow it\n"
+                "this supervisor's epoch 4 was superseded by it\n",
+                0) == 0);
+  CHECK(t.find("  shape       circle r=4") != std::string::npos);
+  info.agents_epoch = 7;  // an agent is ahead of the command topic
+  CHECK(supervisor::show_text(info).find("some agents follow epoch 7") != std::string::npos);
+  info.epoch = 0;  // nothing in force
+  info.agents_epoch = 6;
   t = supervisor::show_text(info);
-  CHECK(t.rfind("nothing published by this supervisor yet", 0) == 0);
+  CHECK(t.rfind("no command in force yet", 0) == 0);
   CHECK(t.find("the agents follow epoch 6, published by another participant") != std::string::npos);
 }

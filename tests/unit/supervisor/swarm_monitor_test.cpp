@@ -110,3 +110,20 @@ TEST_CASE("swarm monitor: free-running agents are sampled at their latest state"
   CHECK(at3[1].second == Vec2(-1, 2));
   CHECK(m.measure(3.0, 0).metrics.extent.value() == Approx((Vec2(1, 0) - Vec2(-1, 2)).norm()));
 }
+
+TEST_CASE("following means the same command: epoch and issuer; the lowest epoch followed", "[supervisor][order]") {
+  SwarmMonitor m(kS, {});
+  dds::SourceId mine, theirs;
+  mine.prefix[0] = 1;
+  theirs.prefix[0] = 2;
+  m.set_command(circle(), dds::CommandId{5, mine}, 0);
+  CHECK(m.min_epoch_followed(0) == 0);  // nobody heard
+  m.on_state(0, Vec2(4, 0), Vec2(4, 0), dds::CommandId{5, mine}, 0, 0);
+  m.on_state(1, Vec2(0, 4), Vec2(0, 4), dds::CommandId{5, theirs}, 0, 0);  // the same epoch, another issuer
+  m.on_state(2, Vec2(-4, 0), Vec2(-4, 0), dds::CommandId{}, 0, 0);          // no command yet
+  CHECK(m.following_count(0) == 1);
+  CHECK(m.min_epoch_followed(0) == 5);
+  m.on_state(2, Vec2(-4, 0), Vec2(-4, 0), dds::CommandId{(1ULL << 40), theirs}, 0, 0);
+  CHECK(m.min_epoch_followed(0) == 5);
+  CHECK(m.max_epoch_seen() == (1ULL << 40));  // 64-bit
+}

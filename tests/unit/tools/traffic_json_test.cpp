@@ -75,7 +75,7 @@ TEST_CASE("a state sample: every field, through the project's conversion", "[too
   s.id = 3;
   s.seq = 17;
   s.stamp_ns = 123456789;
-  s.epoch = 2;
+  s.command = dds::CommandId{2, dds::SourceId{{1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0x2a}}};
   s.model_time = 41.5;
   s.x = core::Vec2(1.25, -2.5);
   s.v = core::Vec2(0.5, 0.25);
@@ -85,7 +85,8 @@ TEST_CASE("a state sample: every field, through the project's conversion", "[too
   nlohmann::json j;
   std::string why;
   REQUIRE(tools::sample_json(dds::to_msg(s), j, why));
-  CHECK(j == nlohmann::json({{"id", 3}, {"seq", 17}, {"stamp_ns", 123456789}, {"epoch", 2}, {"model_time", 41.5},
+  CHECK(j == nlohmann::json({{"id", 3}, {"seq", 17}, {"stamp_ns", 123456789}, {"epoch", 2},
+                             {"issuer", "01.00.00.00.00.00.00.00.00.00.00.2a"}, {"model_time", 41.5},
                              {"x", {1.25, -2.5}}, {"v", {0.5, 0.25}}, {"arc", 3.75}, {"prev_x", {1.0, -2.0}},
                              {"prev_arc", 3.5}}));
   s.arc.reset();
@@ -141,13 +142,17 @@ TEST_CASE("a command sample: its epoch and every key of the command table", "[to
   c.hold = true;
   nlohmann::json j;
   std::string why;
-  REQUIRE(tools::sample_json(dds::to_msg(c, 9), j, why));
+  REQUIRE(tools::sample_json(dds::to_msg(c, 9, "shapeform_supervisor on h pid 1"), j, why));
   CHECK(j["epoch"] == 9);
+  CHECK(j["issuer"] == "00.00.00.00.00.00.00.00.00.00.00.00");  // as sent: none filled in
+  CHECK(j["issuer_name"] == "shapeform_supervisor on h pid 1");
   CHECK(j["shape"]["kind"] == "square");
   CHECK(j["shape"]["a"] == 5.0);
   CHECK(j["dynamics"]["hold"] == true);
   nlohmann::json expected = app::command_json(c);
   expected["epoch"] = 9;
+  expected["issuer"] = j["issuer"];
+  expected["issuer_name"] = j["issuer_name"];
   CHECK(j == expected);
   msg::ShapeCommand bad = dds::to_msg(c, 9);
   bad.dt(50);
@@ -159,7 +164,7 @@ TEST_CASE("a target and a metrics sample", "[tools][echo]") {
   nlohmann::json j;
   std::string why;
   REQUIRE(tools::sample_json(dds::to_msg(dds::TargetSample{3, 12.5, core::Vec2(1, 2), core::Vec2(0.5, 0), 99}), j, why));
-  CHECK(j == nlohmann::json({{"epoch", 3}, {"model_time", 12.5}, {"centre", {1.0, 2.0}}, {"velocity", {0.5, 0.0}},
+  CHECK(j == nlohmann::json({{"epoch", 3}, {"issuer", "00.00.00.00.00.00.00.00.00.00.00.00"}, {"model_time", 12.5}, {"centre", {1.0, 2.0}}, {"velocity", {0.5, 0.0}},
                              {"stamp_ns", 99}}));
   core::Metrics m;
   m.agents = 12;
