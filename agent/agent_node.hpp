@@ -10,12 +10,15 @@ namespace shapeform::agent {
 struct AgentOptions {
   /// Machine output on stdout, one JSON object per line with an "event" key: "status" once per status
   /// period per hosted agent (the AgentStatus numbers), "command" when a command is adopted,
-  /// "rejected" when a sample is refused (throttled like the log). Logs stay on stderr.
+  /// "rejected" when a sample is refused (throttled like the log), "duplicate" when another
+  /// participant publishes a hosted id ({id, source: this participant, other, action: exit|keep}).
+  /// Logs stay on stderr.
   bool json = false;
 };
 
 /// Runs the agents' fixed-rate loop on DDS until SIGINT/SIGTERM; returns the process exit status
-/// (0 clean stop, 1 runtime failure such as a participant that cannot be created).
+/// (0 clean stop, 1 runtime failure such as a participant that cannot be created, 2 an id already in
+/// use: see IdentityGuard; the agents listen agent.identity_grace_s before their first publication).
 /// One process hosts one agent (shapeform_agent) or several (shapeform_agent_group, like a ROS 2
 /// component container): one participant, one state writer for all of their instances, one reader
 /// whose samples every hosted agent takes in. Each hosted agent has its own AgentLogic and publishes

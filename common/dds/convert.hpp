@@ -33,7 +33,8 @@ msg::ShapeCommand to_msg(const core::Command& cmd, std::uint32_t epoch);
 /// The epoch is not part of core::Command: read m.epoch().
 bool from_msg(const msg::ShapeCommand& m, core::CompiledCommand& out, std::string& error);
 
-/// True when s is plausible: id >= 0, model_time, x, y, vx, vy, arc finite, |x|, |y| <=
+/// True when s is plausible: id in 0..kMaxAgentId, model_time in [0, kModelTimeLimit], x, y, vx,
+/// vy, arc finite, |x|, |y| <=
 /// kStateLimit and speed |(vx, vy)| <= kStateLimit. Otherwise false with `why` naming the field
 /// ("state.x: ...").
 bool valid_state(const msg::AgentState& s, std::string& why);
@@ -56,7 +57,7 @@ bool from_msg(const msg::TrackingTarget& m, TargetSample& out, std::string& why)
 /// StatusSample -> AgentStatus (every field).
 msg::AgentStatus to_msg(const StatusSample& s);
 
-/// AgentStatus -> StatusSample when id >= 0; otherwise false, `out` untouched, `why` says so.
+/// AgentStatus -> StatusSample when id is in 0..kMaxAgentId; otherwise false, `out` untouched, `why` says so.
 bool from_msg(const msg::AgentStatus& m, StatusSample& out, std::string& why);
 
 /// core::Metrics -> wire message (agents as agents_alive, every metric of core::kMetricTable under its
