@@ -28,9 +28,10 @@ std::string writable_dir_problem(const std::string& dir) {
   if (dir.empty()) return "";
   const std::string shown = "'" + util::excerpt(dir) + "'";
   std::error_code ec;
+  if (std::filesystem::exists(dir, ec) && !std::filesystem::is_directory(dir, ec))
+    return shown + " is not a folder: give a writable folder";
   std::filesystem::create_directories(dir, ec);
   if (ec) return "cannot create the folder " + shown + " (" + ec.message() + "): give a writable folder";
-  if (!std::filesystem::is_directory(dir, ec)) return shown + " is not a folder: give a writable folder";
   std::string probe = (std::filesystem::path(dir) / ".shapeform_write_probe_XXXXXX").string();
   std::vector<char> name(probe.begin(), probe.end());
   name.push_back('\0');

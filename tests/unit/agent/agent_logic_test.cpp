@@ -283,3 +283,44 @@ TEST_CASE("a held command: the agent keeps its position, model time stands still
     CHECK(a.model_time() == c.dt);
   }
 }
+
+namespace {
+
+dds::SourceId participant(std::uint8_t b) {
+  dds::SourceId s;
+  s.prefix[0] = 1;
+  s.prefix[11] = b;
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("identity: a newcomer that hears its id during the grace period yields without publishing",
+          "[agent][identity]") {
+  agent::IdentityGuard g(participant(1), 1000);
+  CHECK_FALSE(g.may_publish(999));  // listening
+  CHECK(g.on_sample(3, participant(1)) == agent::IdentityGuard::Action::None);  // our own sample
+  CHECK(g.on_sample(3, dds::SourceId{}) == agent::IdentityGuard::Action::None);  // unknown: cannot tell
+  // Even from a higher GUID prefix: whoever published first keeps the id.
+  CHECK(g.on_sample(3, participant(9)) == agent::IdentityGuard::Action::Yield);
+  CHECK(g.yielding());
+  CHECK_FALSE(g.may_publish(2000));  // never publishes
+  CHECK(g.on_sample(3, participant(9)) == agent::IdentityGuard::Action::None);
+}
+
+TEST_CASE("identity: after the grace period the higher GUID prefix yields, the lower keeps the id",
+          "[agent][identity]") {
+  agent::IdentityGuard low(participant(2), 1000), high(participant(5), 1000);
+  CHECK(low.may_publish(1000));
+  CHECK(high.may_publish(1000));
+  low.published();
+  high.published();
+  // Each sees the other: both decide alike, exactly one yields.
+  CHECK(low.on_sample(7, participant(5)) == agent::IdentityGuard::Action::Keep);
+  CHECK(high.on_sample(7, participant(2)) == agent::IdentityGuard::Action::Yield);
+  CHECK_FALSE(low.yielding());
+  CHECK(low.may_publish(5000));
+  CHECK(high.yielding());
+  CHECK(low.on_sample(7, participant(5)) == agent::IdentityGuard::Action::None);  // reported once
+  CHECK(low.on_sample(8, participant(5)) == agent::IdentityGuard::Action::Keep);  // another hosted id
+}
