@@ -25,6 +25,7 @@
 #include "util/proc_stats.hpp"
 #include "util/rate_loop.hpp"
 #include "util/signals.hpp"
+#include "util/text.hpp"
 
 namespace shapeform::supervisor {
 
@@ -468,7 +469,7 @@ void Supervisor::run_lines(std::int64_t now) {
     if (!line) return;
     const ParseResult r = parse_command(*line, current_);
     if (!r.ok()) {
-      std::cerr << with_location(*src, r.error) << std::endl;
+      std::cerr << util::bounded_line(with_location(*src, r.error)) << std::endl;  // it may quote a long line
       continue;
     }
     execute(r.action, now);
@@ -500,7 +501,7 @@ bool Supervisor::load_script() {
     while (auto line = check.poll()) {
       const ParseResult r = parse_command(*line, c);
       if (!r.ok()) {
-        std::cerr << with_location(check, r.error) << std::endl;
+        std::cerr << util::bounded_line(with_location(check, r.error)) << std::endl;
         bad = true;
       } else if (const auto* set = std::get_if<SetCommand>(&r.action)) {
         c = set->command;

@@ -99,16 +99,14 @@ int App::run(const std::function<int()>& body) const {
   try {
     return body();
   } catch (const std::exception& e) {
-    const std::string what = e.what();
-    std::cerr << prog_ << ": " << (what.size() > util::kLineMax ? util::excerpt(what, util::kLineMax) : what)
-              << std::endl;
+    std::cerr << prog_ << ": " << util::bounded_line(e.what()) << std::endl;
     return 1;
   }
 }
 
 int App::usage_error(const std::string& message) const {
   // A flag's value is untrusted input: the line quotes at most about util::kQuoteMax of it.
-  std::cerr << prog_ << ": " << util::excerpt(message, util::kLineMax) << '\n';
+  std::cerr << prog_ << ": " << util::bounded_line(message) << '\n';
   return kExitUsage;
 }
 

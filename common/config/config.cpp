@@ -801,8 +801,7 @@ namespace {
 
 /// Each problem bounded (util::kLineMax): whatever input it quotes, one problem stays one short line.
 std::vector<std::string> bounded(std::vector<std::string> problems) {
-  for (auto& p : problems)
-    if (p.size() > util::kLineMax) p = util::excerpt(p, util::kLineMax);
+  for (auto& p : problems) p = util::bounded_line(p);
   return problems;
 }
 

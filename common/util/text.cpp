@@ -60,4 +60,8 @@ std::string excerpt(std::string_view s, std::size_t max) {
   return out;
 }
 
+std::string bounded_line(std::string_view line, std::size_t max) {
+  return line.size() <= max ? std::string(line) : excerpt(line, max);
+}
+
 }  // namespace shapeform::util

@@ -25,4 +25,8 @@ inline constexpr std::size_t kLineMax = 400;
 /// place that quotes input uses, so that a 1 MB line is never echoed.
 std::string excerpt(std::string_view s, std::size_t max = kQuoteMax);
 
+/// A message line as it is when at most max characters long, else excerpt(line, max): the last guard
+/// where a line that may quote input is printed.
+std::string bounded_line(std::string_view line, std::size_t max = kLineMax);
+
 }  // namespace shapeform::util

@@ -266,3 +266,13 @@ TEST_CASE("excerpt escapes control characters and keeps at most about max charac
   CHECK(excerpt(std::string(201, 'y')).size() < 240);
   CHECK(excerpt(huge, 40).size() < 80);
 }
+
+TEST_CASE("bounded_line keeps a short line as it is and shortens a long one", "[util][text]") {
+  using shapeform::util::bounded_line;
+  CHECK(bounded_line("two\nlines") == "two\nlines");
+  const std::string long_line = "console: unknown command '" + std::string(5000, 'w') + "'";
+  const std::string b = bounded_line(long_line);
+  CHECK(b.size() <= shapeform::util::kLineMax + 20);
+  CHECK(b.rfind("console: unknown command 'www", 0) == 0);
+  CHECK(b.back() == '\'');
+}
