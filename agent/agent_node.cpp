@@ -70,7 +70,8 @@ class AgentNode {
   /// While yielding: our statuses (so a supervisor sees the duplicate too) once a reader matches,
   /// then stop. No state is published and nothing is disposed: the id stays the incumbent's.
   void farewell(std::int64_t now);
-  /// A refused sample: counted by every hosted agent, logged (throttled per kind unless `always`).
+  /// A refused sample: counted by every hosted agent, logged (throttled per first refused field, e.g.
+  /// "state.id", unless `always`).
   void reject(const char* what, const std::string& log_line, const std::string& why, bool always = false);
   bool hosted(std::int32_t id) const { return std::find(ids_.begin(), ids_.end(), id) != ids_.end(); }
 
@@ -180,7 +181,7 @@ void AgentNode::reject(const char* what, const std::string& log_line, const std:
   for (auto& l : logics_) l->count_rejected();
   bool shown = true;
   if (always) util::log_warn(log_line);
-  else shown = throttled_.warn(what, log_line);
+  else shown = throttled_.warn(why.substr(0, why.find(':')), log_line);  // throttled per refused field
   if (opt_.json && shown) emit({{"event", "rejected"}, {"what", what}, {"why", why}});
 }
 

@@ -179,7 +179,7 @@ void Supervisor::drain(std::int64_t now) {
     std::string why;
     if (!dds::from_msg(r.msg, s, why)) {
       ++rejected_;
-      throttled_.warn("state", "agent state rejected: " + why);
+      throttled_.warn(why.substr(0, why.find(':')), "agent state rejected: " + why);  // per refused field
       continue;
     }
     if (!owned(s.id, r.source, now)) {

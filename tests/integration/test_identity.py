@@ -32,7 +32,7 @@ CONFIG_READERS = [
     ("shapeform_bench_baseline", ["--id", "0"]),
     ("shapeform_bench_probe", ["--out", "{run_dir}/probe"]),
     ("shapeform_topics", []),
-    ("shapeform_echo", ["state"]),
+    ("shapeform_echo", ["shapeform/state"]),
     ("shapeform_rogue_publisher", ["--topic", "state"]),
 ]
 
@@ -95,7 +95,8 @@ class IdentityTest(harness.SwarmTestCase):
                          "every agent to count the rogue samples as rejected (%s)" % why)
             self.assertTrue(any(why in e["why"] for a in agents for e in a.events("rejected")),
                             "an agent names the refused field: " + why)
-        self.assertIn("state.id: must be in 0..9999, got 2147483647", sup.log())
+        for why in ("state.id: must be in 0..9999, got 2147483647", "state.model_time: must be in [0, 1000000000]"):
+            self.assertIn(why, sup.log(), "the supervisor names the refused field")
         # No new agent: neither the supervisor nor any agent took the rogue for one.
         rows, m = sup.status()
         self.assertEqual(sorted(rows), [0, 1, 2])

@@ -284,16 +284,8 @@ TEST_CASE("a held command: the agent keeps its position, model time stands still
   }
 }
 
-namespace {
-
-dds::SourceId participant(std::uint8_t b) {
-  dds::SourceId s;
-  s.prefix[0] = 1;
-  s.prefix[11] = b;
-  return s;
-}
-
-}  // namespace
+/// A participant whose GUID prefix ends in b (so participant(1) < participant(2)).
+static dds::SourceId participant(std::uint8_t b) { return dds::SourceId{{1, 15, 0, 0, 0, 0, 0, 0, 0, 0, 0, b}}; }
 
 TEST_CASE("identity: a newcomer that hears its id during the grace period yields without publishing",
           "[agent][identity]") {

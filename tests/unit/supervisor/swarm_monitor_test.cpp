@@ -111,16 +111,7 @@ TEST_CASE("swarm monitor: free-running agents are sampled at their latest state"
   CHECK(m.measure(3.0, 0).metrics.extent.value() == Approx((Vec2(1, 0) - Vec2(-1, 2)).norm()));
 }
 
-namespace {
-
-dds::SourceId source(std::uint8_t b) {
-  dds::SourceId s;
-  s.prefix[0] = 1;
-  s.prefix[11] = b;
-  return s;
-}
-
-}  // namespace
+static dds::SourceId source(std::uint8_t b) { return dds::SourceId{{1, 15, 0, 0, 0, 0, 0, 0, 0, 0, 0, b}}; }
 
 TEST_CASE("swarm monitor: a second participant publishing an id in use is a duplicate, reported once",
           "[supervisor][monitor][identity]") {
