@@ -7,7 +7,7 @@
   keeps running and the formation keeps its spacing.
 - A rogue participant built from the project's own types (tests/tools/rogue_publisher.cpp) publishing
   AgentState samples with id 2^31-1, or with model time 1e300: every agent and the supervisor refuse
-  and count them, and no new agent appears.
+  and count them, and no new agent appears. A 1 MB console line is refused in a short error line.
 - Bad inputs that must be refused fast with exit 2 and the path or key named, before anything starts:
   every program that reads a config given /dev/zero, a FIFO, a directory, a file above 1 MiB, two YAML
   documents, supervisor.target_rate_hz 1e9; an unwritable --record for the supervisor (before its DDS
@@ -101,6 +101,12 @@ class IdentityTest(harness.SwarmTestCase):
         rows, m = sup.status()
         self.assertEqual(sorted(rows), [0, 1, 2])
         self.assertTrue(all(a.hears(2) for a in agents))
+        # A 1 MB console line: its error line quotes a few hundred characters of it, not the megabyte.
+        since = len(sup.log())
+        sup.send("shape circle r=" + "q" * 1000000)
+        harness.poll(lambda: "qqq" in sup.log()[since:], 10, "the supervisor to refuse the long console line")
+        new_lines = sup.log()[since:].splitlines()
+        self.assertTrue(new_lines and max(len(line) for line in new_lines) < 1000, [line[:300] for line in new_lines])
         sup.send("quit")
         self.assertEqual(sup.wait(15), 0)
         s = harness.summary(sup.out())
