@@ -188,12 +188,12 @@ double degrees_for(double rad) {
 
 /// A string value as a message shows it: double-quoted, at most util::kQuoteMax characters of it.
 std::string quote(const std::string& s) {
-  std::string out = "\"";
-  for (const char ch : util::excerpt(s)) {
-    if (ch == '"' || ch == '\\') out += '\\';
-    out += ch;
+  std::string escaped;  // quotes and backslashes first: excerpt's own escapes must stay single
+  for (const char ch : s) {
+    if (ch == '"' || ch == '\\') escaped += '\\';
+    escaped += ch;
   }
-  return out + "\"";
+  return "\"" + util::excerpt(escaped) + "\"";
 }
 
 /// How a value is shown after "got": numbers and booleans as written, strings quoted.

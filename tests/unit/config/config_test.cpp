@@ -849,6 +849,9 @@ TEST_CASE("a problem quotes at most about 200 characters of the offending input"
     REQUIRE(p.size() == 1);
     CHECK(p[0].size() <= shapeform::util::kLineMax + 40);
   }
+  // A quoted string keeps one escape per special character.
+  CHECK(problem_of("schema_version: 1\nagent:\n  rate_hz: \"a\\nb\\\"c\"\n") ==
+        "agent.rate_hz: expected a number, got \"a\\nb\\\"c\" (line 3)");
   const auto set = problems_of("schema_version: 1\n", {"agent.rate_hz=" + huge});
   REQUIRE(set.size() == 1);
   CHECK(set[0].size() <= shapeform::util::kLineMax + 40);
