@@ -47,6 +47,7 @@ class AgentNode {
 
  private:
   void tick() {
+    recover_from_stall();
     const std::int64_t now = util::steady_ns();
     drain_commands();
     drain_targets();
@@ -57,6 +58,8 @@ class AgentNode {
     publish();
     report();
   }
+  /// After a stall longer than the peers' lease the participant is recreated (dds::Node).
+  void recover_from_stall();
   void drain_commands();
   void drain_targets();
   void drain_states();
@@ -185,6 +188,12 @@ void AgentNode::reject(const char* what, const std::string& log_line, const std:
   if (opt_.json && shown) emit({{"event", "rejected"}, {"what", what}, {"why", why}});
 }
 
+void AgentNode::recover_from_stall() {
+  const auto stall_s = node_.recover_if_stalled(1.0 / cfg_.agent.rate_hz);
+  if (stall_s) identity_.rebuilt(node_.source());  // a new GUID prefix: our samples carry both
+  if (stall_s && opt_.json) emit({{"event", "recovered"}, {"stall_s", *stall_s}});
+}
+
 void AgentNode::drain_commands() {
   command_reader_.drain(commands_);
   for (const auto& c : commands_) {
@@ -234,7 +243,7 @@ void AgentNode::drain_states() {
       reject("state", "state sample rejected: " + why, why);
       continue;
     }
-    if (hosted(s.id) && r.source != identity_.own()) {  // our id, from another participant
+    if (hosted(s.id) && !identity_.ours(r.source)) {  // our id, from another participant
       on_duplicate(s.id, r.source, r.receive_stamp_ns);
       continue;
     }

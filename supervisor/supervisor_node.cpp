@@ -82,6 +82,7 @@ class Supervisor {
  private:
   /// One period of the loop.
   void tick(std::int64_t now, bool metrics_due) {
+    recover_from_stall();
     drain(now);
     report_membership(now);
     publish_target(now);
@@ -103,6 +104,8 @@ class Supervisor {
   /// Validates the whole --script before anything is sent; false (reported) on a bad line.
   bool load_script();
   void open_dds();
+  /// After a stall longer than the peers' lease the participant is recreated (dds::Node).
+  void recover_from_stall();
   void drain(std::int64_t now);
   /// --json: an "agent" event for every agent that became alive or stopped being alive.
   void report_membership(std::int64_t now);
@@ -158,6 +161,15 @@ class Supervisor {
   ProgressFilter progress_;
   std::int64_t armed_quit_ns_ = -1;  ///< when Ctrl-C last found nothing to cancel (-1: not armed)
 };
+
+void Supervisor::recover_from_stall() {
+  const auto stall_s = node_->recover_if_stalled(1.0 / cfg_.supervisor.target_rate_hz);
+  if (!stall_s) return;
+  // The new command writer starts empty: offer the command in force (same epoch) to later joiners again.
+  if (epoch_ != 0 && !command_writer_.write(dds::to_msg(current_, epoch_)))
+    util::log_warn("command write failed");
+  out_.event("recovered", {{"stall_s", *stall_s}});
+}
 
 void Supervisor::drain(std::int64_t now) {
   state_reader_.drain(states_);

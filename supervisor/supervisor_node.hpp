@@ -9,7 +9,7 @@ struct SupervisorOptions {
   std::string script;      ///< run this script's lines first (validated up front)
   std::string record_dir;  ///< start recording here at once
   /// Machine output: stdout carries only JSON lines with an "event" key (epoch, wait, status, metrics,
-  /// agent, record, summary); the human text goes to stderr.
+  /// agent, record, recovered, summary); the human text goes to stderr.
   bool json = false;
 };
 

@@ -1,6 +1,8 @@
 #include "dds/node.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cstdio>
 
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/publisher/qos/PublisherQos.hpp>
@@ -9,6 +11,7 @@
 #include <fastdds/dds/topic/qos/TopicQos.hpp>
 
 #include "dds/participant.hpp"
+#include "util/log.hpp"
 
 namespace shapeform::dds {
 
@@ -67,25 +70,85 @@ Node::Node(const TransportConfig& cfg, const std::string& name)
   // Any throw below destroys entities_, which deletes whatever was created so far.
   entities_->name = name;
   entities_->transport = cfg;
-  entities_->participant = create_participant(cfg, name);
+  open();
+}
 
-  register_type<msg::AgentState>(entities_->participant, name);
-  register_type<msg::ShapeCommand>(entities_->participant, name);
-  register_type<msg::TrackingTarget>(entities_->participant, name);
-  register_type<msg::SwarmMetrics>(entities_->participant, name);
-  register_type<msg::AgentStatus>(entities_->participant, name);
+void Node::open() {
+  detail::Entities& e = *entities_;
+  const std::string& name = e.name;
+  e.participant = create_participant(e.transport, name);
+
+  register_type<msg::AgentState>(e.participant, name);
+  register_type<msg::ShapeCommand>(e.participant, name);
+  register_type<msg::TrackingTarget>(e.participant, name);
+  register_type<msg::SwarmMetrics>(e.participant, name);
+  register_type<msg::AgentStatus>(e.participant, name);
 
   // Constructed QoS (not *_QOS_DEFAULT, which XML profiles could change).
-  entities_->publisher = entities_->participant->create_publisher(fdds::PublisherQos());
-  if (entities_->publisher == nullptr) throw std::runtime_error("create_publisher failed (node " + name + ")");
-  entities_->subscriber = entities_->participant->create_subscriber(fdds::SubscriberQos());
-  if (entities_->subscriber == nullptr) {
+  e.publisher = e.participant->create_publisher(fdds::PublisherQos());
+  if (e.publisher == nullptr) throw std::runtime_error("create_publisher failed (node " + name + ")");
+  e.subscriber = e.participant->create_subscriber(fdds::SubscriberQos());
+  if (e.subscriber == nullptr) {
     throw std::runtime_error("create_subscriber failed (node " + name + ")");
   }
 }
 
+void Node::rebuild() {
+  detail::Entities& e = *entities_;
+  const auto live = [](auto& slots) {
+    const auto gone = [](const auto& w) { return w.expired(); };
+    slots.erase(std::remove_if(slots.begin(), slots.end(), gone), slots.end());
+  };
+  live(e.writers);
+  live(e.readers);
+  // Detach the mailboxes first: deleting the old readers unmatches every peer's writer, which would
+  // hand out a NoWriters sample for every agent heard, as if all of them had left.
+  for (const auto& w : e.readers)
+    if (const auto slot = w.lock(); slot->reader != nullptr) slot->reader->set_listener(nullptr);
+  delete_participant(e.participant);  // its children too; peers hear it leave at once
+  e.participant = nullptr;
+  e.publisher = nullptr;
+  e.subscriber = nullptr;
+  e.topics.fill(nullptr);
+  for (const auto& w : e.writers) w.lock()->writer = nullptr;
+  for (const auto& w : e.readers) w.lock()->reader = nullptr;
+
+  open();
+  for (const auto& w : e.writers) {
+    const auto slot = w.lock();
+    slot->writer = create_writer(slot->topic);
+  }
+  for (const auto& w : e.readers) {
+    const auto slot = w.lock();
+    slot->reader = create_reader(slot->topic, slot->listener);
+  }
+}
+
+std::optional<double> Node::recover_if_stalled(double period_s) {
+  const auto stall = stall_.check(boot_ns(), period_s, stall_threshold_s(entities_->transport));
+  if (!stall && !rebuild_pending_) return std::nullopt;
+  if (stall) pending_stall_s_ = *stall;
+  try {
+    rebuild();
+  } catch (const std::exception& ex) {
+    rebuild_pending_ = true;
+    util::log_error("recreating the participant after a stall failed (retrying next tick): " +
+                    std::string(ex.what()));
+    return std::nullopt;
+  }
+  rebuild_pending_ = false;
+  char text[160];
+  std::snprintf(text, sizeof text,
+                "stalled for %.2f s (longer than the lease allows, %.2f s): participant recreated, "
+                "rediscovering",
+                pending_stall_s_, stall_threshold_s(entities_->transport));
+  util::log_warn(text);
+  return pending_stall_s_;
+}
+
 SourceId Node::source() const {
   SourceId s;
+  if (entities_->participant == nullptr) return s;  // a failed rebuild: unknown until one succeeds
   const auto& prefix = entities_->participant->guid().guidPrefix.value;
   std::copy(std::begin(prefix), std::end(prefix), s.prefix.begin());
   return s;
@@ -101,6 +164,10 @@ void Node::check_type(TopicId requested, TopicId of_type) {
 }
 
 fdds::Topic* Node::topic(TopicId id) {
+  if (entities_->participant == nullptr) {
+    throw std::runtime_error(std::string("no participant for topic ") + topic_name(id) + " (node " +
+                             entities_->name + ": its rebuild failed)");
+  }
   auto& slot = entities_->topics[static_cast<std::size_t>(id)];
   if (slot == nullptr) {
     slot = entities_->participant->create_topic(topic_name(id), type_name(id), fdds::TopicQos());

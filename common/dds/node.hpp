@@ -6,12 +6,15 @@
 /// other thread is Fast DDS's receive thread, which only appends to a Reader's mailbox.
 /// Lifetime: handles may be destroyed before or after their Node; after the Node is gone they do nothing
 /// (write() returns false, drain() returns what was already received).
+/// Rebuild: Node::rebuild() replaces the participant and every endpoint behind the handles, which keep
+/// working (same topic, QoS and mailbox) without being touched: see recover_if_stalled().
 #include <array>
 #include <cstddef>
 #include <cstdint>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -30,6 +33,7 @@
 
 #include "dds/msg_traits.hpp"
 #include "dds/samples.hpp"
+#include "dds/stall.hpp"
 #include "dds/transport.hpp"
 #include "dds/topics.hpp"
 #include "util/clock.hpp"
@@ -62,6 +66,20 @@ inline constexpr std::size_t kDefaultMailboxCapacity = 16384;
 
 namespace detail {
 
+/// What a Writer handle points at: its topic and the DataWriter serving it now. Node::rebuild()
+/// replaces the DataWriter; the handle owns the slot, the Node only watches it (weak_ptr).
+struct WriterSlot {
+  TopicId topic;
+  eprosima::fastdds::dds::DataWriter* writer = nullptr;
+};
+
+/// What a Reader handle points at: its topic, its listener (the mailbox) and the DataReader serving it now.
+struct ReaderSlot {
+  TopicId topic;
+  eprosima::fastdds::dds::DataReaderListener* listener = nullptr;
+  eprosima::fastdds::dds::DataReader* reader = nullptr;
+};
+
 /// The DDS entities of a Node. Shared with handles through weak_ptr so they can tell whether the
 /// Node still exists.
 struct Entities {
@@ -71,6 +89,9 @@ struct Entities {
   std::array<eprosima::fastdds::dds::Topic*, kAllTopics.size()> topics{};
   std::string name;
   TransportConfig transport;  ///< the profile the participant was built from (reader locators)
+  /// The live handles' endpoints, recreated by Node::rebuild() on the new participant.
+  std::vector<std::weak_ptr<WriterSlot>> writers;
+  std::vector<std::weak_ptr<ReaderSlot>> readers;
 
   Entities() = default;
   Entities(const Entities&) = delete;
@@ -187,12 +208,12 @@ class Writer {
   Writer() = default;
   Writer(const Writer&) = delete;
   Writer& operator=(const Writer&) = delete;
-  Writer(Writer&& o) noexcept : entities_(std::move(o.entities_)), writer_(std::exchange(o.writer_, nullptr)) {}
+  Writer(Writer&& o) noexcept : entities_(std::move(o.entities_)), slot_(std::move(o.slot_)) {}
   Writer& operator=(Writer&& o) noexcept {
     if (this != &o) {
       reset();
       entities_ = std::move(o.entities_);
-      writer_ = std::exchange(o.writer_, nullptr);
+      slot_ = std::move(o.slot_);
     }
     return *this;
   }
@@ -202,43 +223,44 @@ class Writer {
   bool write(const Msg& m) {
     const auto e = entities_.lock();
     // DataWriter::write takes void*; it only reads the sample.
-    return e && writer_ != nullptr && writer_->write(const_cast<Msg*>(&m));
+    return e && get() != nullptr && slot_->writer->write(const_cast<Msg*>(&m));
   }
 
   /// Disposes the instance with m's key (keyed topics only): readers see it NOT_ALIVE_DISPOSED at once.
   bool dispose(const Msg& m) {
     static_assert(MsgTraits<Msg>::keyed, "dispose() is for keyed topics only");
     const auto e = entities_.lock();
-    return e && writer_ != nullptr &&
-           detail::is_ok(writer_->dispose(const_cast<Msg*>(&m), eprosima::fastdds::dds::HANDLE_NIL));
+    return e && get() != nullptr &&
+           detail::is_ok(slot_->writer->dispose(const_cast<Msg*>(&m), eprosima::fastdds::dds::HANDLE_NIL));
   }
 
   /// Number of matched readers now (-1 without a writer).
   int matched() const {
     const auto e = entities_.lock();
-    if (!e || writer_ == nullptr) return -1;
+    if (!e || get() == nullptr) return -1;
     eprosima::fastdds::dds::PublicationMatchedStatus st;
-    if (!detail::is_ok(writer_->get_publication_matched_status(st))) return -1;
+    if (!detail::is_ok(slot_->writer->get_publication_matched_status(st))) return -1;
     return st.current_count;
   }
 
-  bool valid() const { return writer_ != nullptr && !entities_.expired(); }
-  eprosima::fastdds::dds::DataWriter* get() const { return writer_; }
+  bool valid() const { return get() != nullptr && !entities_.expired(); }
+  /// The DataWriter serving this handle now (another one after Node::rebuild()).
+  eprosima::fastdds::dds::DataWriter* get() const { return slot_ ? slot_->writer : nullptr; }
 
  private:
   friend class Node;
-  Writer(std::weak_ptr<detail::Entities> e, eprosima::fastdds::dds::DataWriter* w)
-      : entities_(std::move(e)), writer_(w) {}
+  Writer(std::weak_ptr<detail::Entities> e, std::shared_ptr<detail::WriterSlot> slot)
+      : entities_(std::move(e)), slot_(std::move(slot)) {}
   void reset() noexcept {
-    if (writer_ != nullptr) {
-      if (const auto e = entities_.lock()) detail::delete_writer(*e, writer_);
-      writer_ = nullptr;
+    if (get() != nullptr) {
+      if (const auto e = entities_.lock()) detail::delete_writer(*e, slot_->writer);
     }
+    slot_.reset();
     entities_.reset();
   }
 
   std::weak_ptr<detail::Entities> entities_;
-  eprosima::fastdds::dds::DataWriter* writer_ = nullptr;
+  std::shared_ptr<detail::WriterSlot> slot_;
 };
 
 /// Typed reader of one topic with a mailbox filled by the listener. Move-only; deletes its DataReader
@@ -250,15 +272,13 @@ class Reader {
   Reader(const Reader&) = delete;
   Reader& operator=(const Reader&) = delete;
   Reader(Reader&& o) noexcept
-      : entities_(std::move(o.entities_)),
-        mailbox_(std::move(o.mailbox_)),
-        reader_(std::exchange(o.reader_, nullptr)) {}
+      : entities_(std::move(o.entities_)), mailbox_(std::move(o.mailbox_)), slot_(std::move(o.slot_)) {}
   Reader& operator=(Reader&& o) noexcept {
     if (this != &o) {
       reset();
       entities_ = std::move(o.entities_);
       mailbox_ = std::move(o.mailbox_);
-      reader_ = std::exchange(o.reader_, nullptr);
+      slot_ = std::move(o.slot_);
     }
     return *this;
   }
@@ -277,32 +297,33 @@ class Reader {
   /// Number of matched writers now (-1 without a reader).
   int matched() const {
     const auto e = entities_.lock();
-    if (!e || reader_ == nullptr) return -1;
+    if (!e || get() == nullptr) return -1;
     eprosima::fastdds::dds::SubscriptionMatchedStatus st;
-    if (!detail::is_ok(reader_->get_subscription_matched_status(st))) return -1;
+    if (!detail::is_ok(slot_->reader->get_subscription_matched_status(st))) return -1;
     return st.current_count;
   }
 
   /// Samples dropped because the mailbox was full (nobody drained).
   std::uint64_t overflowed() const { return mailbox_ ? mailbox_->overflowed() : 0; }
 
-  bool valid() const { return reader_ != nullptr && !entities_.expired(); }
-  eprosima::fastdds::dds::DataReader* get() const { return reader_; }
+  bool valid() const { return get() != nullptr && !entities_.expired(); }
+  /// The DataReader serving this handle now (another one after Node::rebuild()).
+  eprosima::fastdds::dds::DataReader* get() const { return slot_ ? slot_->reader : nullptr; }
 
  private:
   friend class Node;
   void reset() noexcept {
-    if (reader_ != nullptr) {
-      if (const auto e = entities_.lock()) detail::delete_reader(*e, reader_);
-      reader_ = nullptr;
+    if (get() != nullptr) {
+      if (const auto e = entities_.lock()) detail::delete_reader(*e, slot_->reader);
     }
+    slot_.reset();
     entities_.reset();
     mailbox_.reset();  // after the DataReader: no callback can run any more
   }
 
   std::weak_ptr<detail::Entities> entities_;
   std::unique_ptr<detail::Mailbox<Msg>> mailbox_;
-  eprosima::fastdds::dds::DataReader* reader_ = nullptr;
+  std::shared_ptr<detail::ReaderSlot> slot_;
 };
 
 /// Owns a participant built by create_participant(cfg, name), one publisher and one subscriber; all
@@ -319,7 +340,9 @@ class Node {
   template <class Msg>
   Writer<Msg> writer(TopicId id) {
     check_type(id, MsgTraits<Msg>::topic);
-    return Writer<Msg>(entities_, create_writer(id));
+    auto slot = std::make_shared<detail::WriterSlot>(detail::WriterSlot{id, create_writer(id)});
+    entities_->writers.push_back(slot);
+    return Writer<Msg>(entities_, std::move(slot));
   }
 
   /// A reader on topic id with reader_qos(id, transport), its listener filling a mailbox of at most
@@ -329,17 +352,37 @@ class Node {
     check_type(id, MsgTraits<Msg>::topic);
     Reader<Msg> r;
     r.mailbox_ = std::make_unique<detail::Mailbox<Msg>>(mailbox_capacity);
-    r.reader_ = create_reader(id, r.mailbox_.get());
+    r.slot_ = std::make_shared<detail::ReaderSlot>(detail::ReaderSlot{id, r.mailbox_.get(), nullptr});
+    r.slot_->reader = create_reader(id, r.mailbox_.get());
     r.entities_ = entities_;
+    entities_->readers.push_back(r.slot_);
     return r;
   }
 
   eprosima::fastdds::dds::DomainParticipant* participant() const { return entities_->participant; }
   const std::string& name() const { return entities_->name; }
-  /// This participant's identity, as its samples carry it in Received::source.
+  /// This participant's identity, as its samples carry it in Received::source. A rebuild changes it;
+  /// unknown while a rebuild has failed.
   SourceId source() const;
 
+  /// Replaces the participant, publisher, subscriber and topics with new ones from the same transport
+  /// profile (dds::create_participant) and recreates the endpoint of every live handle: same topic,
+  /// QoS and mailbox, so the handles carry on untouched. The new participant has a new GUID, which
+  /// every peer discovers like a late joiner. The old readers' listeners are detached first: their
+  /// unmatching is this process leaving, not its peers. Throws like the constructor; the Node then has
+  /// no participant (handles do nothing) until a later rebuild succeeds.
+  void rebuild();
+
+  /// The self-healing step, called once per loop tick by every process (period_s: the loop's period).
+  /// When the last call was more than kStallMargin past its period ago (the process was stopped,
+  /// debugged, suspended or starved) for longer than the peers' lease allows (stall_threshold_s()),
+  /// its peers may have dropped it, and Fast DDS 2.9 may then never match it again (docs/RELIABILITY.md):
+  /// the Node is rebuilt, a warning logged, and the stall in seconds returned. nullopt otherwise.
+  /// A rebuild that throws is logged and retried on the next call.
+  std::optional<double> recover_if_stalled(double period_s);
+
  private:
+  void open();  ///< creates participant, types, publisher and subscriber into entities_
   static void check_type(TopicId requested, TopicId of_type);
   eprosima::fastdds::dds::Topic* topic(TopicId id);
   eprosima::fastdds::dds::DataWriter* create_writer(TopicId id);
@@ -347,6 +390,9 @@ class Node {
                                                     eprosima::fastdds::dds::DataReaderListener* listener);
 
   std::shared_ptr<detail::Entities> entities_;
+  StallWatch stall_;
+  bool rebuild_pending_ = false;  ///< the last rebuild failed: retry on the next recover_if_stalled()
+  double pending_stall_s_ = 0.0;
 };
 
 }  // namespace shapeform::dds

@@ -61,10 +61,16 @@ std::vector<P> build_table() {
       kHostPortRule,
       [](auto& c) -> auto& { return c.discovery_server; }));
   t.push_back(param<double>(
-      Type::Real, "transport.lease_s", "s", params::above(0), "participant lease duration", "",
+      Type::Real, "transport.lease_s", "s", params::above(0),
+      "participant lease duration: peers drop a participant they heard nothing from for this long (a killed "
+      "process is dropped after it). A process whose loop stalled longer than `lease_s - announce_s` "
+      "recreates its participant, which everyone discovers afresh (docs/RELIABILITY.md)",
+      "",
       [](auto& c) -> auto& { return c.lease_s; }));
   t.push_back(param<double>(
-      Type::Real, "transport.announce_s", "s", params::above(0), "participant announcement period",
+      Type::Real, "transport.announce_s", "s", params::above(0),
+      "participant announcement period (every message renews the lease; announcements also flow when "
+      "nothing else does)",
       " and `< lease_s`", [](auto& c) -> auto& { return c.announce_s; }));
   t.push_back(param<long long>(
       Type::Integer, "transport.socket_buffer_bytes", "bytes", params::integers(0, 2147483647),

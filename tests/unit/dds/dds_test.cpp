@@ -22,6 +22,7 @@
 #include "dds/discovery.hpp"
 #include "dds/node.hpp"
 #include "dds/participant.hpp"
+#include "dds/stall.hpp"
 #include "dds/topics.hpp"
 #include "dds/transport.hpp"
 #include "shapeform/msg/ShapeCommandPubSubTypes.h"
@@ -1306,6 +1307,66 @@ TEST_CASE("node refuses a topic of another type and handles survive their node",
   std::vector<dds::Received<msg::AgentStatus>> batch;
   CHECK(moved.drain(batch) == 0u);
   CHECK(moved.matched() == -1);
+}
+
+TEST_CASE("a rebuilt node has a new participant and its handles carry on", "[dds][node]") {
+  const auto cfg = loopback(test_domain(2));
+  dds::Node a(cfg, "test-rebuilt"), b(cfg, "test-peer");
+  // Both publish and read the state topic: a is rebuilt, b is its peer.
+  using State = msg::AgentState;
+  constexpr auto kState = dds::TopicId::State;
+  auto a_writer = a.writer<State>(kState), b_writer = b.writer<State>(kState);
+  auto a_reader = a.reader<State>(kState), b_reader = b.reader<State>(kState);
+  std::vector<dds::Received<msg::AgentState>> batch;
+  bool a_saw_b_leave = false;
+  // Each publishes its agent until each has heard the other's from the other's current participant.
+  const auto exchange = [&] {
+    bool a_heard = false, b_heard = false;
+    return wait_for([&] {
+      for (auto [w, id] : {std::pair{&a_writer, 1}, std::pair{&b_writer, 2}}) {
+        msg::AgentState s = good_state();
+        s.id(id);
+        s.stamp_ns(util::steady_ns());
+        w->write(s);
+      }
+      a_reader.drain(batch);
+      for (const auto& r : batch) {
+        if (!r.valid_data && r.key_id == 2) a_saw_b_leave = true;
+        if (r.valid_data && r.msg.id() == 2 && r.source == b.source()) a_heard = true;
+      }
+      b_reader.drain(batch);
+      for (const auto& r : batch)
+        if (r.valid_data && r.msg.id() == 1 && r.source == a.source()) b_heard = true;
+      return a_heard && b_heard;
+    });
+  };
+  REQUIRE(exchange());
+  const dds::SourceId before = a.source();
+  a.rebuild();
+  CHECK(a.source() != before);  // a new GUID: peers discover it afresh
+  CHECK(a_writer.valid());
+  CHECK(a_reader.valid());
+  REQUIRE(exchange());
+  // The old reader left with its listener detached: the peer's agent was never handed out as gone.
+  CHECK_FALSE(a_saw_b_leave);
+}
+
+TEST_CASE("the stall watch reports a loop late by more than the threshold", "[dds]") {
+  CHECK(dds::stall_threshold_s(dds::TransportConfig{}) == Approx(1.5));  // lease 2 s - announce 0.5 s
+  constexpr std::int64_t kMs = 1'000'000;
+  dds::StallWatch w;
+  CHECK_FALSE(w.check(1000 * kMs, 0.02, 1.5));         // the first call only starts the watch
+  CHECK_FALSE(w.check(1020 * kMs, 0.02, 1.5));         // on time
+  CHECK_FALSE(w.check(2500 * kMs, 0.02, 1.5));         // 1.46 s late
+  const auto stall = w.check(4100 * kMs, 0.02, 1.5);  // 1.58 s late
+  REQUIRE(stall);
+  CHECK(*stall == Approx(1.58));
+  CHECK_FALSE(w.check(4120 * kMs, 0.02, 1.5));  // measured from the last call, not from the first
+  dds::StallWatch slow;                           // a 0.5 Hz loop is slow, not stalled
+  CHECK_FALSE(slow.check(0, 2.0, 1.5));
+  CHECK_FALSE(slow.check(2000 * kMs, 2.0, 1.5));
+  CHECK(slow.check(5600 * kMs, 2.0, 1.5));
+  CHECK(dds::boot_ns() > 0);
 }
 
 TEST_CASE("a source id prints as Fast DDS prints a GUID prefix and orders bytewise", "[dds]") {
