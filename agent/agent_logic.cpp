@@ -144,6 +144,7 @@ bool AgentLogic::step() {
   const bool follow_target = following_target();
   const core::StepResult r =
       core::agent_step(follow_target ? effective_command() : cmd_, id_, x_, nbrs_, follow_target ? 0.0 : t_);
+  if (r.clamped) ++counters_.steps_clamped;
   arc_prev_ = arc_law ? arc() : std::nullopt;
   x_prev_ = x_;
   x_ = r.x;

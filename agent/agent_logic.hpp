@@ -25,6 +25,7 @@ struct AgentCounters {
   std::uint64_t samples_lost = 0;      ///< gaps in neighbours' sequence numbers
   std::uint64_t stale_dropped = 0;     ///< neighbours dropped for silence
   std::uint64_t departed = 0;          ///< neighbours dropped because they left (disposed)
+  std::uint64_t steps_clamped = 0;     ///< steps the law would have taken out of the workspace (or not finite)
 };
 
 class AgentLogic {

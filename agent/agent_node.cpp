@@ -4,14 +4,19 @@
 
 #include <algorithm>
 #include <cmath>
+#include <condition_variable>
+#include <deque>
 #include <iostream>
 #include <memory>
+#include <mutex>
 #include <sstream>
+#include <thread>
 
 #include <nlohmann/json.hpp>
 
 #include "agent_logic.hpp"
 #include "app/json.hpp"
+#include "core/params.hpp"
 #include "dds/convert.hpp"
 #include "dds/node.hpp"
 #include "dds/participant.hpp"
@@ -34,6 +39,68 @@ std::uint64_t ticks_per(double rate_hz, double every_hz) {
 
 /// One JSON object per line on stdout (--json), flushed so a reader sees it at once.
 void emit(const nlohmann::json& j) { std::cout << j.dump() << std::endl; }
+
+/// Checks and compiles received commands (dds::from_msg: validation, envelope, shapes::compile) on
+/// a thread of its own, so that no command, however costly its curve, stalls the control loop: the
+/// loop submits what it drained and takes what is ready, in the order submitted.
+class CommandCompiler {
+ public:
+  struct Result {
+    std::uint32_t epoch = 0;
+    bool ok = false;
+    core::CompiledCommand cmd;  ///< when ok
+    std::string error;          ///< when not ok
+  };
+  CommandCompiler() : worker_([this] { work(); }) {}
+  ~CommandCompiler() {
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    wake_.notify_one();
+    worker_.join();
+  }
+  CommandCompiler(const CommandCompiler&) = delete;
+  CommandCompiler& operator=(const CommandCompiler&) = delete;
+
+  void submit(const msg::ShapeCommand& m) {
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      todo_.push_back(m);
+    }
+    wake_.notify_one();
+  }
+  /// Moves the results ready so far into `out` (cleared first). Never waits for a compilation.
+  void take(std::vector<Result>& out) {
+    out.clear();
+    const std::lock_guard<std::mutex> lock(mutex_);
+    out.swap(done_);
+  }
+
+ private:
+  void work() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    while (true) {
+      wake_.wait(lock, [this] { return stop_ || !todo_.empty(); });
+      if (stop_) return;
+      const msg::ShapeCommand m = std::move(todo_.front());
+      todo_.pop_front();
+      lock.unlock();
+      Result r;
+      r.epoch = m.epoch();
+      r.ok = dds::from_msg(m, r.cmd, r.error);
+      lock.lock();
+      done_.push_back(std::move(r));
+    }
+  }
+
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::deque<msg::ShapeCommand> todo_;
+  std::vector<Result> done_;
+  bool stop_ = false;
+  std::thread worker_;  ///< last: starts once the rest is built
+};
 
 /// The agents of one process around their pure AgentLogic: each tick drains the inputs, steps,
 /// publishes and reports. One thread of control; Fast DDS threads only fill reader mailboxes.
@@ -92,6 +159,8 @@ class AgentNode {
   dds::Reader<msg::TrackingTarget> target_reader_;
   std::vector<dds::Received<msg::AgentState>> states_;
   std::vector<dds::Received<msg::ShapeCommand>> commands_;
+  CommandCompiler compiler_;
+  std::vector<CommandCompiler::Result> compiled_;
   std::vector<dds::Received<msg::TrackingTarget>> targets_;
 
   util::RateLoop loop_;
@@ -195,23 +264,25 @@ void AgentNode::recover_from_stall() {
 }
 
 void AgentNode::drain_commands() {
+  // New commands go to the compiler; those it has finished are applied (compilation never runs here).
   command_reader_.drain(commands_);
-  for (const auto& c : commands_) {
-    if (!c.valid_data) continue;
-    core::CompiledCommand cmd;
-    std::string error;
-    if (!dds::from_msg(c.msg, cmd, error)) {
-      reject("command", "command epoch " + std::to_string(c.msg.epoch()) + " rejected: " + error, error, true);
+  for (const auto& c : commands_)
+    if (c.valid_data) compiler_.submit(c.msg);
+  compiler_.take(compiled_);
+  for (const auto& c : compiled_) {
+    if (!c.ok) {
+      reject("command", "command epoch " + std::to_string(c.epoch) + " rejected: " + c.error, c.error, true);
       continue;
     }
+    const core::CompiledCommand& cmd = c.cmd;
     bool adopted = false;
-    for (auto& l : logics_) adopted = l->on_command(cmd, c.msg.epoch()) || adopted;
+    for (auto& l : logics_) adopted = l->on_command(cmd, c.epoch) || adopted;
     if (!adopted) continue;
     const std::string shape(core::to_string(cmd.shape.kind));
-    util::log_info("following command epoch " + std::to_string(c.msg.epoch()) + ": " + shape +
+    util::log_info("following command epoch " + std::to_string(c.epoch) + ": " + shape +
                    (cmd.tracking.enabled ? " (tracking)" : ""));
     if (opt_.json)
-      emit({{"event", "command"}, {"epoch", c.msg.epoch()}, {"shape", shape}, {"tracking", cmd.tracking.enabled}});
+      emit({{"event", "command"}, {"epoch", c.epoch}, {"shape", shape}, {"tracking", cmd.tracking.enabled}});
   }
 }
 
@@ -263,7 +334,12 @@ void AgentNode::step(std::int64_t now) {
     l.drop_stale(now);
     if (k == 0 && had_target && !l.following_target())
       util::log_warn("tracking target unheard for 1 s: the centre follows the command's path on this agent's clock");
+    const std::uint64_t clamped = l.counters().steps_clamped;
     l.step();
+    if (l.counters().steps_clamped != clamped)
+      throttled_.warn("clamp", "agent " + std::to_string(l.id()) +
+                                   ": the command's step would leave the workspace; kept at its edge (safety.workspace = " +
+                                   core::params::format_number(l.command().workspace) + ")");
   }
 }
 
@@ -314,7 +390,8 @@ void AgentNode::publish_status(bool json) {
     status_writer_.write(dds::to_msg(st));
     if (opt_.json && json)
       emit({{"event", "status"}, {"id", st.id}, {"neighbours_heard", st.neighbours_heard}, {"epoch", st.epoch},
-            {"model_time", l->model_time()}, {"ticks", st.ticks}, {"samples_rejected", st.samples_rejected}});
+            {"model_time", l->model_time()}, {"ticks", st.ticks}, {"samples_rejected", st.samples_rejected},
+            {"steps_clamped", k.steps_clamped}});
   }
   ages_us_.clear();
 }

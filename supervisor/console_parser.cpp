@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/envelope.hpp"
 #include "core/params.hpp"
 #include "shapes/shapes.hpp"
 #include "util/text.hpp"
@@ -792,6 +793,11 @@ ParseResult parse_command(std::string_view line, const core::CompiledCommand& cu
   if (!result.ok() || tokens.empty()) return result;
   try {
     result.action = parse_tokens(tokens, current);
+    // Every new command keeps to its envelope, as the config loader and the agents' receiver check it.
+    if (const auto* set = std::get_if<SetCommand>(&result.action)) {
+      const auto problems = core::envelope_problems(set->command);
+      if (!problems.empty()) fail(tokens.front().text + ": " + core::envelope_text(problems));
+    }
   } catch (const ParseError& e) {
     result.action = NoOp{};
     result.error = e.message;

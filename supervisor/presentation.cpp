@@ -146,13 +146,14 @@ nlohmann::json metrics_answer(const SwarmMonitor::Sample& s, std::uint32_t epoch
   j["epoch"] = epoch;
   j["model_time"] = s.model_time;
   j["converged"] = s.converged;
+  j["verdict"] = core::to_string(s.why);
   return j;
 }
 
 std::string metrics_table(const SwarmMonitor::Sample& s, std::uint32_t epoch) {
   std::ostringstream o;
   o << "epoch " << epoch << ", model time t=" << fmt_opt(s.model_time, "%.4g") << ", " << s.alive << " agents alive, "
-    << s.following << " following, " << (s.converged ? "converged" : "not converged") << '\n';
+    << s.following << " following, " << (s.converged ? std::string("converged") : std::string("not converged (") + core::to_string(s.why) + ")") << '\n';
   char line[160];
   for (const core::MetricInfo& info : core::kMetricTable) {
     const std::optional<double> v = info.get(s.metrics);
@@ -250,6 +251,7 @@ nlohmann::json summary_json(const Summary& s) {
   j["steps"] = static_cast<long>(std::llround(t / s.command.dt));
   j["agents_seen"] = s.agents_seen;
   j["converged"] = s.sample.converged;
+  j["verdict"] = core::to_string(s.sample.why);
   j["settle_step"] = or_null(settle_step(s));
   if (!s.command.tracking.enabled) {
     j.erase("centroid_error");
@@ -273,7 +275,7 @@ std::string summary_text(const Summary& s) {
   const auto settle = settle_step(s);
   std::ostringstream o;
   o << "summary: epoch " << s.epoch << ", " << s.sample.alive << " agents, t=" << fmt_opt(s.sample.model_time, "%.0f")
-    << (s.sample.converged ? ", converged" : ", not converged") << "\n  shape_error_mean=" << fmt_opt(m.shape_error_mean)
+    << (s.sample.converged ? std::string(", converged") : std::string(", not converged (") + core::to_string(s.sample.why) + ")") << "\n  shape_error_mean=" << fmt_opt(m.shape_error_mean)
     << " shape_error_max=" << fmt_opt(m.shape_error_max) << " gap_cv=" << fmt_opt(m.gap_cv)
     << " min_separation=" << fmt_opt(m.min_separation) << " clusters=" << count_or_dash(m.clusters)
     << " settle_step=" << (settle ? std::to_string(*settle) : "-");

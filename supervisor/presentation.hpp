@@ -47,7 +47,7 @@ nlohmann::json status_json(const std::vector<AgentRow>& rows, std::uint32_t epoc
 /// The progress line logged about once a second.
 std::string progress_line(const SwarmMonitor::Sample& s, const core::Command& current);
 
-/// The `metrics` answer: every metric (app::metrics_json), epoch, model_time, converged.
+/// The `metrics` answer: every metric (app::metrics_json), epoch, model_time, converged, verdict (core::to_string(ConvergenceDetector::Why): why not converged).
 nlohmann::json metrics_answer(const SwarmMonitor::Sample& s, std::uint32_t epoch);
 
 /// The `metrics` table: a heading line (epoch, model time, agents, converged), then one row per metric
@@ -114,7 +114,7 @@ struct Summary {
 };
 
 /// The summary as one JSON object: every metric (centroid_error and ring_error only when tracking),
-/// name, shape, law, tracking, epoch, model_time, dt, steps, agents_seen, converged, settle_step,
+/// name, shape, law, tracking, epoch, model_time, dt, steps, agents_seen, converged, verdict, settle_step,
 /// final_ids, final_positions, final_model_times, samples_rejected, recording, exit_status, and
 /// "event":"summary".
 nlohmann::json summary_json(const Summary& s);

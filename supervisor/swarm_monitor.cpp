@@ -48,7 +48,7 @@ void SwarmMonitor::on_departed(std::int32_t id) {
 void SwarmMonitor::set_command(const core::CompiledCommand& cmd, std::uint32_t epoch, std::int64_t) {
   command_ = cmd;
   epoch_ = epoch;
-  detector_.reset();
+  detector_.set_command(cmd);  // judged against this command's shape from now on
   last_.reset();
   hist_t_.clear();
   hist_err_.clear();
@@ -106,10 +106,12 @@ SwarmMonitor::Sample SwarmMonitor::measure(double model_time, std::int64_t now_n
     x.reserve(agents_.size());
     for (const auto& [id, p] : alive_positions(now_ns, model_time)) x.push_back(p);
     s.metrics = core::compute_metrics(*command_, x, model_time);
+    s.spread = core::spread(x);
   } else {
     s.metrics.agents = s.alive;
   }
   s.converged = detector_.converged();
+  s.why = detector_.why();
   return s;
 }
 
@@ -118,14 +120,15 @@ SwarmMonitor::Sample SwarmMonitor::update(double model_time, std::int64_t now_ns
   if (command_) {
     if (s.alive > 0 && s.following == s.alive) {
       const auto uniform = core::uniformity(*command_, s.metrics);
-      detector_.add(model_time, s.metrics.shape_error_mean, uniform);
+      detector_.add(model_time, s.metrics.shape_error_mean, uniform, s.spread);
       hist_t_.push_back(model_time);
       hist_err_.push_back(s.metrics.shape_error_mean.value_or(0.0));
       hist_gap_.push_back(uniform);
     } else {
-      detector_.reset();  // agents still switching to the new command
+      detector_.reset();  // agents still switching to the new command (or following another one)
     }
     s.converged = detector_.converged();
+    s.why = detector_.why();
   }
   last_ = s;
   return s;

@@ -75,6 +75,8 @@ class SwarmMonitor {
     double model_time = 0.0;
     core::Metrics metrics;
     bool converged = false;
+    core::ConvergenceDetector::Why why = core::ConvergenceDetector::Why::NoData;  ///< the verdict's reason
+    std::optional<double> spread;  ///< core::spread of the alive agents (the verdict's growth measure)
     int alive = 0;
     int following = 0;
   };

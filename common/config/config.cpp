@@ -24,6 +24,7 @@
 #include <string_view>
 #include <system_error>
 
+#include "core/envelope.hpp"
 #include "shapes/shapes.hpp"
 #include "util/text.hpp"
 
@@ -641,6 +642,13 @@ Config convert(const YAML::Node& root, bool version_required, Reader& rd) {
     ShapeKeys keys{found.at("shape.r_expr"), found.at("shape.x_expr"), found.at("shape.y_expr"),
                    found.at("shape.f_expr"), found.at("shape.vertices")};
     compile_shape(c.command, keys, rd);
+  }
+  // The envelope (core/envelope.hpp) judges the command as a whole: only once every key of it is good.
+  if (rd.problems.empty()) {
+    for (const core::EnvelopeProblem& p : core::envelope_problems(c.command)) {
+      const Entry& e = found.at(p.key);
+      rd.problems.push_back(p.text + rd.where(e.path, e.anchor()));
+    }
   }
   return c;
 }

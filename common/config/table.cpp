@@ -125,6 +125,14 @@ std::vector<P> build() {
   t.push_back(real(
       "supervisor.converge.hold", "model time", params::at_least(0), "time the conditions must hold",
       [](auto& c) -> auto& { return c.supervisor.converge.hold; }));
+  t.push_back(real(
+      "supervisor.converge.on_shape_rel", "", params::at_least(0),
+      "on the shape: mean shape error <= this times the shape's size (scale x r0, max(a, b), a, ...)",
+      [](auto& c) -> auto& { return c.supervisor.converge.on_shape_rel; }));
+  t.push_back(real(
+      "supervisor.converge.on_shape_abs", "shape units", params::at_least(0),
+      "on the shape: ... or this many shape units, whichever is larger",
+      [](auto& c) -> auto& { return c.supervisor.converge.on_shape_abs; }));
   for (const auto& p : dds::transport_table())
     t.push_back(params::lift<Config>(
         p, [](auto& c) -> auto& { return c.transport; }));

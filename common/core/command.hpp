@@ -32,7 +32,13 @@ struct Command {
   Gains gains;
   Integrator integrator = Integrator::Euler;
   double dt = 1.0;         ///< model time per step (one paper iteration = 1)
-  double max_speed = 0.0;  ///< speed limit in units per model time; 0 = none
+  /// Speed limit in units per model time; 0 = none. The default never binds in any shipped scenario
+  /// (the fastest, arc_line, peaks at 4.4; the paper's law at 0.41): it only bounds a mis-tuned
+  /// command's steps (config/README.md).
+  double max_speed = 10.0;
+  /// Half-width of the workspace [-w, w]^2 (shape units): commands that would carry agents outside are
+  /// refused (core::envelope_problems) and no step leaves it (core::agent_step).
+  double workspace = 1000.0;
   Law law = Law::Paper;
   ArcParams arc;
   /// Held (the console's hold / stop): every agent keeps its position (velocity 0) and its model

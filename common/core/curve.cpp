@@ -346,11 +346,17 @@ Polyline trace_contour(const std::function<double(double, double)>& f, double ha
     at_edge[segs[k].second].push_back(k);
   }
   std::vector<char> used(segs.size(), 0);
+  int pieces = 0;
   std::vector<Vec2> best;
   bool best_closed = false;
   double best_len = -1.0;
   for (std::size_t s0 = 0; s0 < segs.size(); ++s0) {
     if (used[s0]) continue;
+    // A zero set in many pieces is a pattern, not a curve a formation can follow (agents would settle
+    // on whichever piece is nearest, all over the box); tracing it would also cost without bound.
+    if (++pieces > kImplicitPiecesMax)
+      throw ShapeError("implicit curve: f(x, y) = 0 falls into more than " + std::to_string(kImplicitPiecesMax) +
+                       " separate pieces in the box (a pattern, or a curve finer than the tracing grid)");
     used[s0] = 1;
     std::deque<long> chain = {segs[s0].first, segs[s0].second};
     // Grow at the back, then at the front.

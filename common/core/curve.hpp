@@ -89,10 +89,14 @@ std::shared_ptr<const Curve> make_polygon(std::vector<Vec2> vertices, bool close
 std::shared_ptr<const Curve> make_polar(std::vector<double> r_samples);
 /// A sampled parametric curve (points at s = k / (n-1) for s in [0, 1]); closest-point target.
 std::shared_ptr<const Curve> make_sampled(std::vector<Vec2> points, bool closed);
+/// Most separate pieces of f = 0 in the tracing box make_implicit accepts (a circle has 1, a hyperbola
+/// 2, the lemniscate 1): more is a pattern (e.g. sin(50 x) sin(50 y) = 0.5), refused with a ShapeError.
+inline constexpr int kImplicitPiecesMax = 16;
 /// Implicit curve f(x, y) = 0: target by Newton steps along the gradient (numerical), falling back to
 /// the closest point of the traced contour where the gradient vanishes or Newton does not converge.
 /// The contour is traced by marching squares over [-half_box, half_box]^2 at `grid` cells per side;
-/// its longest component defines arc length. Throws ShapeError when f has no zero in the box.
+/// its longest component defines arc length. Throws ShapeError when f has no zero in the box or more
+/// than kImplicitPiecesMax pieces.
 std::shared_ptr<const Curve> make_implicit(std::function<double(double, double)> f, double half_box = 20.0,
                                            int grid = 400);
 

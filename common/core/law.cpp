@@ -1,5 +1,6 @@
 #include "law.hpp"
 
+#include "envelope.hpp"
 #include "integrator.hpp"
 #include "law_arc.hpp"
 #include "law_paper.hpp"
@@ -24,7 +25,10 @@ StepResult agent_step(const CompiledCommand& cmd, std::int32_t self_id, const Ve
   if (cmd.hold) return {x, Vec2::Zero()};  // held: nobody moves (the simulator holds the same way)
   const auto f = [&](const Vec2& y, double tau) { return agent_velocity(cmd, self_id, y, nbrs, tau); };
   const Vec2 next = integrate(cmd.integrator, f, x, t, cmd.dt);
-  return {next, (next - x) / cmd.dt};
+  if (!next.allFinite()) return {x, Vec2::Zero(), true};
+  bool clamped = false;
+  const Vec2 inside = keep_inside(next, cmd.workspace, clamped);
+  return {inside, (inside - x) / cmd.dt, clamped};
 }
 
 }  // namespace shapeform::core

@@ -17,10 +17,15 @@ Vec2 agent_velocity(const CompiledCommand& cmd, std::int32_t self_id, const Vec2
 struct StepResult {
   Vec2 x;  ///< new position
   Vec2 v;  ///< velocity used over the step ((x_new - x) / dt)
+  /// The law's step would have left the workspace (moved back inside it) or was not finite (not
+  /// taken: the agent stays where it was).
+  bool clamped = false;
 };
 
 /// One integration step of agent self_id from model time t to t + cmd.dt, neighbours held fixed.
-/// A held command (cmd.hold) leaves x where it is, with velocity 0.
+/// A held command (cmd.hold) leaves x where it is, with velocity 0. The new position is always finite
+/// and inside the workspace (core::keep_inside): an agent never takes a position its peers would
+/// refuse, and a swarm carried to the edge comes back when commanded back.
 StepResult agent_step(const CompiledCommand& cmd, std::int32_t self_id, const Vec2& x,
                       const std::vector<Neighbour>& nbrs, double t);
 

@@ -164,15 +164,50 @@ std::optional<int> settle_index(const std::vector<double>& shape_error,
   return 0;
 }
 
+double on_shape_bound(const CompiledCommand& cmd, const ConvergenceParams& p) {
+  return std::max(p.on_shape_abs, p.on_shape_rel * cmd.shape.scale * cmd.curve().size());
+}
+
+std::optional<double> spread(const std::vector<Vec2>& x) {
+  if (x.empty()) return std::nullopt;
+  Vec2 lo = x.front(), hi = lo;
+  for (const Vec2& v : x) {
+    lo = lo.cwiseMin(v);
+    hi = hi.cwiseMax(v);
+  }
+  return 0.5 * (hi - lo).norm();
+}
+
+const char* to_string(ConvergenceDetector::Why w) {
+  switch (w) {
+    case ConvergenceDetector::Why::Converged: return "converged";
+    case ConvergenceDetector::Why::NoData: return "no data";
+    case ConvergenceDetector::Why::OffShape: return "off the shape";
+    case ConvergenceDetector::Why::Uneven: return "uneven";
+    case ConvergenceDetector::Why::Unsteady: return "unsteady";
+    case ConvergenceDetector::Why::Growing: return "growing";
+    case ConvergenceDetector::Why::Holding: return "holding";
+  }
+  return "?";
+}
+
+void ConvergenceDetector::set_command(const CompiledCommand& cmd) {
+  on_shape_ = on_shape_bound(cmd, p_);
+  reset();
+}
+
 void ConvergenceDetector::reset() {
   window_.clear();
+  spreads_.clear();
   converged_ = false;
+  why_ = Why::NoData;
 }
 
 void ConvergenceDetector::add(double t, const std::optional<double>& shape_error,
-                              const std::optional<double>& gap_cv) {
-  if (!shape_error || !gap_cv || *gap_cv > p_.gap_cv_max) {
+                              const std::optional<double>& gap_cv, const std::optional<double>& spread) {
+  if (!shape_error || !gap_cv || *gap_cv > p_.gap_cv_max || !(*shape_error <= on_shape_)) {
     reset();
+    why_ = !shape_error || !gap_cv ? Why::NoData : !(*shape_error <= on_shape_) ? Why::OffShape : Why::Uneven;
     return;
   }
   window_.push_back({t, *shape_error, *gap_cv});
@@ -186,13 +221,26 @@ void ConvergenceDetector::add(double t, const std::optional<double>& shape_error
   }
   const double mean = sum / static_cast<double>(window_.size());
   const bool steady = hi - lo <= std::max(p_.band_abs, p_.band_rel * mean);
-  if (!steady) {
-    // Restart the window at the newest sample: the error is still moving.
+  // Growth over the last `hold` span, whatever restarted the window meanwhile, against the same
+  // size-relative bound: on its shape a formation can only keep growing along an unbounded curve
+  // (the line), where it never settles.
+  bool growing = false;
+  if (spread && on_shape_ < std::numeric_limits<double>::infinity()) {
+    spreads_.push_back({t, *spread});
+    while (spreads_.size() > 2 && spreads_[1].first <= t - p_.hold) spreads_.erase(spreads_.begin());
+    double smallest = *spread;
+    for (const auto& [ts, sp] : spreads_) smallest = std::min(smallest, sp);
+    growing = *spread - smallest > on_shape_;
+  }
+  if (!steady || growing) {
+    // Restart the window at the newest sample: the error or the extent is still moving.
     window_.erase(window_.begin(), window_.end() - 1);
     converged_ = false;
+    why_ = !steady ? Why::Unsteady : Why::Growing;
     return;
   }
   converged_ = t - window_.front().t >= p_.hold;
+  why_ = converged_ ? Why::Converged : Why::Holding;
 }
 
 }  // namespace shapeform::core

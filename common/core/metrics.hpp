@@ -1,7 +1,9 @@
 #pragma once
 /// Convergence metrics of a formation, shared by the simulator and the supervisor.
 /// Undefined values (too few agents, all agents on one point) are std::nullopt, never 0 or NaN.
+#include <limits>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "compiled_command.hpp"
@@ -65,20 +67,50 @@ std::optional<int> settle_index(const std::vector<double>& shape_error,
                                 const std::vector<std::optional<double>>& gap_cv,
                                 const SettleParams& p = {});
 
-/// Online convergence for a live swarm: converged when, over the last `hold` span of model time,
-/// the shape error stayed within a band (max - min <= max(band_abs, band_rel * mean)) and gap CV
-/// stayed <= gap_cv_max. Suits the paper's law, whose plateau is off the shape and chatters.
+/// The verdict "converged" for a live swarm (supervisor) or a run (simulator): over the last `hold`
+/// span of model time
+/// - the formation is ON the commanded shape: the mean shape error stayed <= on_shape_bound(cmd, p),
+///   a bound relative to the shape's size that the paper's law meets on every paper scenario (its
+///   plateaus: 0.17 on the circle of radius 4, 0.47 on the 4 x 2 ellipse, 0.39 on the square of half
+///   side 5; bound 0.8, 0.8, 1.0);
+/// - it is steady: the error stayed within a band (max - min <= max(band_abs, band_rel * mean)) and
+///   the uniformity (gap CV) <= gap_cv_max (the paper's law plateaus off the shape and chatters);
+/// - it stopped growing: its spread (core::spread) rose by at most the on-shape bound over the span
+///   (the paper's line grows for ever at about 0.2 units per model time with every agent on it).
+/// Which command the agents follow is the caller's part: it feeds samples only while every agent
+/// follows the command judged, and resets the detector otherwise.
 struct ConvergenceParams : SettleParams {
-  double hold = 50.0;  ///< model time units the conditions must hold
+  double hold = 50.0;          ///< model time units the conditions must hold
+  double on_shape_rel = 0.2;   ///< on the shape: mean error <= on_shape_rel x the shape's size ...
+  double on_shape_abs = 0.5;   ///< ... or this many shape units, whichever is larger
 };
+
+/// The largest mean shape error that counts as on the shape of cmd: max(on_shape_abs, on_shape_rel x
+/// scale x the curve's size (circle: r0; ellipse: max(a, b); square: a; line: 1; others: half their
+/// bounding box's diagonal)).
+double on_shape_bound(const CompiledCommand& cmd, const ConvergenceParams& p);
+
+/// The growth measure of the verdict: half the diagonal of the formation's bounding box (O(N));
+/// nullopt without agents.
+std::optional<double> spread(const std::vector<Vec2>& x);
 
 class ConvergenceDetector {
  public:
   using Params = ConvergenceParams;
+  /// What the verdict waits for (the first condition that failed last).
+  enum class Why { Converged, NoData, OffShape, Uneven, Unsteady, Growing, Holding };
   explicit ConvergenceDetector(Params p = Params()) : p_(p) {}
-  /// Feeds one sample; a sample with an undefined error or gap CV resets the window.
-  void add(double t, const std::optional<double>& shape_error, const std::optional<double>& gap_cv);
+  /// Judges samples against cmd from now on (and resets). Before any command the on-shape bound and
+  /// the growth check are off (the steadiness and uniformity conditions alone).
+  void set_command(const CompiledCommand& cmd);
+  /// Feeds one sample; a sample with an undefined error or gap CV, off the shape or uneven resets the
+  /// window; spread: the formation's spread (nullopt: growth not judged).
+  void add(double t, const std::optional<double>& shape_error, const std::optional<double>& gap_cv,
+           const std::optional<double>& spread = std::nullopt);
   bool converged() const { return converged_; }
+  Why why() const { return why_; }
+  /// The on-shape bound in force (infinity before set_command).
+  double on_shape() const { return on_shape_; }
   void reset();
 
  private:
@@ -86,8 +118,15 @@ class ConvergenceDetector {
     double t, err, cv;
   };
   Params p_;
+  double on_shape_ = std::numeric_limits<double>::infinity();
   std::vector<Sample> window_;
+  std::vector<std::pair<double, double>> spreads_;  ///< (t, spread) over the last `hold`
   bool converged_ = false;
+  Why why_ = Why::NoData;
 };
+
+/// "converged", "no data", "off the shape", "uneven", "unsteady", "growing", "holding" (the span not
+/// yet complete).
+const char* to_string(ConvergenceDetector::Why w);
 
 }  // namespace shapeform::core

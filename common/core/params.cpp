@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "envelope.hpp"
+
 namespace shapeform::core::params {
 
 std::string format_number(double v) {
@@ -246,7 +248,8 @@ std::vector<P> build_command_table() {
       "dynamics.r", "r", speed, at_least(0), "nearest-neighbour repulsion magnitude (0 = off)",
       [](auto& c) -> auto& { return c.gains.r; }));
   t.push_back(real(
-      "dynamics.max_speed", "max_speed", speed, at_least(0), "speed limit, both laws (0 = none)",
+      "dynamics.max_speed", "max_speed", speed, at_least(0),
+      "speed limit, both laws (0 = none; then the step gains must be <= 2 instead of 10)",
       [](auto& c) -> auto& { return c.max_speed; }));
   t.push_back(choice(
       "dynamics.law", "law",
@@ -277,6 +280,12 @@ std::vector<P> build_command_table() {
   t.push_back(real(
       "integration.dt", "dt", "model time", above_up_to(0, 10),
       "model time per step (one paper iteration = 1)", [](auto& c) -> auto& { return c.dt; }));
+  // safety: the envelope every command is checked against (core/envelope.hpp)
+  t.push_back(real(
+      "safety.workspace", "workspace", su, above_up_to(0, kWorkspaceMax),
+      "half-width of the workspace `[-w, w]^2` centred on the origin: a command whose shape, centre, path or "
+      "gains could carry agents outside is refused, and no agent steps outside",
+      [](auto& c) -> auto& { return c.workspace; }));
   return t;
 }
 

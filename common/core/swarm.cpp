@@ -5,6 +5,8 @@
 #include <random>
 #include <utility>
 
+#include "envelope.hpp"
+
 namespace shapeform::core {
 
 std::vector<Vec2> uniform_start(int n, std::uint64_t seed, double half_width) {
@@ -85,7 +87,11 @@ void Swarm::step() {
   const int n = static_cast<int>(x_.size());
   if (kernel_ == Kernel::Batch && cmd_.law == Law::Paper && cmd_.integrator == Integrator::Euler) {
     paper_velocities_batch(cmd_, x_, t_, v_);
-    for (int i = 0; i < n; ++i) x_[i] += cmd_.dt * v_[i];
+    for (int i = 0; i < n; ++i) {
+      const Vec2 next = x_[i] + cmd_.dt * v_[i];
+      bool clamped = false;  // as agent_step: a non-finite step is not taken, the workspace is kept
+      if (next.allFinite()) x_[i] = keep_inside(next, cmd_.workspace, clamped);
+    }
     t_ += cmd_.dt;
     ++steps_;
     return;

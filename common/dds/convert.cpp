@@ -6,6 +6,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/envelope.hpp"
 #include "core/metric_table.hpp"
 #include "core/params.hpp"
 #include "shapes/shapes.hpp"
@@ -123,6 +124,7 @@ msg::ShapeCommand to_msg(const core::Command& cmd, std::uint32_t epoch) {
   m.k_tangent(cmd.arc.k_tangent);
   m.spacing(cmd.arc.spacing);
   m.hold(cmd.hold);
+  m.workspace(cmd.workspace);
   return m;
 }
 
@@ -214,18 +216,28 @@ bool from_msg(const msg::ShapeCommand& m, core::CompiledCommand& out, std::strin
   c.arc.k_tangent = m.k_tangent();
   c.arc.spacing = m.spacing();
   c.hold = m.hold();
+  p.ranged("workspace", m.workspace());
+  c.workspace = m.workspace();
 
   if (!p.empty()) {
     error = p.joined();
     return false;
   }
   // Only a well-formed command is compiled: a shape that cannot be built is refused as a whole.
+  core::CompiledCommand compiled;
   try {
-    out = shapes::compile(c);
+    compiled = shapes::compile(c);
   } catch (const core::ShapeError& e) {
     error = "command: " + util::excerpt(e.what(), util::kLineMax);  // it quotes the received expression
     return false;
   }
+  // A command that could carry the swarm out of its workspace is refused as a whole, too.
+  for (const core::EnvelopeProblem& e : core::envelope_problems(compiled)) p.add(e.wire, e.text);
+  if (!p.empty()) {
+    error = p.joined();
+    return false;
+  }
+  out = std::move(compiled);
   return true;
 }
 

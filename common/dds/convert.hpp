@@ -30,6 +30,8 @@ msg::ShapeCommand to_msg(const core::Command& cmd, std::uint32_t epoch);
 /// law one of the names of their tables; vertices of even length. When all of that passes, the
 /// shape is compiled; a core::ShapeError is reported as "command: <its message>", e.g.
 /// "command: polar: r(phi) = '4+foo': Unexpected token \"foo\" found at position 2.".
+/// Last, the compiled command is checked against its envelope (core::envelope_problems, as the
+/// config loader and the console do), e.g. "command.k1: dynamics.k1 = 1e+300: the step gain ...".
 /// The epoch is not part of core::Command: read m.epoch().
 bool from_msg(const msg::ShapeCommand& m, core::CompiledCommand& out, std::string& error);
 

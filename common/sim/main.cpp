@@ -88,6 +88,7 @@ int main(int argc, char** argv) {
   }
   const auto& cv = cfg.supervisor.converge;
   opt.settle = {cv.band_abs, cv.band_rel, cv.gap_cv_max};
+  opt.converge = cv;
   opt.kernel = kernel == "agent"   ? core::Kernel::Agent
                : kernel == "batch" ? core::Kernel::Batch
                                    : sim::auto_kernel(static_cast<int>(start.size()));
@@ -110,6 +111,8 @@ int main(int argc, char** argv) {
   j["seed"] = init_path.empty() ? nlohmann::json(cfg.swarm.seed) : nlohmann::json(nullptr);
   j["init"] = init_path.empty() ? nlohmann::json(nullptr) : nlohmann::json(init_path);
   j["settle_step"] = r.settle_step ? nlohmann::json(*r.settle_step) : nlohmann::json(nullptr);
+  j["converged"] = r.converged;
+  j["verdict"] = core::to_string(r.why);
   if (!cmd.tracking.enabled) {
     j.erase("centroid_error");
     j.erase("ring_error");

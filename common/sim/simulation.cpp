@@ -30,6 +30,8 @@ SimResult run_simulation(const core::CompiledCommand& cmd, std::vector<core::Vec
   core::Swarm swarm(cmd, std::move(start));
   swarm.set_kernel(opt.kernel);
   std::vector<core::Vec2> last = swarm.positions();
+  core::ConvergenceDetector verdict(opt.converge);
+  verdict.set_command(cmd);
   std::vector<double> err;
   std::vector<std::optional<double>> gap;
   err.reserve(static_cast<std::size_t>(steps) + 1);
@@ -46,6 +48,7 @@ SimResult run_simulation(const core::CompiledCommand& cmd, std::vector<core::Vec
     const core::Metrics m = core::compute_metrics(cmd, x, swarm.time(), opt.metrics_csv != nullptr);
     err.push_back(m.shape_error_mean.value_or(0.0));
     gap.push_back(core::uniformity(cmd, m));
+    verdict.add(swarm.time(), m.shape_error_mean, gap.back(), core::spread(x));
     if (opt.metrics_csv) *opt.metrics_csv << k << ',' << util::format_g10(swarm.time()) << ',' << metric_csv_values(m) << '\n';
     if (opt.positions_csv)
       for (std::size_t i = 0; i < x.size(); ++i)
@@ -60,6 +63,8 @@ SimResult run_simulation(const core::CompiledCommand& cmd, std::vector<core::Vec
   r.final_positions = swarm.positions();
   for (std::size_t i = 0; i < last.size() && steps > 0; ++i)
     r.max_step = std::max(r.max_step, (r.final_positions[i] - last[i]).norm());
+  r.converged = verdict.converged();
+  r.why = verdict.why();
   r.steps = swarm.steps();
   r.model_time = swarm.time();
   return r;

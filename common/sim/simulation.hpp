@@ -16,6 +16,7 @@ struct SimOptions {
   std::ostream* metrics_csv = nullptr;
   std::ostream* positions_csv = nullptr;  ///< per-step positions: step,agent,x1,x2
   core::SettleParams settle;
+  core::ConvergenceParams converge;  ///< the verdict (core::ConvergenceDetector), as the supervisor's
   core::Kernel kernel = core::Kernel::Agent;  ///< see core::Kernel (Batch applies to paper law + Euler)
 };
 
@@ -29,6 +30,8 @@ struct SimResult {
   long steps = 0;
   double model_time = 0.0;
   double max_step = 0.0;  ///< largest displacement of any agent in the last step (chatter)
+  bool converged = false;  ///< the verdict at the final step (core::ConvergenceDetector over every step)
+  core::ConvergenceDetector::Why why = core::ConvergenceDetector::Why::NoData;
 };
 
 /// Runs `steps` synchronous steps from `start` (the start itself is step 0 of every series).

@@ -1093,3 +1093,20 @@ TEST_CASE("to_yaml writes the documented schema") {
         std::string::npos);
   CHECK(poly.find("  law: arc\n") != std::string::npos);
 }
+
+TEST_CASE("a config outside the envelope is refused at the key and line that carry it", "[config][envelope]") {
+  CHECK(problems_of("schema_version: 1\ndynamics:\n  k1: 1.0e+300\n") ==
+        std::vector<std::string>{"dynamics.k1 = 1e+300: the step gain k1 dt sigma^(-2 beta) is 4.945801632282963e+298, "
+                                 "must be <= 10 (a step overshoots its target 9 times over: nothing a formation can "
+                                 "follow) (line 3)"});
+  const auto centre = problems_of("schema_version: 1\n", {"shape.centre=[1e300, 0]"});
+  REQUIRE(centre.size() == 1);
+  CHECK(centre[0].rfind("shape.centre = (1e+300, 0): the shape's centre gets 1e+300 units from the origin, outside "
+                        "the workspace (safety.workspace = 1000) (--set)",
+                        0) == 0);
+  // A larger workspace takes the same shape.
+  CHECK_NOTHROW(load_string("schema_version: 1\nshape: {centre: [2000, 0]}\nsafety: {workspace: 3000}\n"));
+  const auto implicit = problems_of("schema_version: 1\nshape:\n  kind: implicit\n  f_expr: sin(x*50)*sin(y*50)-0.5\n");
+  REQUIRE(implicit.size() == 1);
+  CHECK(implicit[0].rfind("shape.f_expr: implicit curve: f(x, y) = 0 falls into more than 16 separate pieces", 0) == 0);
+}

@@ -181,3 +181,51 @@ TEST_CASE("online convergence detector holds for the hold time", "[metrics][sett
   d.add(61, 0.17, 0.5);  // gap CV over the threshold
   CHECK_FALSE(d.converged());
 }
+
+TEST_CASE("verdict: off the shape, however steady, is not converged", "[metrics][verdict]") {
+  ConvergenceDetector::Params p;
+  p.hold = 10;
+  ConvergenceDetector d(p);
+  d.set_command(circle_cmd(4.0));
+  CHECK(d.on_shape() == Approx(0.8));  // max(0.5, 0.2 x 4)
+  for (int k = 0; k < 60; ++k) {
+    d.add(k, 32.0, 0.05, 40.0);  // the 20-wide start: steady, even, 32 units off
+    CHECK_FALSE(d.converged());
+  }
+  CHECK(d.why() == ConvergenceDetector::Why::OffShape);
+  for (int k = 60; k < 80; ++k) d.add(k, 0.17, 0.05, 4.0);
+  CHECK(d.converged());
+  // A new command is judged anew: its own size's bound, from nothing.
+  d.set_command(circle_cmd(1.0));
+  CHECK_FALSE(d.converged());
+  CHECK(d.on_shape() == Approx(0.5));  // the absolute floor
+  CompiledCommand scaled = circle_cmd(2.0);
+  scaled.shape.scale = 10;
+  CHECK(on_shape_bound(scaled, p) == Approx(4.0));
+}
+
+TEST_CASE("verdict: a formation on its shape that keeps growing is not converged", "[metrics][verdict]") {
+  ConvergenceDetector::Params p;
+  p.hold = 50;
+  Command line;
+  line.shape.kind = ShapeKind::Line;
+  ConvergenceDetector d(p);
+  d.set_command(compile(line));
+  // The paper's 8 agents on the line: on it, evenly spaced, spread growing 0.1 per model time.
+  for (int k = 0; k < 300; ++k) {
+    d.add(k, 1e-6, 0.01, 40.0 + 0.1 * k);
+    CHECK_FALSE(d.converged());
+  }
+  CHECK(d.why() == ConvergenceDetector::Why::Growing);
+  // It stops growing (chatter of 0.1 about a fixed spread): growth is judged over the last `hold`,
+  // so the span must first be clear of the growth (about 345), then last `hold` on its own.
+  int first = -1;
+  for (int k = 300; k < 450; ++k) {
+    d.add(k, 1e-6, 0.01, 70.0 + ((k % 2) ? 0.05 : -0.05));
+    if (d.converged() && first < 0) first = k;
+  }
+  CHECK(first >= 390);
+  CHECK(first <= 400);
+  CHECK(spread({Vec2(0, 0), Vec2(6, 8)}) == Approx(5.0));
+  CHECK_FALSE(spread({}));
+}

@@ -1440,4 +1440,26 @@ TEST_CASE("discovery lists the topics of other participants with name, host, pid
   CHECK(std::chrono::steady_clock::now() - t0 < std::chrono::seconds(10));
 }
 
+
+TEST_CASE("a command outside its envelope is refused on the wire, naming the value", "[dds][convert][envelope]") {
+  const auto paper = [](msg::ShapeCommand& m) {
+    m.law("paper");
+    m.tracking(false);
+  };
+  CHECK(reject(paper).empty());
+  CHECK(reject([&](msg::ShapeCommand& m) { paper(m), m.k1(1e300); })
+            .rfind("command.k1: dynamics.k1 = 1e+300: the step gain k1 dt sigma^(-2 beta) is ", 0) == 0);
+  CHECK(reject([&](msg::ShapeCommand& m) { paper(m), m.k2(1e300); }).rfind("command.k2: dynamics.k2 = 1e+300", 0) == 0);
+  CHECK(reject([&](msg::ShapeCommand& m) { paper(m), m.cx(1e300); })
+            .rfind("command.cx: shape.centre = (1e+300, -2): the shape's centre gets 1e+300 units from the origin", 0) == 0);
+  CHECK(reject([&](msg::ShapeCommand& m) {
+          paper(m);
+          m.shape_kind("implicit");
+          m.f_expr("sin(x*50)*sin(y*50)-0.5");
+        }).find("more than 16 separate pieces") != std::string::npos);
+  // The workspace itself travels with the command, within its own range.
+  CHECK(reject([&](msg::ShapeCommand& m) { paper(m), m.workspace(1e300); }).rfind("command.workspace: must be in (0, 1e+05]", 0) == 0);
+  CHECK(reject([&](msg::ShapeCommand& m) { paper(m), m.workspace(5); }).rfind("command.scale: shape.scale = 1.5: the shape reaches 11.2", 0) == 0);
+}
+
 }  // namespace shapeform

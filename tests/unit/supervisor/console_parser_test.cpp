@@ -977,3 +977,15 @@ TEST_CASE("hold, stop (its emergency alias) and resume", "[supervisor][parser][h
   CHECK(help_text("hold").find("late") != std::string::npos);
   CHECK(help_text("resume").find("re-converges") != std::string::npos);
 }
+
+TEST_CASE("console: a command outside the envelope is refused, naming the value", "[console][envelope]") {
+  CHECK(error_of("gains k1=1e300").rfind("gains: dynamics.k1 = 1e+300: the step gain", 0) == 0);
+  CHECK(error_of("gains k2=1e300").rfind("gains: dynamics.k2 = 1e+300: the step gain", 0) == 0);
+  CHECK(error_of("shape circle r=4 cx=1e300")
+            .rfind("shape: shape.centre = (1e+300, 0): the shape's centre gets 1e+300 units from the origin", 0) == 0);
+  CHECK(error_of("shape implicit f=\"sin(x*50)*sin(y*50)-0.5\"").find("more than 16 separate pieces") !=
+        std::string::npos);
+  // The bound is on the step gain k2 dt sigma^(-2 beta): here dt 0.5, sigma 2.5, beta 1.1 (0.0665 k2).
+  CHECK(parse_as<SetCommand>("gains k2=100").command.gains.k2 == 100);
+  CHECK(error_of("gains k2=200").rfind("gains: dynamics.k2 = 200: the step gain k2 dt sigma^(-2 beta) is 13.", 0) == 0);
+}

@@ -128,7 +128,7 @@ TEST_CASE("summary JSON keeps every key, tracking errors only when tracking", "[
   std::set<std::string> keys;
   for (const auto& [k, v] : j.items()) keys.insert(k);
   std::set<std::string> want = {"event", "agents", "name", "shape", "law", "tracking", "epoch", "model_time", "dt",
-                                "steps", "agents_seen", "converged", "settle_step", "final_ids", "final_positions",
+                                "steps", "agents_seen", "converged", "verdict", "settle_step", "final_ids", "final_positions",
                                 "final_model_times", "samples_rejected", "recording", "exit_status"};
   for (const core::MetricInfo& info : core::kMetricTable)
     if (info.name != "centroid_error" && info.name != "ring_error") want.insert(std::string(info.name));
@@ -163,6 +163,10 @@ TEST_CASE("summary JSON keeps every key, tracking errors only when tracking", "[
 
 TEST_CASE("a command is described on one line", "[supervisor][presentation]") {
   CHECK(supervisor::describe_command(circle()) ==
+        "circle r=4 centre (0, 0); k1=0.1 k2=2 sigma=3.5 beta=1.2 r=0.1, euler dt=1, max_speed=10");
+  core::CompiledCommand unlimited = circle();
+  unlimited.max_speed = 0.0;  // no speed limit: not mentioned
+  CHECK(supervisor::describe_command(unlimited) ==
         "circle r=4 centre (0, 0); k1=0.1 k2=2 sigma=3.5 beta=1.2 r=0.1, euler dt=1");
 }
 
@@ -224,6 +228,7 @@ TEST_CASE("show: the command in force and who published it", "[supervisor][prese
   supervisor::ShowInfo info;
   info.command = test::circle();
   info.command.gains.k1 = 0.5;
+  info.command.max_speed = 0.0;
   info.epoch = 4;
   info.published_s_ago = 12.34;
   info.agents_epoch = 4;
