@@ -177,4 +177,14 @@ core::Vec2 seeded_start(std::int32_t id, int n, std::uint64_t seed, double half_
   return core::uniform_start(std::max(n, id + 1), seed, half_width)[static_cast<std::size_t>(id)];
 }
 
+IdentityGuard::Action IdentityGuard::on_sample(std::int32_t id, const dds::SourceId& other) {
+  if (yielding_ || !other.known() || ours(other)) return Action::None;
+  const std::pair<std::int32_t, dds::SourceId> key{id, other};
+  if (std::find(reported_.begin(), reported_.end(), key) != reported_.end()) return Action::None;
+  reported_.push_back(key);
+  // A newcomer yields; two publishers agree on the GUID prefix order: the higher one yields.
+  yielding_ = !published_ || other < own();
+  return yielding_ ? Action::Yield : Action::Keep;
+}
+
 }  // namespace shapeform::agent

@@ -1,9 +1,11 @@
 #pragma once
 /// The agent's behaviour without DDS or clocks: a latest-per-agent neighbour table, the command and
 /// tracking target in force, and one core::agent_step per tick. agent_node.cpp only wires DDS to it.
+#include <algorithm>
 #include <cstdint>
 #include <optional>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "core/compiled_command.hpp"
@@ -12,8 +14,8 @@
 
 namespace shapeform::agent {
 
-/// Largest agent id (ids are 0..kMaxAgentId, unique in the swarm).
-inline constexpr int kMaxAgentId = 9999;
+/// Largest agent id (ids are 0..kMaxAgentId, unique in the swarm; received samples are held to it).
+inline constexpr int kMaxAgentId = dds::kMaxAgentId;
 
 /// The latest tracking target heard: the centre C and its velocity at the supervisor's model time.
 using TargetSample = dds::TargetSample;
@@ -130,6 +132,47 @@ class AgentLogic {
   std::unordered_map<std::int32_t, Entry> table_;
   std::vector<core::Neighbour> nbrs_;  ///< reused every step
   AgentCounters counters_;
+};
+
+/// Whether this process may publish its agent ids when another participant publishes one of them (two
+/// processes started with one --id). A process listens for a grace period before its first
+/// publication: hearing one of its ids from another participant then, it is the newcomer and yields
+/// (exits, never having published, so the incumbent is never displaced). Two processes that both got
+/// past the grace (they started together, or one was unheard throughout the other's grace) resolve by
+/// the participants' GUID prefixes, which both see alike: the higher one yields, the lower one keeps
+/// the id. Pure: the caller passes every foreign sample of a hosted id and the clock.
+class IdentityGuard {
+ public:
+  /// own: this process's participant; grace_end_ns: the steady time its grace period ends.
+  IdentityGuard(const dds::SourceId& own, std::int64_t grace_end_ns) : own_{own}, grace_end_ns_(grace_end_ns) {}
+  /// This process's participant after it was recreated (dds::Node::rebuild gives it a new GUID
+  /// prefix): samples of the old one and of the new one are all ours.
+  void rebuilt(const dds::SourceId& now_own) {
+    if (now_own.known()) own_.push_back(now_own);
+  }
+
+  enum class Action {
+    None,   ///< nothing new: this (id, participant) pair was handled already, or we are yielding
+    Keep,   ///< a duplicate that must yield to us: report it, keep running
+    Yield,  ///< we must give the id up: report it, stop without disposing, exit 2
+  };
+  /// A sample of hosted agent `id` from participant `other`. Samples from ourselves (any participant
+  /// this process had) or from an unknown participant are not duplicates (None).
+  Action on_sample(std::int32_t id, const dds::SourceId& other);
+  /// Whether the grace period is over and we did not yield: the agents may step and publish.
+  bool may_publish(std::int64_t now_ns) const { return !yielding_ && (published_ || now_ns >= grace_end_ns_); }
+  void published() { published_ = true; }
+  bool yielding() const { return yielding_; }
+  /// The participant this process publishes from now.
+  const dds::SourceId& own() const { return own_.back(); }
+  bool ours(const dds::SourceId& s) const { return std::find(own_.begin(), own_.end(), s) != own_.end(); }
+
+ private:
+  std::vector<dds::SourceId> own_;  ///< every participant this process had, the current one last
+  std::int64_t grace_end_ns_;
+  bool published_ = false;
+  bool yielding_ = false;
+  std::vector<std::pair<std::int32_t, dds::SourceId>> reported_;
 };
 
 /// Agent i's start for a seeded swarm of n: the i-th position of core::uniform_start(max(n, i+1), seed),

@@ -109,8 +109,9 @@ class AgentNode {
  public:
   AgentNode(const std::vector<std::int32_t>& ids, const std::vector<core::Vec2>& starts, const config::Config& cfg,
             const AgentOptions& opt);
-  /// Runs until SIGINT/SIGTERM, then disposes the hosted instances. Throws on a DDS set-up failure.
-  void run();
+  /// Runs until SIGINT/SIGTERM, then disposes the hosted instances; returns the exit status (0, or
+  /// 2 when another participant holds one of the ids). Throws on a DDS set-up failure.
+  int run();
 
  private:
   void tick() {
@@ -119,6 +120,8 @@ class AgentNode {
     drain_commands();
     drain_targets();
     drain_states();
+    if (identity_.yielding()) return farewell(now);
+    if (!identity_.may_publish(now)) return;  // the grace period: listening whether an id is in use
     step(now);
     publish();
     report();
@@ -131,8 +134,15 @@ class AgentNode {
   void step(std::int64_t now);
   void publish();
   void report();
-  void publish_status();
-  /// A refused sample: counted by every hosted agent, logged (throttled per kind unless `always`).
+  /// Statuses of the hosted agents; with --json also their "status" events.
+  void publish_status(bool json = true);
+  /// Another participant publishes hosted agent `id`: report it; yield (stop, exit 2) if we must.
+  void on_duplicate(std::int32_t id, const dds::SourceId& other, std::int64_t now);
+  /// While yielding: our statuses (so a supervisor sees the duplicate too) once a reader matches,
+  /// then stop. No state is published and nothing is disposed: the id stays the incumbent's.
+  void farewell(std::int64_t now);
+  /// A refused sample: counted by every hosted agent, logged (throttled per first refused field, e.g.
+  /// "state.id", unless `always`).
   void reject(const char* what, const std::string& log_line, const std::string& why, bool always = false);
   bool hosted(std::int32_t id) const { return std::find(ids_.begin(), ids_.end(), id) != ids_.end(); }
 
@@ -168,6 +178,10 @@ class AgentNode {
   std::uint64_t seq_ = 0, ticks_ = 0;
   std::int64_t stamp_ns_ = 0;  ///< this tick's AgentState stamp
   int heard_logged_ = -1;
+  IdentityGuard identity_;
+  std::int64_t farewell_end_ns_ = 0;  ///< yielding: stop at the latest then
+  int farewell_sent_ = 0;             ///< yielding: status rounds written to a matched reader
+  bool done_ = false;                 ///< yielding: the loop ends
 };
 
 std::string node_name(const std::vector<std::int32_t>& ids) {
@@ -189,7 +203,8 @@ AgentNode::AgentNode(const std::vector<std::int32_t>& ids, const std::vector<cor
       target_reader_(node_.reader<msg::TrackingTarget>(dds::TopicId::Target)),
       loop_(cfg.agent.rate_hz),
       log_every_(ticks_per(cfg.agent.rate_hz, 1.0)),
-      status_every_(ticks_per(cfg.agent.rate_hz, cfg.agent.status_rate_hz)) {
+      status_every_(ticks_per(cfg.agent.rate_hz, cfg.agent.status_rate_hz)),
+      identity_(node_.source(), util::steady_ns() + static_cast<std::int64_t>(cfg.agent.identity_grace_s * 1e9)) {
   const double period_s = 1.0 / cfg.agent.rate_hz;
   const auto timeout_ns = static_cast<std::int64_t>(cfg.agent.neighbour_timeout_periods * period_s * 1e9);
   const int max_wait_ticks = static_cast<int>(std::lround(5.0 * cfg.agent.rate_hz));
@@ -198,8 +213,12 @@ AgentNode::AgentNode(const std::vector<std::int32_t>& ids, const std::vector<cor
   ages_us_.reserve(kAgeCapacity);
 }
 
-void AgentNode::run() {
-  while (loop_.wait_next(util::stop_flag())) tick();
+int AgentNode::run() {
+  while (!done_ && loop_.wait_next(util::stop_flag())) tick();
+  if (identity_.yielding()) {
+    if (opt_.json) emit({{"event", "stop"}, {"ticks", ticks_}, {"signal", util::stop_signal()}, {"refused", true}});
+    return 2;  // a bad command line: the id is in use
+  }
   // Leave cleanly: dispose our instances so the others drop us at once (the entities go with node_).
   for (const auto id : ids_) {
     msg::AgentState gone;
@@ -208,19 +227,47 @@ void AgentNode::run() {
   }
   util::log_info("stopping after " + std::to_string(ticks_) + " ticks (signal " + std::to_string(util::stop_signal()) + ")");
   if (opt_.json) emit({{"event", "stop"}, {"ticks", ticks_}, {"signal", util::stop_signal()}});
+  return 0;
+}
+
+void AgentNode::on_duplicate(std::int32_t id, const dds::SourceId& other, std::int64_t now) {
+  const IdentityGuard::Action action = identity_.on_sample(id, other);
+  if (action == IdentityGuard::Action::None) return;
+  const bool yield = action == IdentityGuard::Action::Yield;
+  const std::string own = dds::to_string(identity_.own()), theirs = dds::to_string(other);
+  if (yield) {
+    util::log_error("id " + std::to_string(id) + " is already in use by participant " + theirs + " (this one is " +
+                    own + "): refusing to run; give every agent its own id");
+    farewell_end_ns_ = now + 1'000'000'000;
+  } else {
+    util::log_warn("id " + std::to_string(id) + " is also published by participant " + theirs + " (this one is " +
+                   own + ", the lower GUID prefix, keeps it): that process must exit");
+  }
+  if (opt_.json)
+    emit({{"event", "duplicate"}, {"id", id}, {"source", own}, {"other", theirs}, {"action", yield ? "exit" : "keep"}});
+}
+
+void AgentNode::farewell(std::int64_t now) {
+  if (status_writer_.matched() > 0) {
+    publish_status(false);
+    ++farewell_sent_;
+  }
+  // A few rounds (a reliable topic: the first may race the reader's matching of this writer).
+  done_ = farewell_sent_ >= 3 || now >= farewell_end_ns_;
 }
 
 void AgentNode::reject(const char* what, const std::string& log_line, const std::string& why, bool always) {
   for (auto& l : logics_) l->count_rejected();
   bool shown = true;
   if (always) util::log_warn(log_line);
-  else shown = throttled_.warn(what, log_line);
+  else shown = throttled_.warn(why.substr(0, why.find(':')), log_line);  // throttled per refused field
   if (opt_.json && shown) emit({{"event", "rejected"}, {"what", what}, {"why", why}});
 }
 
 void AgentNode::recover_from_stall() {
   const auto stall_s = node_.recover_if_stalled(1.0 / cfg_.agent.rate_hz);
   if (!stall_s) return;
+  identity_.rebuilt(node_.source());  // a new GUID prefix: our samples carry both
   // The new re-offer writer starts empty: offer the command followed again.
   if (!relayed_.none()) {
     const dds::CommandSample& s = logics_.front()->command_sample();
@@ -301,6 +348,10 @@ void AgentNode::drain_states() {
       reject("state", "state sample rejected: " + why, why);
       continue;
     }
+    if (hosted(s.id) && !identity_.ours(r.source)) {  // our id, from another participant
+      on_duplicate(s.id, r.source, r.receive_stamp_ns);
+      continue;
+    }
     for (auto& l : logics_)  // own id ignored
       l->on_state(s.id, s.x, s.seq, r.receive_stamp_ns, s.command, s.arc, s.model_time, s.prev_x, s.prev_arc);
     // Data age of samples from agents hosted elsewhere (a process's own samples are not a delivery).
@@ -327,6 +378,7 @@ void AgentNode::step(std::int64_t now) {
 }
 
 void AgentNode::publish() {
+  identity_.published();
   ++seq_;
   for (const auto& l : logics_) {
     dds::StateSample s;
@@ -356,7 +408,7 @@ void AgentNode::report() {
   if (++ticks_ % status_every_ == 0) publish_status();
 }
 
-void AgentNode::publish_status() {
+void AgentNode::publish_status(bool json) {
   const double share = 1.0 / static_cast<double>(logics_.size());  // of the process figures, per agent
   dds::StatusSample st =
       dds::process_status(util::steady_ns(), loop_.stats(), ages_us_, cpu_.percent() * share, util::rss_mb() * share);
@@ -370,9 +422,10 @@ void AgentNode::publish_status() {
     st.samples_lost = k.samples_lost;
     st.epoch = l->command_id().epoch;
     status_writer_.write(dds::to_msg(st));
-    if (opt_.json)
+    if (opt_.json && json)
       emit({{"event", "status"}, {"id", st.id}, {"neighbours_heard", st.neighbours_heard}, {"epoch", st.epoch},
-            {"model_time", l->model_time()}, {"ticks", st.ticks}, {"steps_clamped", k.steps_clamped}});
+            {"model_time", l->model_time()}, {"ticks", st.ticks}, {"samples_rejected", st.samples_rejected},
+            {"steps_clamped", k.steps_clamped}});
   }
   ages_us_.clear();
 }
@@ -405,12 +458,11 @@ int run_agents(const std::vector<std::int32_t>& ids, const std::vector<core::Vec
   }
   try {
     AgentNode node(ids, starts, cfg, opt);
-    node.run();
+    return node.run();
   } catch (const std::exception& e) {
     util::log_error(e.what());
     return 1;
   }
-  return 0;
 }
 
 }  // namespace shapeform::agent

@@ -11,12 +11,15 @@ struct AgentOptions {
   /// Machine output on stdout, one JSON object per line with an "event" key: "status" once per status
   /// period per hosted agent (the AgentStatus numbers), "command" when a command is adopted,
   /// "rejected" when a sample is refused (throttled like the log), "recovered" (with "stall_s") when the
-  /// process recreated its participant after a stall (dds::Node::recover_if_stalled). Logs stay on stderr.
+  /// process recreated its participant after a stall (dds::Node::recover_if_stalled), "duplicate" when
+  /// another participant publishes a hosted id ({id, source: this participant, other, action:
+  /// exit|keep}). Logs stay on stderr.
   bool json = false;
 };
 
 /// Runs the agents' fixed-rate loop on DDS until SIGINT/SIGTERM; returns the process exit status
-/// (0 clean stop, 1 runtime failure such as a participant that cannot be created).
+/// (0 clean stop, 1 runtime failure such as a participant that cannot be created, 2 an id already in
+/// use: see IdentityGuard; the agents listen agent.identity_grace_s before their first publication).
 /// One process hosts one agent (shapeform_agent) or several (shapeform_agent_group, like a ROS 2
 /// component container): one participant, one state writer for all of their instances, one reader
 /// whose samples every hosted agent takes in. Each hosted agent has its own AgentLogic and publishes

@@ -106,7 +106,7 @@ int main(int argc, char** argv) {
   shapeform::app::App app("shapeform_bench_probe",
                 "shapeform_bench_probe: records AgentStatus and SwarmMetrics samples as CSV for benchmarks.");
   std::string out;
-  app.cli().add_option("--out", out, "directory for status.csv and metrics.csv (created)")->required();
+  app.cli().add_option("--out", out, "directory for status.csv and metrics.csv (created)")->required()->check(shapeform::app::writable_dir());
   app.add_config_options("YAML config (transport.*)");
   if (const auto rc = app.parse(argc, argv)) return *rc;
   const auto cfg = app.load_config();

@@ -95,6 +95,16 @@ for s in "${sets[@]+"${sets[@]}"}"; do
   [[ $s == ?*=* ]] || die "--set: expected key=value, got '$s'"
 done
 if [ -n "$init" ]; then [ -r "$init" ] && [ -f "$init" ] || die "--init: cannot read '$init'"; fi
+# An output folder is checked before anything starts (the supervisor checks --record too, but only once
+# the launcher has started the agents beside it): created as the recorder would, and a file written in it.
+writable_dir() { # dir -> 0 when a file can be created in it (root included: a probe, not permissions)
+  local probe
+  mkdir -p -- "$1" 2>/dev/null && probe=$(mktemp -- "$1/.shapeform_write_probe_XXXXXX" 2>/dev/null) &&
+    rm -f -- "$probe"
+}
+if [ -n "$record" ]; then
+  writable_dir "$record" || die "--record: cannot write into the folder '${record:0:200}': give a writable folder"
+fi
 
 case "$build" in /*) ;; *) build="$root/$build" ;; esac
 case "$runs" in /*) ;; *) runs="$root/$runs" ;; esac
@@ -194,7 +204,7 @@ fi
 # Run folder and script
 
 stamp=$(date -u +%Y%m%dT%H%M%SZ)
-mkdir -p "$runs" || die "--runs: cannot create '$runs'"
+writable_dir "$runs" || die "--runs: cannot write into the folder '${runs:0:200}': give a writable folder"
 run="$runs/$stamp-$name-n$n"
 k=1
 while ! mkdir "$run" 2>/dev/null; do

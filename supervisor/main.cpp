@@ -10,7 +10,9 @@ int main(int argc, char** argv) {
   supervisor::SupervisorOptions opt;
   app.add_config_options("YAML config; its command is what `start` publishes");
   app.cli().add_option("--script", opt.script, "run the console commands of this file first");
-  app.cli().add_option("--record", opt.record_dir, "record metrics.csv and positions.csv into this folder");
+  app.cli()
+      .add_option("--record", opt.record_dir, "record metrics.csv and positions.csv into this folder")
+      ->check(app::writable_dir());
   app.cli().add_flag("--json", opt.json,
                      "machine output: stdout carries only JSON lines, one event each (epoch, wait, status, metrics, "
                      "agent, record, and the exit summary); human text goes to stderr");

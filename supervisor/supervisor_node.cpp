@@ -28,6 +28,7 @@
 #include "util/proc_stats.hpp"
 #include "util/rate_loop.hpp"
 #include "util/signals.hpp"
+#include "util/text.hpp"
 
 namespace shapeform::supervisor {
 
@@ -127,6 +128,9 @@ class Supervisor {
   bool foreign_command_in_force(std::int64_t now) const;
   /// --json: an "agent" event for every agent that became alive or stopped being alive.
   void report_membership(std::int64_t now);
+  /// Whether a sample of agent id from `source` is the agent's own (SwarmMonitor::claim); the first
+  /// sample of another participant on an id in use is reported (log line, "duplicate" event).
+  bool owned(std::int32_t id, const dds::SourceId& source, std::int64_t now);
   void publish_target(std::int64_t now);
   void metrics_tick(std::int64_t now);
   void publish_command(const core::CompiledCommand& cmd, std::int64_t now);
@@ -304,8 +308,10 @@ void Supervisor::drain(std::int64_t now) {
       // Disposed, or its writer left (its dispose, best effort, may be lost) while it was still heard:
       // a clean exit, logged once. A writer leaving after the agent fell silent (a lease expiring after
       // a kill) changes nothing: that agent is shown dead already.
+      // A duplicate's writer leaving (a second process with the id exiting) is not the agent leaving.
       const auto it = monitor_.agents().find(r.key_id);
-      if (r.instance != dds::InstanceState::Alive && it != monitor_.agents().end() && monitor_.alive(it->second, now)) {
+      if (r.instance != dds::InstanceState::Alive && it != monitor_.agents().end() && monitor_.alive(it->second, now) &&
+          (!r.source.known() || !it->second.source.known() || r.source == it->second.source)) {
         monitor_.on_departed(r.key_id);
         util::log_info("agent " + std::to_string(r.key_id) + " left");
       }
@@ -315,17 +321,33 @@ void Supervisor::drain(std::int64_t now) {
     std::string why;
     if (!dds::from_msg(r.msg, s, why)) {
       ++rejected_;
-      throttled_.warn("state", "agent state rejected: " + why);
+      throttled_.warn(why.substr(0, why.find(':')), "agent state rejected: " + why);  // per refused field
       continue;
     }
-    monitor_.on_state(s.id, s.x, s.prev_x, s.command, s.model_time, now);
+    if (!owned(s.id, r.source, now)) {
+      ++rejected_;
+      continue;
+    }
+    monitor_.on_state(s.id, s.x, s.prev_x, s.command, s.model_time, now, r.source);
   }
   status_reader_.drain(statuses_);
   for (const auto& r : statuses_) {
     dds::StatusSample s;
     std::string why;
-    if (r.valid_data && dds::from_msg(r.msg, s, why)) monitor_.on_status(s.id, s.neighbours_heard, s.samples_rejected);
+    if (r.valid_data && dds::from_msg(r.msg, s, why) && owned(s.id, r.source, now))
+      monitor_.on_status(s.id, s.neighbours_heard, s.samples_rejected);
   }
+}
+
+bool Supervisor::owned(std::int32_t id, const dds::SourceId& source, std::int64_t now) {
+  const SwarmMonitor::Claim c = monitor_.claim(id, source, now);
+  if (c == SwarmMonitor::Claim::NewDuplicate) {
+    const std::string owner = dds::to_string(monitor_.agents().at(id).source), other = dds::to_string(source);
+    util::log_warn("agent id " + std::to_string(id) + " is published by two participants: " + owner +
+                   " (in use) and " + other + " (a second process started with this id? it is ignored)");
+    out_.event("duplicate", {{"id", id}, {"source", owner}, {"other", other}});
+  }
+  return c == SwarmMonitor::Claim::Owner;
 }
 
 void Supervisor::report_membership(std::int64_t now) {
@@ -634,7 +656,7 @@ void Supervisor::run_lines(std::int64_t now) {
     if (!line) return;
     const ParseResult r = parse_command(*line, current_);
     if (!r.ok()) {
-      std::cerr << with_location(*src, r.error) << std::endl;
+      std::cerr << util::bounded_line(with_location(*src, r.error)) << std::endl;  // it may quote a long line
       continue;
     }
     execute(r.action, now);
@@ -667,7 +689,7 @@ bool Supervisor::load_script() {
     while (auto line = check.poll()) {
       const ParseResult r = parse_command(*line, c);
       if (!r.ok()) {
-        std::cerr << with_location(check, r.error) << std::endl;
+        std::cerr << util::bounded_line(with_location(check, r.error)) << std::endl;
         bad = true;
       } else if (const auto* set = std::get_if<SetCommand>(&r.action)) {
         c = set->command;

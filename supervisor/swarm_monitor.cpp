@@ -1,5 +1,6 @@
 #include "swarm_monitor.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -9,9 +10,20 @@ namespace shapeform::supervisor {
 SwarmMonitor::SwarmMonitor(std::int64_t agent_timeout_ns, core::ConvergenceDetector::Params converge, bool lockstep)
     : agent_timeout_ns_(agent_timeout_ns), detector_(converge), lockstep_(lockstep) {}
 
+SwarmMonitor::Claim SwarmMonitor::claim(std::int32_t id, const dds::SourceId& source, std::int64_t now_ns) {
+  const auto it = agents_.find(id);
+  if (it == agents_.end() || !alive(it->second, now_ns)) return Claim::Owner;
+  AgentView& a = it->second;
+  if (!source.known() || !a.source.known() || source == a.source) return Claim::Owner;
+  if (std::find(a.duplicates.begin(), a.duplicates.end(), source) != a.duplicates.end()) return Claim::Duplicate;
+  a.duplicates.push_back(source);
+  return Claim::NewDuplicate;
+}
+
 void SwarmMonitor::on_state(std::int32_t id, const core::Vec2& x, const core::Vec2& prev_x, dds::CommandId command,
-                            double model_time, std::int64_t now_ns) {
+                            double model_time, std::int64_t now_ns, const dds::SourceId& source) {
   AgentView& a = agents_[id];
+  if (source.known()) a.source = source;
   a.x = x;
   a.prev_x = prev_x;
   a.command = command;

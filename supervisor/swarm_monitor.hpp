@@ -23,6 +23,8 @@ struct AgentView {
   // From the agent's status topic (absent until the first status).
   std::optional<int> neighbours_heard;
   std::uint64_t samples_rejected = 0;
+  dds::SourceId source;                    ///< the participant that publishes it (unknown: all zeros)
+  std::vector<dds::SourceId> duplicates;   ///< other participants seen publishing its id (reported)
 };
 
 class SwarmMonitor {
@@ -31,8 +33,17 @@ class SwarmMonitor {
   /// every agent at step t, the previous position of those already one step further.
   SwarmMonitor(std::int64_t agent_timeout_ns, core::ConvergenceDetector::Params converge, bool lockstep = false);
 
+  /// Whose a sample of agent `id` from participant `source` is. Owner: the id is unknown, not alive,
+  /// or published by that same participant (or either participant is unknown), so the sample is the
+  /// agent's. Otherwise another participant publishes an id in use (two processes started with one
+  /// --id): NewDuplicate the first time that participant is seen on the id, Duplicate after; such
+  /// samples are not the agent's (the incumbent keeps the id until it leaves or falls silent).
+  enum class Claim { Owner, NewDuplicate, Duplicate };
+  Claim claim(std::int32_t id, const dds::SourceId& source, std::int64_t now_ns);
+
+  /// A state of agent id (source: the participant that published it, see claim()).
   void on_state(std::int32_t id, const core::Vec2& x, const core::Vec2& prev_x, dds::CommandId command,
-                double model_time, std::int64_t now_ns);
+                double model_time, std::int64_t now_ns, const dds::SourceId& source = {});
   void on_status(std::int32_t id, int neighbours_heard, std::uint64_t samples_rejected);
   void on_departed(std::int32_t id);
 

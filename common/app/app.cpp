@@ -1,9 +1,18 @@
 #include "app/app.hpp"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
 #include <iostream>
 #include <string>
+#include <vector>
 
 #include "dds/transport.hpp"
+#include "util/text.hpp"
 
 #include "shapeform_version.hpp"  // generated in the build tree
 
@@ -14,6 +23,48 @@ App::App(std::string prog, const std::string& description) : prog_(std::move(pro
 }
 
 std::string version_line(const std::string& prog) { return prog + " " + kVersion; }
+
+std::string writable_dir_problem(const std::string& dir) {
+  if (dir.empty()) return "";
+  const std::string shown = "'" + util::excerpt(dir) + "'";
+  std::error_code ec;
+  if (std::filesystem::exists(dir, ec) && !std::filesystem::is_directory(dir, ec))
+    return shown + " is not a folder: give a writable folder";
+  std::filesystem::create_directories(dir, ec);
+  if (ec) return "cannot create the folder " + shown + " (" + ec.message() + "): give a writable folder";
+  std::string probe = (std::filesystem::path(dir) / ".shapeform_write_probe_XXXXXX").string();
+  std::vector<char> name(probe.begin(), probe.end());
+  name.push_back('\0');
+  const int fd = ::mkstemp(name.data());
+  if (fd < 0) {
+    const int err = errno;
+    return "cannot write into the folder " + shown + " (" + std::strerror(err) + "): give a writable folder";
+  }
+  ::close(fd);
+  ::unlink(name.data());
+  return "";
+}
+
+std::string writable_file_problem(const std::string& file) {
+  if (file.empty()) return "";
+  std::error_code ec;
+  const std::filesystem::path p(file);
+  if (std::filesystem::exists(p, ec) && !std::filesystem::is_regular_file(p, ec))
+    return "'" + util::excerpt(file) + "' exists and is not a regular file: give a file path to write";
+  const std::filesystem::path parent = p.has_parent_path() ? p.parent_path() : std::filesystem::path(".");
+  return writable_dir_problem(parent.string());
+}
+
+namespace {
+
+CLI::Validator path_check(std::string name, std::string (*problem)(const std::string&)) {
+  return CLI::Validator([problem](std::string& value) { return problem(value); }, "PATH", std::move(name));
+}
+
+}  // namespace
+
+CLI::Validator writable_dir() { return path_check("writable folder", writable_dir_problem); }
+CLI::Validator writable_file() { return path_check("writable file", writable_file_problem); }
 
 void App::add_config_options(const std::string& config_help, bool with_domain) {
   cli_.add_option("--config", config_path_, config_help);
@@ -48,13 +99,14 @@ int App::run(const std::function<int()>& body) const {
   try {
     return body();
   } catch (const std::exception& e) {
-    std::cerr << prog_ << ": " << e.what() << std::endl;
+    std::cerr << prog_ << ": " << util::bounded_line(e.what()) << std::endl;
     return 1;
   }
 }
 
 int App::usage_error(const std::string& message) const {
-  std::cerr << prog_ << ": " << message << '\n';
+  // A flag's value is untrusted input: the line quotes at most about util::kQuoteMax of it.
+  std::cerr << prog_ << ": " << util::bounded_line(message) << '\n';
   return kExitUsage;
 }
 

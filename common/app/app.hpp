@@ -20,6 +20,21 @@ namespace shapeform::app {
 /// Exit status of a bad command line or config.
 inline constexpr int kExitUsage = 2;
 
+/// Why `dir` cannot be the folder a program writes into, or "" when it can: it is created if missing
+/// (as the program would create it) and a probe file is created and removed in it, so a read-only file
+/// system, a missing permission or a path under a regular file is found before anything starts, even
+/// for root.
+std::string writable_dir_problem(const std::string& dir);
+
+/// Why `file` cannot be written, or "": its folder must be writable (writable_dir_problem) and the
+/// path, if it exists, a regular file.
+std::string writable_file_problem(const std::string& file);
+
+/// CLI11 checks for flags that name an output folder or file (`--record DIR`, `--csv FILE`): a bad
+/// path is a parse error, exit 2, before the program loads its config or creates a DDS participant.
+CLI::Validator writable_dir();
+CLI::Validator writable_file();
+
 /// "prog VERSION": the project version and, when built from git, `git describe --always --dirty`
 /// ("shapeform_agent 0.1.0 (git 0b3727a-dirty)"). What --version prints.
 std::string version_line(const std::string& prog);

@@ -5,11 +5,15 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
-#include <filesystem>
-#include <fstream>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <map>
@@ -183,22 +187,14 @@ double degrees_for(double rad) {
   return best;
 }
 
+/// A string value as a message shows it: double-quoted, at most util::kQuoteMax characters of it.
 std::string quote(const std::string& s) {
-  constexpr std::size_t kMaxShown = 60;
-  std::string out = "\"";
-  for (std::size_t i = 0; i < s.size() && i < kMaxShown; ++i) {
-    const char ch = s[i];
-    if (ch == '"' || ch == '\\')
-      out += '\\', out += ch;
-    else if (ch == '\n')
-      out += "\\n";
-    else if (ch == '\t')
-      out += "\\t";
-    else
-      out += ch;
+  std::string escaped;  // quotes and backslashes first: excerpt's own escapes must stay single
+  for (const char ch : s) {
+    if (ch == '"' || ch == '\\') escaped += '\\';
+    escaped += ch;
   }
-  if (s.size() > kMaxShown) out += "...";
-  return out + "\"";
+  return "\"" + util::excerpt(escaped) + "\"";
 }
 
 /// How a value is shown after "got": numbers and booleans as written, strings quoted.
@@ -276,7 +272,7 @@ class Reader {
       const std::string& key = it->first.Scalar();
       const std::string path = join_path(section, key);
       if (std::find(known.begin(), known.end(), key) == known.end())
-        problems.push_back(path + ": unknown key" + where(path, it->first));
+        problems.push_back(util::excerpt(path) + ": unknown key" + where(path, it->first));
       else if (std::find(seen.begin(), seen.end(), key) != seen.end())
         problems.push_back(path + ": duplicate key" + where(path, it->first));
       seen.push_back(key);
@@ -506,18 +502,18 @@ std::vector<std::string> apply_overrides(YAML::Node& root,
     const auto eq = item.find('=');
     const std::string key = eq == std::string::npos ? "" : util::trim(item.substr(0, eq));
     if (key.empty()) {
-      problems.push_back("--set " + item + ": expected dotted.key=value");
+      problems.push_back("--set " + util::excerpt(item) + ": expected dotted.key=value");
       continue;
     }
     if (!schema_has(key)) {
-      problems.push_back("--set " + item + ": unknown key " + key);
+      problems.push_back("--set " + util::excerpt(item) + ": unknown key " + util::excerpt(key));
       continue;
     }
     YAML::Node value;
     try {
       value = YAML::Load(item.substr(eq + 1));
     } catch (const YAML::Exception& ex) {
-      problems.push_back("--set " + item + ": YAML syntax error: " + ex.msg);
+      problems.push_back("--set " + util::excerpt(item) + ": YAML syntax error: " + util::excerpt(ex.msg));
       continue;
     }
     // Walk down to the parent map, creating missing (or null) sections.
@@ -668,7 +664,81 @@ Config build(YAML::Node root, bool version_required, const std::vector<std::stri
 }
 
 std::string file_problem(const std::string& source, const std::string& what) {
-  return "config file '" + source + "': " + what;
+  return "config file '" + util::excerpt(source) + "': " + what;
+}
+
+/// The 1-based line where the second document of text begins: its node's line, or (an empty
+/// document has no usable mark) the second line that starts a document ("---" at column 0, not
+/// counting one that opens the first document before any content).
+std::size_t second_document_line(const std::string& text, const YAML::Node& second) {
+  std::size_t line = 1;
+  bool content = false;  // the first document has begun
+  for (std::size_t pos = 0; pos < text.size(); ++line) {
+    const std::size_t end = std::min(text.find('\n', pos), text.size());
+    const std::string_view l(text.data() + pos, end - pos);
+    const bool marker = l.substr(0, 3) == "---" && (l.size() == 3 || l[3] == ' ' || l[3] == '\t' || l[3] == '\r');
+    if (marker && content) return line;
+    const std::string t = util::trim(l);
+    if (marker || (!t.empty() && t[0] != '#' && t[0] != '%')) content = true;
+    pos = end + 1;
+  }
+  return second.Mark().is_null() ? line : static_cast<std::size_t>(second.Mark().line) + 1;
+}
+
+/// What a config file must be, said after every problem with the file itself.
+constexpr const char* kFileFix = ": give the path of a YAML config file";
+
+/// "a directory", "a FIFO", ...: what a path that is not a regular file is.
+std::string file_kind(mode_t mode) {
+  if (S_ISDIR(mode)) return "a directory";
+  if (S_ISFIFO(mode)) return "a FIFO";
+  if (S_ISCHR(mode)) return "a character device";
+  if (S_ISBLK(mode)) return "a block device";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "not a regular file";
+}
+
+/// The text of the config file at path: a regular file of at most kMaxFileBytes. Opened without
+/// blocking and checked on the open descriptor, so a FIFO, a device or a file swapped in between
+/// never blocks or floods the reader. Throws ConfigError naming the path and the fix.
+std::string read_config_file(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) {
+    const int err = errno;
+    throw ConfigError({file_problem(path, std::string("cannot open (") + std::strerror(err) + ")" + kFileFix)});
+  }
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    const std::string kind = ::fstat(fd, &st) == 0 ? file_kind(st.st_mode) : "of unknown kind";
+    throw ConfigError({file_problem(path, "is " + kind + ", not a regular file" + kFileFix)});
+  }
+  const auto too_big = [&path](std::uint64_t bytes, const char* how) {
+    return ConfigError({file_problem(path, how + std::to_string(bytes) + " bytes, more than the " +
+                                               std::to_string(kMaxFileBytes) + " (1 MiB) a config may hold" +
+                                               kFileFix)});
+  };
+  if (static_cast<std::uint64_t>(st.st_size) > kMaxFileBytes)
+    throw too_big(static_cast<std::uint64_t>(st.st_size), "");
+  // Read at most one byte past the limit: a file that grows while it is read is refused too.
+  std::string text(kMaxFileBytes + 1, '\0');
+  std::size_t got = 0;
+  while (got < text.size()) {
+    const ssize_t n = ::read(fd, &text[got], text.size() - got);
+    if (n == 0) break;
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      const int err = errno;
+      throw ConfigError({file_problem(path, std::string("cannot read (") + std::strerror(err) + ")" + kFileFix)});
+    }
+    got += static_cast<std::size_t>(n);
+  }
+  if (got > kMaxFileBytes) throw too_big(got, "more than ");
+  text.resize(got);
+  return text;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -735,14 +805,34 @@ std::string join_lines(const std::vector<std::string>& lines) {
 
 }  // namespace
 
+namespace {
+
+/// Each problem bounded (util::kLineMax): whatever input it quotes, one problem stays one short line.
+std::vector<std::string> bounded(std::vector<std::string> problems) {
+  for (auto& p : problems) p = util::bounded_line(p);
+  return problems;
+}
+
+}  // namespace
+
 ConfigError::ConfigError(std::vector<std::string> problems)
+    : ConfigError(bounded(std::move(problems)), 0) {}
+
+ConfigError::ConfigError(std::vector<std::string> problems, int)
     : std::runtime_error(join_lines(problems)), problems_(std::move(problems)) {}
 
 Config load_string(const std::string& yaml_text, const std::vector<std::string>& overrides,
                    const std::string& source_name) {
   YAML::Node root;
   try {
-    root = YAML::Load(yaml_text);
+    const std::vector<YAML::Node> documents = YAML::LoadAll(yaml_text);
+    if (documents.size() > 1) {
+      const std::size_t line = second_document_line(yaml_text, documents[1]);
+      throw ConfigError({file_problem(source_name, "a second YAML document starts at line " + std::to_string(line) +
+                                                       ": a config holds one document (remove the '---' line and "
+                                                       "what follows it, or split the file)")});
+    }
+    if (!documents.empty()) root = documents.front();
   } catch (const YAML::Exception& ex) {
     const std::string at = ex.mark.is_null() ? "" : " at line " + std::to_string(ex.mark.line + 1);
     throw ConfigError({file_problem(source_name, "YAML syntax error" + at + ": " + ex.msg)});
@@ -759,14 +849,7 @@ Config load_string(const std::string& yaml_text, const std::vector<std::string>&
 
 Config load(const std::string& path, const std::vector<std::string>& overrides) {
   if (path.empty()) return build(YAML::Node(YAML::NodeType::Map), false, overrides);
-  std::error_code ec;
-  std::ifstream in(path, std::ios::binary);
-  if (!in || std::filesystem::is_directory(path, ec))
-    throw ConfigError({file_problem(path, "cannot open")});
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw ConfigError({file_problem(path, "cannot open")});
-  return load_string(text.str(), overrides, path);
+  return load_string(read_config_file(path), overrides, path);
 }
 
 namespace {

@@ -2,6 +2,7 @@
 /// shapeform configuration: YAML -> these plain structs. The one config loader of the project.
 /// Each field's default is its initialiser here (or in core / dds); its key, type, unit, range and
 /// description are declared once in the config table (config_table(), common/config/table.cpp).
+#include <cstddef>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
@@ -16,6 +17,10 @@
 namespace shapeform::config {
 
 inline constexpr int kSchemaVersion = 1;
+
+/// Largest config file load() reads, in bytes (1 MiB: the longest scenario is a few kB, so anything
+/// bigger is a wrong path, e.g. a log or a device).
+inline constexpr std::size_t kMaxFileBytes = std::size_t{1} << 20;
 
 /// How agents start when no explicit start is given.
 struct SwarmConfig {
@@ -34,6 +39,9 @@ struct AgentConfig {
   double rate_hz = 50.0;                  ///< control loop rate
   double neighbour_timeout_periods = 3.0; ///< drop a neighbour unheard for this many periods
   double status_rate_hz = 1.0;            ///< agent status publication rate
+  /// Listening time before the first publication, s: an agent that hears its id from another
+  /// participant meanwhile refuses to run (exit 2) instead of joining as a duplicate.
+  double identity_grace_s = 1.0;
   /// How agents step: false = free running (each on its own clock, using the newest neighbour states);
   /// true = lockstep (step k+1 waits for every neighbour's step k: the simulator's synchronous update).
   bool lockstep = false;
@@ -65,21 +73,26 @@ struct Config {
 const std::vector<core::params::Param<Config>>& config_table();
 
 /// Every problem found while loading or validating, one line each, e.g.
-/// "dynamics.sigma: must be > 0, got -1 (line 7)".
+/// "dynamics.sigma: must be > 0, got -1 (line 7)". A problem longer than util::kLineMax characters
+/// (it quotes much input) is shortened with util::excerpt.
 class ConfigError : public std::runtime_error {
  public:
   explicit ConfigError(std::vector<std::string> problems);
   const std::vector<std::string>& problems() const { return problems_; }
 
  private:
+  ConfigError(std::vector<std::string> bounded_problems, int);
   std::vector<std::string> problems_;
 };
 
 /// Loads a YAML file (empty path = defaults only), applies "dotted.key=value" overrides in order,
-/// validates, and returns the result. Throws ConfigError naming every problem.
+/// validates, and returns the result. Throws ConfigError naming every problem. The file must be a
+/// regular file of at most kMaxFileBytes (a FIFO, a device or a directory is refused at once, without
+/// reading it) holding one YAML document.
 Config load(const std::string& path, const std::vector<std::string>& overrides = {});
 
-/// Loads from YAML text (source_name is used in messages).
+/// Loads from YAML text (source_name is used in messages). A second YAML document is an error that
+/// names its line.
 Config load_string(const std::string& yaml_text, const std::vector<std::string>& overrides = {},
                    const std::string& source_name = "<string>");
 

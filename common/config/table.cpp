@@ -11,6 +11,10 @@ namespace params = core::params;
 using params::Type;
 using P = params::Param<Config>;
 
+/// Upper bound of every rate key, Hz: the fastest loop in use (the 1 kHz agents of the benchmarks).
+/// No loop of the project does useful work faster; an unbounded rate would spin a core.
+constexpr double kMaxRateHz = 1000.0;
+
 /// agent.sync spellings.
 constexpr params::Name<bool> kSyncNames[] = {{false, "free"}, {true, "lockstep"}};
 
@@ -50,15 +54,25 @@ std::vector<P> build() {
       Type::Integer, "sim.steps", "steps", params::integers(0, 10'000'000), "number of integration steps",
       [](auto& c) -> auto& { return c.sim.steps; }));
   t.push_back(real(
-      "agent.rate_hz", "Hz", params::above_up_to(0, 1000), "control loop rate",
+      "agent.rate_hz", "Hz", params::above_up_to(0, kMaxRateHz),
+      "control loop rate (at most 1 kHz: the benchmarks' fastest loop; a faster one would spin a core on "
+      "its overruns)",
       [](auto& c) -> auto& { return c.agent.rate_hz; }));
   t.push_back(real(
       "agent.neighbour_timeout_periods", "periods", params::at_least(1),
       "drop a neighbour unheard for this many loop periods",
       [](auto& c) -> auto& { return c.agent.neighbour_timeout_periods; }));
   t.push_back(real(
-      "agent.status_rate_hz", "Hz", params::above(0), "agent status publication rate",
+      "agent.status_rate_hz", "Hz", params::above_up_to(0, kMaxRateHz),
+      "agent status publication rate (once per loop tick at most, so at most `agent.rate_hz`)",
       [](auto& c) -> auto& { return c.agent.status_rate_hz; }));
+  t.push_back(real(
+      "agent.identity_grace_s", "s", params::Range{0, false, 10, false, false},
+      "listening time before an agent's first publication: hearing its id from another participant "
+      "meanwhile, it refuses to run (exit 2). Longer than discovery takes (well under 1 s on one host) and "
+      "than the slowest neighbour's period; 0: no listening (two processes with one id then settle by "
+      "their GUID prefixes, the higher exits)",
+      [](auto& c) -> auto& { return c.agent.identity_grace_s; }));
   {
     P sync;
     sync.key = "agent.sync";
@@ -83,12 +97,14 @@ std::vector<P> build() {
     t.push_back(std::move(sync));
   }
   t.push_back(real(
-      "supervisor.metrics_rate_hz", "Hz", params::above(0),
+      "supervisor.metrics_rate_hz", "Hz", params::above_up_to(0, kMaxRateHz),
       "metrics computation / publication / recording rate (computed every round(target_rate_hz / "
       "metrics_rate_hz) ticks of the target loop, so at most `target_rate_hz`)",
       [](auto& c) -> auto& { return c.supervisor.metrics_rate_hz; }));
   t.push_back(real(
-      "supervisor.target_rate_hz", "Hz", params::above(0), "tracking target publication rate",
+      "supervisor.target_rate_hz", "Hz", params::above_up_to(0, kMaxRateHz),
+      "tracking target publication rate, the supervisor's loop rate (at most 1 kHz, the fastest agent loop: "
+      "a faster one would only spin a core)",
       [](auto& c) -> auto& { return c.supervisor.target_rate_hz; }));
   t.push_back(real(
       "supervisor.agent_timeout_s", "s", params::above(0),

@@ -51,7 +51,8 @@ class Problems {
   std::vector<std::string> list_;
 };
 
-std::string quoted(const std::string& s) { return "\"" + s + "\""; }
+/// A received string as a message quotes it: at most util::kQuoteMax characters of it.
+std::string quoted(const std::string& s) { return "\"" + util::excerpt(s) + "\""; }
 
 /// " (line|circle|...)": the names a ShapeCommand enumeration field accepts.
 template <class E, std::size_t N>
@@ -229,7 +230,7 @@ bool from_msg(const msg::ShapeCommand& m, core::CompiledCommand& out, std::strin
   try {
     compiled = shapes::compile(c);
   } catch (const core::ShapeError& e) {
-    error = std::string("command: ") + e.what();
+    error = "command: " + util::excerpt(e.what(), util::kLineMax);  // it quotes the received expression
     return false;
   }
   // A command that could carry the swarm out of its workspace is refused as a whole, too.
@@ -259,8 +260,11 @@ bool from_msg(const msg::ShapeCommand& m, const SourceId& source, CommandSample&
 
 bool valid_state(const msg::AgentState& s, std::string& why) {
   Problems p("state");
-  if (s.id() < 0) p.add("id", "must be >= 0, got " + std::to_string(s.id()));
-  p.finite("model_time", s.model_time());
+  if (s.id() < 0 || s.id() > kMaxAgentId)
+    p.add("id", "must be in 0.." + std::to_string(kMaxAgentId) + ", got " + std::to_string(s.id()));
+  if (p.finite("model_time", s.model_time()) && !(s.model_time() >= 0.0 && s.model_time() <= kModelTimeLimit))
+    p.add("model_time", "must be in [0, " + util::format_g10(kModelTimeLimit) + "], got " +
+                            util::format_g10(s.model_time()));
   const bool fx = p.finite("x", s.x());
   const bool fy = p.finite("y", s.y());
   const bool fvx = p.finite("vx", s.vx());
@@ -365,8 +369,8 @@ msg::AgentStatus to_msg(const StatusSample& s) {
 }
 
 bool from_msg(const msg::AgentStatus& m, StatusSample& out, std::string& why) {
-  if (m.id() < 0) {
-    why = "status.id: must be >= 0, got " + std::to_string(m.id());
+  if (m.id() < 0 || m.id() > kMaxAgentId) {
+    why = "status.id: must be in 0.." + std::to_string(kMaxAgentId) + ", got " + std::to_string(m.id());
     return false;
   }
   out = StatusSample{m.id(),           m.stamp_ns(),        m.ticks(),         m.overruns(),

@@ -42,7 +42,8 @@ bool from_msg(const msg::ShapeCommand& m, core::CompiledCommand& out, std::strin
 /// refuses epoch 0 ("command.epoch: must be >= 1, got 0").
 bool from_msg(const msg::ShapeCommand& m, const SourceId& source, CommandSample& out, std::string& error);
 
-/// True when s is plausible: id >= 0, model_time, x, y, vx, vy, arc finite, |x|, |y| <=
+/// True when s is plausible: id in 0..kMaxAgentId, model_time in [0, kModelTimeLimit], x, y, vx,
+/// vy, arc finite, |x|, |y| <=
 /// kStateLimit and speed |(vx, vy)| <= kStateLimit. Otherwise false with `why` naming the field
 /// ("state.x: ...").
 bool valid_state(const msg::AgentState& s, std::string& why);
@@ -65,7 +66,7 @@ bool from_msg(const msg::TrackingTarget& m, TargetSample& out, std::string& why)
 /// StatusSample -> AgentStatus (every field).
 msg::AgentStatus to_msg(const StatusSample& s);
 
-/// AgentStatus -> StatusSample when id >= 0; otherwise false, `out` untouched, `why` says so.
+/// AgentStatus -> StatusSample when id is in 0..kMaxAgentId; otherwise false, `out` untouched, `why` says so.
 bool from_msg(const msg::AgentStatus& m, StatusSample& out, std::string& why);
 
 /// core::Metrics -> wire message (agents as agents_alive, every metric of core::kMetricTable under its

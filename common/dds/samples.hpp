@@ -79,6 +79,15 @@ inline std::string describe_issuer(const std::string& name, const SourceId& issu
 /// start): beyond it a sample is absurd and refused.
 inline constexpr double kStateLimit = 1e6;
 
+/// Largest agent id: ids are 0..kMaxAgentId, unique in the swarm. A received sample with another id
+/// is refused (and counted) like any absurd value, so a rogue publisher cannot add agents that way.
+inline constexpr std::int32_t kMaxAgentId = 9999;
+
+/// Largest model time accepted in a received AgentState (model time is >= 0: it starts at 0 when a
+/// command is adopted). 1e9 lasts 28 hours at the extreme integration.dt 10 and 1 kHz, and years at
+/// any configured pace; beyond it a sample is absurd.
+inline constexpr double kModelTimeLimit = 1e9;
+
 /// AgentState: one agent's state after a step (see idl/AgentState.idl).
 struct StateSample {
   std::int32_t id = 0;

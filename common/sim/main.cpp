@@ -31,8 +31,9 @@ int main(int argc, char** argv) {
                  core::params::join(core::params::names(core::params::kIntegratorNames), " | ") +
                      " (overrides integration.integrator)");
   cli.add_option("--init", init_path, "CSV of starting positions, one x1,x2 row per agent");
-  cli.add_option("--csv", csv_path, "write per-step metrics to this CSV file");
-  cli.add_option("--positions", positions_path, "write per-step positions (step,agent,x1,x2) to this CSV file");
+  cli.add_option("--csv", csv_path, "write per-step metrics to this CSV file")->check(app::writable_file());
+  cli.add_option("--positions", positions_path, "write per-step positions (step,agent,x1,x2) to this CSV file")
+      ->check(app::writable_file());
   cli.add_flag("--verbose", verbose, "print the effective configuration on stderr");
   cli.add_option("--kernel", kernel,
                  "auto | agent (each agent through agent_step, as agent processes) | batch (paper law + Euler: "

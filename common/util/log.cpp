@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "util/text.hpp"
+
 namespace shapeform::util {
 
 namespace {
@@ -34,8 +36,17 @@ std::string_view level_tag(LogLevel level) {
   return "";
 }
 
+/// A log line longer than this is shortened with excerpt(): whatever input a message quotes, a line
+/// stays readable (and a test harness's read of it bounded).
+constexpr std::size_t kLogLineMax = 4 * kLineMax;
+
 std::string format_with_prefix(const std::string& prefix, LogLevel level, std::string_view msg) {
   if (!msg.empty() && msg.back() == '\n') msg.remove_suffix(1);
+  std::string shortened;
+  if (msg.size() > kLogLineMax) {
+    shortened = excerpt(msg, kLogLineMax);
+    msg = shortened;
+  }
   const std::string_view tag = level_tag(level);
   std::string line;
   line.reserve(prefix.size() + tag.size() + msg.size() + 1);

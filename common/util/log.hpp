@@ -22,7 +22,8 @@ void log_init(std::string role, int id = -1);
 void write_all(int fd, std::string_view text);
 
 /// The full line for msg at level, with prefix, level tag (none for Info, "WARN ", "ERROR ") and
-/// one trailing newline (a trailing newline already in msg is not doubled).
+/// one trailing newline (a trailing newline already in msg is not doubled). A msg longer than
+/// 4 * kLineMax characters (util/text.hpp) is shortened with excerpt().
 std::string format_log_line(LogLevel level, std::string_view msg);
 
 void log(LogLevel level, std::string_view msg);

@@ -40,11 +40,12 @@ class AuthorityTest(harness.SwarmTestCase):
         self.sets = ["--set", "swarm.agents=%d" % AGENTS]
 
     def publisher(self, epoch, name="commander", extra=()):
-        """The test commander: publishes the circle config's command (with `extra` --set) at `epoch`."""
-        exe = os.path.join(os.path.dirname(harness.CONFIG["bin"]), "tests", "shapeform_test_publish_command")
-        p = self.start(name, [exe, "--config", self.config, "--domain", str(self.domain), "--epoch", str(epoch),
-                              "--readers", str(AGENTS)] + self.sets + list(extra))
-        return p.wait_event("published", 30, what="%s to publish epoch %d" % (name, epoch))
+        """A test commander (the rogue publisher, staying): publishes the circle config's command (with
+        `extra` --set) at `epoch`, issuer left empty; returns its "sent" event (with its "source")."""
+        p = self.start(name, [harness.bin_path("shapeform_rogue_publisher"), "--topic", "command", "--field", "epoch=%d" % epoch,
+                              "--wait-readers", str(AGENTS), "--wait-s", "20", "--stay", "--config", self.config,
+                              "--domain", str(self.domain)] + self.sets + list(extra))
+        return dict(p.wait_event("sent", 30, what="%s to publish epoch %d" % (name, epoch)), epoch=epoch)
 
     def agents_follow(self, agents, epoch, issuer=None):
         """True when every agent process's newest command event is (epoch, issuer)."""

@@ -396,3 +396,50 @@ TEST_CASE("tracking targets of another command with the same epoch are ignored",
   a.on_target(dds::TargetSample{dds::CommandId{5, issuer(2)}, 0.0, Vec2(9, 9), Vec2::Zero(), 0}, 0);
   CHECK(a.following_target());
 }
+
+/// A participant whose GUID prefix ends in b (so participant(1) < participant(2)).
+static dds::SourceId participant(std::uint8_t b) { return dds::SourceId{{1, 15, 0, 0, 0, 0, 0, 0, 0, 0, 0, b}}; }
+
+TEST_CASE("identity: a newcomer that hears its id during the grace period yields without publishing",
+          "[agent][identity]") {
+  agent::IdentityGuard g(participant(1), 1000);
+  CHECK_FALSE(g.may_publish(999));  // listening
+  CHECK(g.on_sample(3, participant(1)) == agent::IdentityGuard::Action::None);  // our own sample
+  CHECK(g.on_sample(3, dds::SourceId{}) == agent::IdentityGuard::Action::None);  // unknown: cannot tell
+  // Even from a higher GUID prefix: whoever published first keeps the id.
+  CHECK(g.on_sample(3, participant(9)) == agent::IdentityGuard::Action::Yield);
+  CHECK(g.yielding());
+  CHECK_FALSE(g.may_publish(2000));  // never publishes
+  CHECK(g.on_sample(3, participant(9)) == agent::IdentityGuard::Action::None);
+}
+
+TEST_CASE("identity: after the grace period the higher GUID prefix yields, the lower keeps the id",
+          "[agent][identity]") {
+  agent::IdentityGuard low(participant(2), 1000), high(participant(5), 1000);
+  CHECK(low.may_publish(1000));
+  CHECK(high.may_publish(1000));
+  low.published();
+  high.published();
+  // Each sees the other: both decide alike, exactly one yields.
+  CHECK(low.on_sample(7, participant(5)) == agent::IdentityGuard::Action::Keep);
+  CHECK(high.on_sample(7, participant(2)) == agent::IdentityGuard::Action::Yield);
+  CHECK_FALSE(low.yielding());
+  CHECK(low.may_publish(5000));
+  CHECK(high.yielding());
+  CHECK(low.on_sample(7, participant(5)) == agent::IdentityGuard::Action::None);  // reported once
+  CHECK(low.on_sample(8, participant(5)) == agent::IdentityGuard::Action::Keep);  // another hosted id
+}
+
+TEST_CASE("identity: after its participant is recreated, samples of the old and the new one are ours",
+          "[agent][identity]") {
+  agent::IdentityGuard g(participant(5), 0);
+  g.published();
+  g.rebuilt(participant(1));  // a rebuild after a stall: a new GUID prefix, lower than the old one
+  CHECK(g.own() == participant(1));
+  CHECK(g.on_sample(3, participant(5)) == agent::IdentityGuard::Action::None);  // in flight from the old one
+  CHECK(g.on_sample(3, participant(1)) == agent::IdentityGuard::Action::None);
+  g.rebuilt(dds::SourceId{});  // a failed rebuild: no participant, nothing learned
+  CHECK(g.own() == participant(1));
+  // A real duplicate is still one, ordered against the participant in use now.
+  CHECK(g.on_sample(3, participant(3)) == agent::IdentityGuard::Action::Keep);
+}

@@ -10,6 +10,9 @@
 #include <vector>
 
 #include "shapes/shapes.hpp"
+#include "util/text.hpp"
+
+#include <sys/stat.h>
 
 using shapeform::config::Config;
 using shapeform::config::ConfigError;
@@ -17,6 +20,7 @@ using shapeform::config::load;
 using shapeform::config::load_string;
 using shapeform::config::to_yaml;
 namespace core = shapeform::core;
+namespace config = shapeform::config;
 
 namespace {
 /// True when the command's curve is the one its shape compiles to (not a default or stale curve).
@@ -647,9 +651,9 @@ TEST_CASE("out-of-range values are reported with the range") {
         "agent.rate_hz: must be in (0, 1000], got 1001 (line 3)");
   CHECK(one("agent", "neighbour_timeout_periods", "0.5") ==
         "agent.neighbour_timeout_periods: must be >= 1, got 0.5 (line 3)");
-  CHECK(one("agent", "status_rate_hz", "0") == "agent.status_rate_hz: must be > 0, got 0 (line 3)");
+  CHECK(one("agent", "status_rate_hz", "0") == "agent.status_rate_hz: must be in (0, 1000], got 0 (line 3)");
   CHECK(one("supervisor", "metrics_rate_hz", "-10") ==
-        "supervisor.metrics_rate_hz: must be > 0, got -10 (line 3)");
+        "supervisor.metrics_rate_hz: must be in (0, 1000], got -10 (line 3)");
   CHECK(one("supervisor", "agent_timeout_s", "0") ==
         "supervisor.agent_timeout_s: must be > 0, got 0 (line 3)");
   CHECK(one("supervisor", "flush_s", "0") == "supervisor.flush_s: must be > 0, got 0 (line 3)");
@@ -777,10 +781,81 @@ TEST_CASE("schema_version is required in a file and must be 1") {
 TEST_CASE("a missing or unreadable file is reported") {
   const auto missing = problems_of_load("/nonexistent/shapeform.yaml");
   REQUIRE(missing.size() == 1);
-  CHECK(missing[0] == "config file '/nonexistent/shapeform.yaml': cannot open");
+  CHECK(missing[0] ==
+        "config file '/nonexistent/shapeform.yaml': cannot open (No such file or directory): give the path of a "
+        "YAML config file");
   const auto dir = problems_of_load(kSourceDir + "/config");
   REQUIRE(dir.size() == 1);
-  CHECK(dir[0] == "config file '" + kSourceDir + "/config': cannot open");
+  CHECK(dir[0] == "config file '" + kSourceDir +
+                      "/config': is a directory, not a regular file: give the path of a YAML config file");
+}
+
+TEST_CASE("a config that is not a regular file is refused at once, without reading it") {
+  // A device that never ends: reading it used to take 2 GB and abort.
+  CHECK(problems_of_load("/dev/zero") ==
+        std::vector<std::string>{"config file '/dev/zero': is a character device, not a regular file: give the path "
+                                 "of a YAML config file"});
+  // A FIFO nobody writes: opening it for reading used to block for ever.
+  const std::string fifo = (std::filesystem::temp_directory_path() / "shapeform_config_test.fifo").string();
+  std::remove(fifo.c_str());
+  REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
+  const auto p = problems_of_load(fifo);
+  std::remove(fifo.c_str());
+  CHECK(p == std::vector<std::string>{"config file '" + fifo +
+                                      "': is a FIFO, not a regular file: give the path of a YAML config file"});
+}
+
+TEST_CASE("a config file above 1 MiB is refused; one at the limit is read") {
+  const TempFile at_limit("schema_version: 1\n#" + std::string(config::kMaxFileBytes - 20, 'x') + "\n");
+  REQUIRE(std::filesystem::file_size(at_limit.path) <= config::kMaxFileBytes);
+  CHECK_NOTHROW(load(at_limit.path));
+  const TempFile big("schema_version: 1\n#" + std::string(config::kMaxFileBytes, 'x') + "\n");
+  const auto p = problems_of_load(big.path);
+  REQUIRE(p.size() == 1);
+  CHECK(p[0] == "config file '" + big.path + "': " + std::to_string(config::kMaxFileBytes + 20) +
+                    " bytes, more than the 1048576 (1 MiB) a config may hold: give the path of a YAML config file");
+}
+
+TEST_CASE("a second YAML document is an error naming its line") {
+  const std::string fix = ": a config holds one document (remove the '---' line and what follows it, or split the file)";
+  CHECK(problem_of("schema_version: 1\n---\nname: x\n") ==
+        "config file '<string>': a second YAML document starts at line 2" + fix);
+  CHECK(problem_of("---\nschema_version: 1\n# note\n---\n") ==
+        "config file '<string>': a second YAML document starts at line 4" + fix);
+  CHECK(problem_of("schema_version: 1\n...\nname: x\n") ==
+        "config file '<string>': a second YAML document starts at line 3" + fix);
+  // One document, with its optional start and end markers, is fine.
+  CHECK(load_string("%YAML 1.2\n---\nschema_version: 1\nname: x\n...\n").name == "x");
+}
+
+TEST_CASE("every rate key has an upper bound") {
+  for (const auto& p : config::config_table()) {
+    if (p.key.size() < 3 || p.key.compare(p.key.size() - 3, 3, "_hz") != 0) continue;
+    INFO(p.key);
+    CHECK(p.range.hi <= 1000.0);
+    const auto [section, leaf] = std::pair(p.key.substr(0, p.key.find('.')), p.key.substr(p.key.find('.') + 1));
+    CHECK(problem_of("schema_version: 1\n" + section + ":\n  " + leaf + ": 1e9\n") ==
+          p.key + ": must be in (0, 1000], got 1e9 (line 3)");
+    CHECK_NOTHROW(load_string("schema_version: 1\n" + section + ":\n  " + leaf + ": 1000\n"));
+  }
+}
+
+TEST_CASE("a problem quotes at most about 200 characters of the offending input") {
+  const std::string huge(1'000'000, 'q');
+  for (const std::string& text : {"schema_version: 1\nname: [" + huge + "]\n",  // a value
+                                  "schema_version: 1\n" + huge + ": 1\n",       // a key
+                                  "schema_version: 1\nshape:\n  kind: " + huge + "\n"}) {
+    const auto p = problems_of(text);
+    REQUIRE(p.size() == 1);
+    CHECK(p[0].size() <= shapeform::util::kLineMax + 40);
+  }
+  // A quoted string keeps one escape per special character.
+  CHECK(problem_of("schema_version: 1\nagent:\n  rate_hz: \"a\\nb\\\"c\"\n") ==
+        "agent.rate_hz: expected a number, got \"a\\nb\\\"c\" (line 3)");
+  const auto set = problems_of("schema_version: 1\n", {"agent.rate_hz=" + huge});
+  REQUIRE(set.size() == 1);
+  CHECK(set[0].size() <= shapeform::util::kLineMax + 40);
+  CHECK(set[0].find("agent.rate_hz: expected a number, got \"qqq") == 0);
 }
 
 TEST_CASE("a YAML syntax error is reported with its line") {

@@ -512,7 +512,7 @@ TEST_CASE("valid_state rejects non-finite and absurd samples", "[dds][convert]")
 
   auto s = good_state();
   s.id(-1);
-  CHECK(state_problem(s) == "state.id: must be >= 0, got -1");
+  CHECK(state_problem(s) == "state.id: must be in 0..9999, got -1");
   s = good_state();
   s.x(kNaN);
   CHECK(state_problem(s) == "state.x: must be finite, got nan");
@@ -551,6 +551,40 @@ TEST_CASE("valid_state rejects non-finite and absurd samples", "[dds][convert]")
   s.vx(8e5);
   s.vy(8e5);  // each component fine, speed 1.13e6 is not
   CHECK(state_problem(s).find("state.v: speed must be <= 1000000") == 0);
+}
+
+TEST_CASE("valid_state refuses ids outside 0..kMaxAgentId and absurd model times", "[dds][convert]") {
+  auto s = good_state();
+  s.id(dds::kMaxAgentId);  // the bounds themselves are accepted
+  s.model_time(dds::kModelTimeLimit);
+  CHECK(state_problem(s).empty());
+  s.id(0);
+  s.model_time(0.0);
+  CHECK(state_problem(s).empty());
+  s = good_state();
+  s.id(2147483647);  // 2^31 - 1: the rogue id of the fault probes
+  CHECK(state_problem(s) == "state.id: must be in 0..9999, got 2147483647");
+  s.id(dds::kMaxAgentId + 1);
+  CHECK(state_problem(s) == "state.id: must be in 0..9999, got 10000");
+  s = good_state();
+  s.model_time(1e300);
+  CHECK(state_problem(s) == "state.model_time: must be in [0, 1000000000], got 1e+300");
+  s.model_time(-1.0);
+  CHECK(state_problem(s) == "state.model_time: must be in [0, 1000000000], got -1");
+  dds::StatusSample st;
+  std::string why;
+  msg::AgentStatus m;
+  m.id(2147483647);
+  CHECK_FALSE(dds::from_msg(m, st, why));
+  CHECK(why == "status.id: must be in 0..9999, got 2147483647");
+}
+
+TEST_CASE("a received string is quoted in a rejection at most about util::kQuoteMax characters long",
+          "[dds][convert]") {
+  const std::string error = reject([](msg::ShapeCommand& m) { m.shape_kind(std::string(1'000'000, 'z')); });
+  CHECK(error.find("command.shape_kind: unknown shape \"zzz") == 0);
+  CHECK(error.size() < 500);
+  CHECK(error.find("characters ...]") != std::string::npos);
 }
 
 TEST_CASE("AgentState converts both ways; a refused sample leaves the output untouched", "[dds][convert]") {
@@ -662,7 +696,7 @@ TEST_CASE("AgentStatus converts both ways; a negative id is refused", "[dds][con
   bad.id(-2);
   dds::StatusSample untouched;
   CHECK_FALSE(dds::from_msg(bad, untouched, why));
-  CHECK(why == "status.id: must be >= 0, got -2");
+  CHECK(why == "status.id: must be in 0..9999, got -2");
   CHECK(untouched.id == 0);
 }
 

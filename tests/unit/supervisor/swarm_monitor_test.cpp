@@ -127,3 +127,27 @@ TEST_CASE("following means the same command: epoch and issuer; the lowest epoch 
   CHECK(m.min_epoch_followed(0) == 5);
   CHECK(m.max_epoch_seen() == (1ULL << 40));  // 64-bit
 }
+
+static dds::SourceId source(std::uint8_t b) { return dds::SourceId{{1, 15, 0, 0, 0, 0, 0, 0, 0, 0, 0, b}}; }
+
+TEST_CASE("swarm monitor: a second participant publishing an id in use is a duplicate, reported once",
+          "[supervisor][monitor][identity]") {
+  SwarmMonitor m(kS, {});
+  const auto a = source(1), b = source(2);
+  CHECK(m.claim(3, a, 0) == SwarmMonitor::Claim::Owner);  // unknown id: whoever comes first
+  m.on_state(3, Vec2(1, 2), Vec2(1, 2), dds::CommandId{}, 0.0, 0, a);
+  CHECK(m.agents().at(3).source == a);
+  CHECK(m.claim(3, a, 10) == SwarmMonitor::Claim::Owner);
+  CHECK(m.claim(3, b, 20) == SwarmMonitor::Claim::NewDuplicate);
+  CHECK(m.claim(3, b, 30) == SwarmMonitor::Claim::Duplicate);  // reported once
+  CHECK(m.claim(3, source(3), 30) == SwarmMonitor::Claim::NewDuplicate);
+  CHECK(m.claim(3, dds::SourceId{}, 30) == SwarmMonitor::Claim::Owner);  // unknown source: cannot tell
+  CHECK(m.claim(4, b, 30) == SwarmMonitor::Claim::Owner);                // another id: b owns it
+  // The incumbent keeps the id while alive; once it fell silent (or left), the id is free again.
+  CHECK(m.claim(3, b, kS) == SwarmMonitor::Claim::Duplicate);
+  CHECK(m.claim(3, b, kS + 1) == SwarmMonitor::Claim::Owner);
+  m.on_state(3, Vec2(0, 0), Vec2(0, 0), dds::CommandId{}, 0.0, kS + 1, b);
+  CHECK(m.agents().at(3).source == b);
+  m.on_departed(3);
+  CHECK(m.claim(3, a, kS + 2) == SwarmMonitor::Claim::Owner);
+}

@@ -17,6 +17,7 @@
 #include "util/proc_stats.hpp"
 #include "util/signals.hpp"
 #include "util/stats.hpp"
+#include "util/text.hpp"
 
 using namespace std::chrono_literals;
 namespace util = shapeform::util;
@@ -248,4 +249,30 @@ TEST_CASE("rss_mb and CpuMeter give plausible numbers", "[util][proc_stats]") {
   const double again = meter.percent();
   CHECK(std::isfinite(again));
   CHECK(again >= 0.0);
+}
+
+TEST_CASE("excerpt escapes control characters and keeps at most about max characters of long input", "[util][text]") {
+  using shapeform::util::excerpt;
+  CHECK(excerpt("plain text") == "plain text");
+  CHECK(excerpt("a\nb\tc\rd\x01" "e\x7f") == "a\\nb\\tc\\rd\\x01e\\x7f");
+  const std::string huge = "BEGIN" + std::string(1'000'000, 'x') + "END";
+  const std::string e = excerpt(huge);
+  CHECK(e.size() <= shapeform::util::kQuoteMax + 20);
+  CHECK(e.rfind("BEGIN", 0) == 0);  // the beginning and the end are kept
+  CHECK(e.size() >= 3);
+  CHECK(e.compare(e.size() - 3, 3, "END") == 0);
+  CHECK(e.find("[... " + std::to_string(huge.size() - 120 - 50) + " characters ...]") != std::string::npos);
+  CHECK(excerpt(std::string(200, 'y')) == std::string(200, 'y'));  // up to max: as it is
+  CHECK(excerpt(std::string(201, 'y')).size() < 240);
+  CHECK(excerpt(huge, 40).size() < 80);
+}
+
+TEST_CASE("bounded_line keeps a short line as it is and shortens a long one", "[util][text]") {
+  using shapeform::util::bounded_line;
+  CHECK(bounded_line("two\nlines") == "two\nlines");
+  const std::string long_line = "console: unknown command '" + std::string(5000, 'w') + "'";
+  const std::string b = bounded_line(long_line);
+  CHECK(b.size() <= shapeform::util::kLineMax + 20);
+  CHECK(b.rfind("console: unknown command 'www", 0) == 0);
+  CHECK(b.back() == '\'');
 }
