@@ -292,10 +292,7 @@ void AgentNode::drain_commands() {
     bool refused = false;
     for (auto& l : logics_) refused = l->on_command(cmd) == Verdict::Refused || refused;  // each counts it
     if (refused) {
-      const std::string why = "epoch " + std::to_string(cmd.id.epoch) + " of " +
-                              dds::describe_issuer(cmd.issuer_name, cmd.id.issuer) + " is more than " +
-                              std::to_string(dds::kMaxEpochJump) + " above epoch " +
-                              std::to_string(logics_.front()->command_id().epoch) + ": refused";
+      const std::string why = dds::CommandArbiter::refusal(cmd, logics_.front()->command_id().epoch);
       // Each new epoch refused is reported; a publisher repeating one is throttled.
       const bool fresh = cmd.id.epoch != last_refused_epoch_;
       last_refused_epoch_ = cmd.id.epoch;

@@ -227,9 +227,8 @@ void Supervisor::drain_commands(std::int64_t now) {
     } else if (v == Verdict::Refused) {
       ++commands_refused_;
       const std::string who = dds::describe_issuer(c.issuer_name, c.id.issuer);
-      const std::string line = "command epoch " + std::to_string(c.id.epoch) + " of " + who + " refused: more than " +
-                               std::to_string(dds::kMaxEpochJump) + " above epoch " +
-                               std::to_string(arbiter_.reference(floor)) + "; the agents refuse it too";
+      const std::string line =
+          "command " + dds::CommandArbiter::refusal(c, arbiter_.reference(floor)) + " (the agents refuse it too)";
       // Each new epoch refused is reported; a publisher repeating one is throttled.
       const bool fresh = c.id.epoch != last_refused_epoch_;
       last_refused_epoch_ = c.id.epoch;

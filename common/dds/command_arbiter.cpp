@@ -32,4 +32,9 @@ bool CommandArbiter::recheck(std::uint64_t peer_floor) {
   return false;
 }
 
+std::string CommandArbiter::refusal(const CommandSample& c, std::uint64_t reference) {
+  return "epoch " + std::to_string(c.id.epoch) + " of " + describe_issuer(c.issuer_name, c.id.issuer) +
+         " is more than " + std::to_string(kMaxEpochJump) + " above epoch " + std::to_string(reference) + ": refused";
+}
+
 }  // namespace shapeform::dds

@@ -3,6 +3,7 @@
 /// supervisor, so that a swarm never splits between two commands. No Fast DDS, no clock.
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "dds/samples.hpp"
@@ -47,6 +48,9 @@ class CommandArbiter {
   static bool absurd(std::uint64_t epoch, std::uint64_t reference) {
     return epoch > reference && epoch - reference > kMaxEpochJump;
   }
+  /// Why c is refused, judged from `reference`: "epoch E of NAME [GUID] is more than 1000000 above
+  /// epoch R: refused" (the one wording of agents and supervisor).
+  static std::string refusal(const CommandSample& c, std::uint64_t reference);
   /// Whether a refused command waits for recheck().
   bool has_refused() const { return !refused_.empty(); }
   /// Refused commands kept for recheck(), the greatest ones.
