@@ -11,8 +11,10 @@ packages=(
   build-essential cmake pkg-config
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
   libeigen3-dev libyaml-cpp-dev catch2 libcli11-dev nlohmann-json3-dev libmuparser-dev libedit-dev
-  python3 python3-matplotlib python3-numpy
-  iproute2 tcpdump procps psmisc
+  libcpp-httplib-dev
+  python3 python3-matplotlib python3-numpy python3-pil python3-yaml
+  iproute2 iptables tcpdump procps psmisc
+  chromium chromium-driver python3-selenium
 )
 
 missing=()
