@@ -161,11 +161,12 @@ def parse(text):
     hosts, names, addresses, owner = [], {}, {}, {}
     for k, raw in enumerate(raw_hosts):
         where = "hosts[%d]" % k
+        if isinstance(raw, dict) and isinstance(raw.get("name"), str) and NAME_RE.match(raw["name"]):
+            where += " (%s)" % raw["name"]
         h = _mapping(raw, where, HOST_KEYS)
         name = _required(h, "name", where)
         if not isinstance(name, str) or not NAME_RE.match(name):
             raise FleetError(where + ".name", "expected a name of letters, digits, _ and -, got %s" % _brief(name))
-        where = "hosts[%d] (%s)" % (k, name)
         if name in names:
             raise FleetError(where + ".name", "host '%s' is also hosts[%d]" % (name, names[name]))
         names[name] = k
