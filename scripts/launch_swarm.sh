@@ -304,7 +304,7 @@ agents_timeout=$((30 + n / 2))
 # ------------------------------------------------------------------------------------------------
 # Children and cleanup
 
-sup_pid="" tail_pids=() agent_pids=()
+sup_pid="" tail_pids=() agent_pids=() ssh_agent_pids=()
 interrupted=""
 shm_list() { ls /dev/shm 2>/dev/null | grep -E '^(sem\.)?(fastrtps|fast_datasharing|fastdds)' | sort; }
 shm_before=$(shm_list)
@@ -374,15 +374,26 @@ for g in $left; do kill -s KILL -- "-$g" 2>/dev/null; done
 EOF
 }
 ssh_hosts() { for h in "${hosts[@]+"${hosts[@]}"}"; do on_ssh "$h" && echo "$h"; done; }
+# Waits up to 5 s for the given pids to end by themselves (ssh clients whose remote command was stopped).
+settle() {
+  local p i any
+  for ((i = 0; i < 50; i++)); do
+    any=0
+    for p in "$@"; do alive "$p" && any=1; done
+    [ $any -eq 0 ] && return 0
+    sleep 0.1
+  done
+}
 
 cleanup() {
   local rc=$? i p st bad=0 new_shm h
   trap - INT TERM EXIT
   [ -n "$interrupted" ] && rc=$interrupted
   # The supervisor first, so its recording and summary see the swarm to the end; then the agents.
-  if [ -n "$sup_pid" ] && on_ssh "$sup_host"; then remote_stop "$sup_host" supervisor; fi
+  if [ -n "$sup_pid" ] && on_ssh "$sup_host"; then remote_stop "$sup_host" supervisor && settle "$sup_pid"; fi
   [ -n "$sup_pid" ] && stop_pids "$sup_pid"
-  if [ ${#agent_pids[@]} -gt 0 ]; then for h in $(ssh_hosts); do remote_stop "$h"; done; fi
+  for h in $(ssh_hosts); do remote_stop "$h"; done # every group started there (and one started as we stopped)
+  settle "${ssh_agent_pids[@]+"${ssh_agent_pids[@]}"}"
   stop_pids "${agent_pids[@]+"${agent_pids[@]}"}"
   for i in "${!agent_pids[@]}"; do
     wait "${agent_pids[$i]}" 2>/dev/null
@@ -493,6 +504,7 @@ for ((i = 0; i < n; i++)); do
   start_on "${agent_host[$i]-}" "agent_$i" "$bin/shapeform_agent" --id "$i" --config "$config" --domain "$domain" \
     "${startarg[@]}" "${setargs[@]}" "${hsets[@]+"${hsets[@]}"}" --json
   agent_pids+=("$started_pid")
+  on_ssh "${agent_host[$i]-}" && ssh_agent_pids+=("$started_pid")
   sleep 0.02 # a slight stagger avoids a discovery storm
 done
 say "started $n agents (pids ${agent_pids[0]}..${agent_pids[$((n - 1))]}) and the supervisor (pid $sup_pid)"
