@@ -142,7 +142,9 @@ hosts=() agent_host=() sup_host="" fleet_name="" fleet_peers="" lab=() lab_made=
 if [ -n "$fleet" ]; then
   [ -f "$fleet" ] && [ -r "$fleet" ] || die "--fleet: cannot read '${fleet:0:200}'"
   fleet=$(cd "$(dirname "$fleet")" && pwd)/$(basename "$fleet")
-  plan=$(python3 "$root/scripts/lib/fleet.py" "$fleet" --prog "$prog: --fleet") || exit 2
+  /usr/bin/python3 -c 'import yaml' 2>/dev/null ||
+    die "--fleet: reading fleet files needs /usr/bin/python3 with python3-yaml (scripts/install_deps.sh)"
+  plan=$(/usr/bin/python3 "$root/scripts/lib/fleet.py" "$fleet" --prog "$prog: --fleet") || exit 2
   while read -r what a b c d; do
     case "$what" in
       fleet) fleet_name=$a; n=$b ;;

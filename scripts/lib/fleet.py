@@ -63,11 +63,12 @@ def _brief(value):
 
 
 def _mapping(value, key, allowed):
+    key = key or "(the file)"
     if not isinstance(value, dict):
         raise FleetError(key, "expected a mapping with keys %s, got %s" % (", ".join(allowed), _brief(value)))
     for k in value:
         if k not in allowed:
-            raise FleetError("%s.%s" % (key, k) if key else k,
+            raise FleetError(k if key == "(the file)" else "%s.%s" % (key, k),
                              "unknown key (known: %s)" % ", ".join(allowed))
     return value
 
