@@ -56,6 +56,27 @@ class FleetTest(harness.SwarmTestCase):
         self.procs.append(p)
         return p
 
+    def setUp(self):
+        super().setUp()
+        self.labs = []  # test hosts a launch of this test may make
+
+    def tearDown(self):
+        # The launcher first, with time to stop its hosts' processes and remove its lab by itself; a lab
+        # still there (the launcher killed) is removed here.
+        for p in self.procs:
+            p.stop(grace=30.0)
+        try:
+            super().tearDown()
+        finally:
+            for lab in self.labs:
+                harness.netlab.NetLab(lab, 1, "10.0.0").down()
+
+    def use_lab(self, name):
+        """A lab a launch of this test makes: one left by an earlier run that was itself killed is removed
+        first (ours by name), and whatever is left of it after the test is removed."""
+        harness.netlab.NetLab(name, 1, "10.0.0").down()
+        self.labs.append(name)
+
     def assert_nothing_left(self, proc, lab):
         self.assertEqual(harness.processes_in_group(proc.pid), [], "processes left in the launcher's group")
         self.assertEqual(harness.shapeform_processes_on_domain(self.domain), [], "shapeform processes left")
@@ -71,6 +92,7 @@ class FleetTest(harness.SwarmTestCase):
     def test_example_fleet_converges(self):
         # The README's command: the example fleet, the paper's circle, until converged.
         fleet = source("config", "fleets", "lab4.yaml")
+        self.use_lab("lab4")
         sim = self.run_sim(harness.scenario("circle"), ["--steps", "500"])
         p = self.launch(fleet, ["--scenario", "circle", "--json"])
         self.assertEqual(p.wait(90), 0, "launcher exit status (0: converged)")
@@ -110,6 +132,7 @@ class FleetTest(harness.SwarmTestCase):
         # Two test hosts, unicast discovery: h1 a namespace running agents 0..2; h2 an ssh host (the
         # stand-in) running agents 3..5 and the supervisor. Ctrl-C to the launcher alone, mid-run.
         lab = "d%d" % self.domain
+        self.use_lab(lab)
         subnet = "10.200.%d" % (2 * self.domain)
         bindir = os.path.join(self.run_dir, "fake_bin")
         os.makedirs(bindir)
