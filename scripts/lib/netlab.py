@@ -96,7 +96,8 @@ class Capture:
                 if "listening on" in line:
                     listening.set()
 
-        threading.Thread(target=read_stderr, daemon=True).start()
+        self._reader = threading.Thread(target=read_stderr, daemon=True)
+        self._reader.start()
         deadline = time.monotonic() + timeout
         while not listening.wait(0.05):
             if self.proc.poll() is not None or time.monotonic() > deadline:
@@ -119,6 +120,8 @@ class Capture:
             except subprocess.TimeoutExpired:
                 self.proc.kill()
                 self.proc.wait()
+        self._reader.join(5)  # ends at tcpdump's end of stderr
+        self.proc.stderr.close()
 
     def packets(self):
         """Every datagram captured so far (probes included)."""
