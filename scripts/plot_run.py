@@ -131,6 +131,8 @@ class Outlines:
         self.warned = False
 
     def at(self, epoch, model_time, positions):
+        if epoch == 0:
+            return None  # before any command: there is no commanded shape
         settings = self.commands.get(epoch)
         if settings is None or self.sim is None:
             if not self.warned:
