@@ -490,13 +490,16 @@ class LanRow:
             sw.command("start")
             t_end = t_fault
         elif self.fault == "partition":
+            # From the moment netlab.sh returns: its rule is in place (the call takes up to a second or two
+            # on a loaded machine; its duration is kept as fault_call_s).
             host = "h%d" % (1 + k % 3)
-            t_fault = time.monotonic()
+            t_call = time.monotonic()
             self.lab.fault(host, "partition")
+            t_fault = time.monotonic()
             w.sleep(PARTITION_S, N_AGENTS)
             self.lab.fault(host, "heal")
             t_end = time.monotonic()
-            r["victim"] = host
+            r["victim"], r["fault_call_s"] = host, t_fault - t_call
         elif self.fault == "kill":
             victims = [(k % 4), 4 + (k + 1) % 4, 8 + (k + 2) % 4]  # one on each of h1, h2, h3
             t_fault = t_end = time.monotonic()
@@ -739,6 +742,10 @@ def estimate_s(args, plan):
 
 def main(argv):
     args = parse(argv)
+    # Started in the background, a script has SIGINT ignored: both signals end it through its clean-up
+    # (every process stopped, the test hosts removed).
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
     plan = lan_plan(args)
     if args.dry_run:
         for f, law, loss in plan:
