@@ -261,7 +261,8 @@ class Watch:
         self.heard = {}       # agent id -> newest neighbours_heard
         self.alive = set()    # the current supervisor's view
         self.converged = False
-        self.drops = []       # (t, id): the supervisor's "lost"/"left" events, and agents that report fewer
+        self.drops = []       # (t, id, by): the supervisor's "lost"/"left" events (by None), and agents that
+                              # report fewer (by: the reporting agent)
         self.sup_drops = []   # (t, id): the supervisor's "lost"/"left" events only
         self.in_force = None  # when the current supervisor printed "in_force"
         self.exits = {}       # name -> (t, code) of processes that exited while watched
@@ -288,7 +289,7 @@ class Watch:
                 if e.get("event") == "status":
                     before = self.heard.get(i)
                     if before is not None and before >= n_expected - 1 > e["neighbours_heard"]:
-                        self.drops.append((now, i))
+                        self.drops.append((now, None, i))
                     self.heard[i] = e["neighbours_heard"]
         sup = self.swarm.sup
         for e in self.tail(sup).read():
@@ -298,7 +299,7 @@ class Watch:
                     self.alive.add(e["id"])
                 else:
                     self.alive.discard(e["id"])
-                    self.drops.append((now, e["id"]))
+                    self.drops.append((now, e["id"], None))
                     self.sup_drops.append((now, e["id"]))
             elif kind == "metrics":
                 self.converged = bool(e.get("converged"))
@@ -315,19 +316,19 @@ class Watch:
                 pass
         return now
 
-    def whole(self, ids):
+    def whole(self, ids, meshed=True):
         """The swarm of `ids` is whole: the supervisor reports exactly them alive, each reports hearing all
-        the others, and the supervisor says converged."""
-        return (self.alive == set(ids) and all(self.heard.get(i) == len(ids) - 1 for i in ids)
-                and self.converged)
+        the others (when meshed), and the supervisor says converged."""
+        return (self.alive == set(ids) and self.converged and
+                (not meshed or all(self.heard.get(i) == len(ids) - 1 for i in ids)))
 
-    def until_whole(self, ids, t_from, timeout, hold=HOLD_S):
+    def until_whole(self, ids, t_from, timeout, hold=HOLD_S, meshed=True):
         """The first moment from t_from on after which the swarm of `ids` stays whole for `hold` seconds
         (seconds after t_from), or None when that does not happen within timeout seconds."""
         since = None
         while True:
             now = self.poll(len(ids))
-            if self.whole(ids):
+            if self.whole(ids, meshed):
                 since = now if since is None else since
                 if now - since >= hold:
                     return since - t_from
@@ -345,7 +346,7 @@ class Watch:
 
     def aborted(self, since):
         """Processes that exited by themselves after `since` (not the ones the fault killed)."""
-        return sorted(name for name, (t, code) in self.exits.items()
+        return sorted("%s (exit %s)" % (name, code) for name, (t, code) in self.exits.items()
                       if t >= since and name not in self.expected_exits)
 
 
@@ -443,10 +444,13 @@ class LanRow:
             return []
         codes = self.swarm.stop()
         # A process that ends by our SIGTERM exits 0, or dies of it before its handler is installed (-15).
-        bad = [name for name, code in codes.items()
+        bad = ["%s (exit %s)" % (name, "killed after 10 s" if code is None else code) for name, code in codes.items()
                if name not in self.watch.exits and name not in self.watch.expected_exits and code not in (0, -15)]
-        bad += [p.name for p in self.swarm.procs if p.name not in bad and
-                any(w in p.log() for w in ("Assertion", "terminate called", "core dumped", "Aborted"))]
+        for p in self.swarm.procs:
+            text = p.log()
+            hit = next((w for w in ("Assertion", "terminate called", "core dumped", "Aborted") if w in text), None)
+            if hit:
+                bad.append("%s (log: %s)" % (p.name, hit))
         self.swarm = self.watch = self.echo = None
         return bad
 
@@ -529,14 +533,19 @@ class LanRow:
             r["victim"] = "%s -> %s" % (old.host, host)
         if self.fault != "supervisor":
             # Detect: the first agent dropped (the supervisor's "lost"/"left", or an agent hearing fewer).
+            # A partitioned host's agents hear the others stop as soon as netlab.sh has put its first rule
+            # (packets in) in place, before the partition is complete: only the other side's view counts.
             def first_drop():
                 w.poll(N_AGENTS)
-                return [t for t, _ in w.drops if t >= t_fault]
+                return [t for t, _, by in w.drops if t >= t_fault and
+                        not (self.fault == "partition" and by is not None and sw.hosts[by] == r["victim"])]
             found = procs.wait_for(first_drop, 10 if self.fault != "loss" else 0, POLL_S)
             r["detect_s"] = (min(found) - t_fault) if found else None
         w.forget_statuses()
         timeout = self.args.timeout
-        rec = w.until_whole(survivors, t_end, timeout)
+        # Under loss an agent drops a neighbour whose last 3 samples were lost (agent.neighbour_timeout_periods)
+        # and takes it back with its next one: the mesh is not required there, the supervisor's view is.
+        rec = w.until_whole(survivors, t_end, timeout, meshed=self.fault != "loss")
         t_stop = time.monotonic() if rec is None else t_end + rec
         if self.fault == "supervisor":
             r["detect_s"] = None if w.in_force is None else w.in_force - t_fault
