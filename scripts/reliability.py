@@ -442,6 +442,8 @@ class LanRow:
         """Stops the swarm; names of its processes that exited abnormally when stopped."""
         if self.swarm is None:
             return []
+        if self.echo is not None:  # the measuring tool first, alone: its exit is not the swarm's
+            procs.stop_all([self.echo], grace=10.0)
         codes = self.swarm.stop()
         # A process that ends by our SIGTERM exits 0, or dies of it before its handler is installed (-15).
         bad = ["%s (exit %s)" % (name, "killed after 10 s" if code is None else code) for name, code in codes.items()
@@ -611,6 +613,13 @@ def med_worst(values, fmt, worst=max):
     return "%s / %s" % (fmt(statistics.median(vals)), fmt(worst(vals)))
 
 
+TOOL = "echo_status"  # the measuring process (shapeform_echo): not part of the swarm
+
+
+def swarm_aborted(r):
+    return [a for a in r.get("aborted", []) if not a.startswith(TOOL)]
+
+
 def lan_table(runs, fault):
     head = ("| law | loss (%) | runs | detected after (s) | recovered | recovered after (s) | samples lost (%) | "
             "agents dropped | processes aborted | recording complete |")
@@ -626,13 +635,19 @@ def lan_table(runs, fault):
         rec = [r.get("recover_s") for r in rows]
         n_rec = sum(1 for v in rec if v is not None)
         rec_txt = med_worst(rec, fmt_s)
-        if n_rec < len(rows) and rec_txt != "-":
-            rec_txt = rec_txt.split(" / ")[0] + " / not within %g s" % rows[0].get("timeout_s", 0)
+        if n_rec < len(rows):
+            rec_txt = ("%s / " % rec_txt.split(" / ")[0] if n_rec else "") + "not within %g s" % rows[0].get("timeout_s", 0)
         lines.append("| %s | %g | %d | %s | %d | %s | %s | %s | %d | %d |" % (
             law, loss, len(rows), med_worst([r.get("detect_s") for r in rows], fmt_s), n_rec, rec_txt,
             med_worst([r.get("lost_pct") for r in rows], fmt_pct),
-            med_worst([r.get("dropped") for r in rows], str), sum(len(r.get("aborted", [])) for r in rows),
+            med_worst([r.get("dropped") for r in rows], str), sum(len(swarm_aborted(r)) for r in rows),
             sum(1 for r in rows if r.get("recording"))))
+    notes = sorted({a for r in runs if r["fault"] == fault for a in r.get("aborted", [])})
+    tool = sum(1 for r in runs if r["fault"] == fault for a in r.get("aborted", []) if a.startswith(TOOL))
+    if notes:
+        lines.append("\nNot ended normally: %s%s." % (", ".join(a for a in notes if not a.startswith(TOOL)) or "no "
+                     "process of the swarm", "; the measuring `shapeform_echo` (not counted above) %d time(s)" % tool
+                     if tool else ""))
     return "\n".join(lines) + "\n"
 
 
@@ -694,6 +709,9 @@ def parse(argv):
     ap.add_argument("--timeout", type=float, default=40.0, help="a run that has not recovered by then failed, s "
                     "(default 40)")
     ap.add_argument("--dry-run", action="store_true", help="print the plan and its estimated duration; start nothing")
+    ap.add_argument("--tables-from", action="append", default=[], metavar="RUNS_JSON",
+                    help="write the tables of the faults in a runs.json of an earlier run (repeatable; later files "
+                         "win per fault) into --out, with that run's provenance; start nothing")
     stall = ap.add_argument_group("stalls (loopback)")
     stall.add_argument("--stalls", default=None, help="stall lengths, s (default 3,5,20; --quick: 5)")
     stall.add_argument("--targets", default="agent,supervisor", help="stalled process kinds (default agent,supervisor)")
@@ -749,6 +767,23 @@ def estimate_s(args, plan):
     return lan + stall
 
 
+def rerender(args):
+    """--tables-from: the tables of earlier runs into the document, nothing started."""
+    if not args.out:
+        log("reliability.py: --tables-from needs --out (or no --quick)")
+        return 2
+    doc = Path(args.out).read_text()
+    for path in args.tables_from:
+        saved = json.loads(Path(path).read_text())
+        stamp = saved.get("provenance", "Measured by an earlier run (%s).\n\n" % path)
+        for f in LAN_FAULTS:
+            if any(r["fault"] == f for r in saved["lan"]):
+                doc = replace_block(doc, f, stamp + lan_table(saved["lan"], f))
+    Path(args.out).write_text(doc)
+    log("tables written into %s" % args.out)
+    return 0
+
+
 def main(argv):
     args = parse(argv)
     # Started in the background, a script has SIGINT ignored: both signals end it through its clean-up
@@ -756,6 +791,8 @@ def main(argv):
     signal.signal(signal.SIGINT, signal.default_int_handler)
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
     plan = lan_plan(args)
+    if args.tables_from:
+        return rerender(args)
     if args.dry_run:
         for f, law, loss in plan:
             print("%s, %s law, loss %g %%: %d runs" % (f, law, loss, args.runs))
@@ -787,7 +824,8 @@ def main(argv):
         """runs.json, and the tables of what was measured so far into the document."""
         for r in runs:
             r["timeout_s"] = args.timeout
-        (work / "runs.json").write_text(json.dumps({"lan": runs, "stall": trials}, indent=1))
+        (work / "runs.json").write_text(json.dumps({"lan": runs, "stall": trials,
+                                                    "provenance": provenance(argv, load, t0)}, indent=1))
         tables = {f: lan_table(runs, f) for f in LAN_FAULTS if any(r["fault"] == f for r in runs)}
         if trials:
             tables["stall"] = table(trials, args.stalls, args.targets)
