@@ -791,7 +791,7 @@ def main(argv):
     signal.signal(signal.SIGINT, signal.default_int_handler)
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
     plan = lan_plan(args)
-    if args.tables_from:
+    if args.tables_from and not args.dry_run:
         return rerender(args)
     if args.dry_run:
         for f, law, loss in plan:
