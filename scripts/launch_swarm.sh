@@ -16,7 +16,7 @@
 #   --domain D      DDS domain id 0..232 (default: 10..100, derived from the PID, skipping domains
 #                   in use on this host)
 #   --rate HZ       agent loop rate (agent.rate_hz and supervisor.target_rate_hz)
-#   --record DIR    record metrics.csv and positions.csv into DIR (default: RUN/record)
+#   --record DIR    record the run into DIR (default: RUN/record; its files: docs/RECORDING.md)
 #   --init CSV      agent i starts at row i (x1,x2; optional header); N must equal the row count
 #   --seed S        seeded starts: agent i starts where shapeform_sim --seed S puts agent i
 #                   (default: the scenario's swarm.seed)
@@ -430,7 +430,7 @@ cleanup() {
   fi
   if [ -n "$sup_pid" ]; then
     [ $json -eq 1 ] && grep -E '"event": ?"summary"' "$run/supervisor.out" | tail -n 1
-    [ -d "$record" ] && say "recording: $record (metrics.csv, positions.csv)"
+    [ -d "$record" ] && say "recording: $record (metrics, positions, commands, centre: docs/RECORDING.md)"
     say "logs: $run (supervisor.log, supervisor.out, agent_0..$((n - 1)).log and .out, script.txt)"
   fi
   new_shm=$(comm -13 <(printf '%s\n' "$shm_before") <(shm_list) | sed '/^$/d')
