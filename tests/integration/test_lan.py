@@ -123,8 +123,8 @@ class LanTest(harness.LanSwarmTestCase):
     def test_loss_20_percent(self):
         # 20 % of UDP datagrams dropped at every host's eth0, in and out (so about 36 % between two hosts),
         # from the moment everyone hears everyone: the command and every state cross the lossy LAN, and
-        # the paper's circle still forms, evenly. (Discovery itself under this loss takes about 15 s:
-        # docs/RELIABILITY.md measures it.)
+        # the paper's circle still forms, evenly. (Discovery itself under this loss took about 15 s in a
+        # trial, against about 2 s without: too long for this suite, so the loss starts after it.)
         circle = harness.scenario("circle")
         sim = self.run_sim(circle, ["--steps", "500"])
         hosts = list(self.lab.hosts)
