@@ -293,13 +293,15 @@ class LanTest(harness.LanSwarmTestCase):
         self.assertEqual(len(pause_step), 1, "one step across the pause")
         pause_step = pause_step[0]
         self.assertGreater(len(before_steps), 100)
-        held = sorted(before_steps[-100:])  # the 2 s before the pause: converged, the chatter of the law
-        typical = held[len(held) // 2]
+        # The 2 s before the pause: converged, each step the law's chatter (about r dt = 0.1). An ordinary
+        # step is within 1.2 x the 90th percentile of those; the law's bound is over 3 times that.
+        held = sorted(before_steps[-100:])
+        typical = held[len(held) * 9 // 10]
         largest = max(before_steps + after_steps)
-        print("paused agent: step across the pause %.4f, median step before %.4f, largest %.4f, law's bound %.4f"
+        print("paused agent: step across the pause %.4f, 90th percentile before %.4f, largest %.4f, law's bound %.4f"
               % (pause_step, typical, largest, bound), flush=True)
         self.assertLessEqual(largest, bound, "no step beyond the law's bound")
-        self.assertLessEqual(pause_step, typical, "the step across the pause is no larger than a typical one")
+        self.assertLessEqual(pause_step, 1.2 * typical, "the step across the pause is an ordinary one")
         self.assertTrue(sup.wait_converged(30), "the swarm is converged again")
         self.assert_all_alive(everyone)
 
