@@ -128,7 +128,7 @@ core::CompiledCommand command_from_json(const std::string& json_object) {
   std::vector<std::string> sets;
   for (const auto& [key, value] : j.items()) sets.push_back(key + "=" + (value.is_string() ? value.get<std::string>() : value.dump()));
   try {
-    return config::load_string("", sets, "command").command;
+    return config::load_string("schema_version: " + std::to_string(config::kSchemaVersion) + "\n", sets, "command").command;
   } catch (const config::ConfigError& e) {
     std::string all;
     for (const auto& p : e.problems()) all += (all.empty() ? "" : "; ") + p;

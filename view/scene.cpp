@@ -49,7 +49,9 @@ void Series::push(const std::vector<double>& point) {
   if (points_.size() >= capacity_) {
     // Keep points 0, 2, 4, ...: the history at half the density.
     std::size_t kept = 0;
-    for (std::size_t i = 0; i < points_.size(); i += 2) points_[kept++] = std::move(points_[i]);
+    for (std::size_t i = 0; i < points_.size(); i += 2, ++kept) {
+      if (kept != i) points_[kept] = std::move(points_[i]);
+    }
     points_.resize(kept);
   }
   points_.push_back(point);
