@@ -171,7 +171,7 @@ nlohmann::json Scene::frame(double now_s) {
   json out = json::object();
   out["now_s"] = now_s;
   out["model_time"] = t;
-  out["epoch"] = epoch_;
+  out["epoch"] = command_ ? epoch_ : chart_epoch_;  // a recording without commands.csv: the metrics' epoch
   out["converged"] = converged_;
   out["agents"] = std::move(agents);
   out["trails"] = std::move(trails);

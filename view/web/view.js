@@ -106,10 +106,11 @@ function draw_chart(id, f, column) {
   const c = document.getElementById(id), g = c.getContext("2d");
   g.clearRect(0, 0, c.width, c.height);
   const k = f.chart.columns.indexOf(column);
-  const pts = f.chart.points.filter((p) => p[k] !== null);
+  const pts = f.chart.points.filter((p) => Number.isFinite(p[0]) && Number.isFinite(p[k]));
   if (pts.length === 0) return 0;
   const t0 = pts[0][0], t1 = Math.max(pts[pts.length - 1][0], t0 + 1e-9);
-  let lo = Math.min(0, ...pts.map((p) => p[k])), hi = Math.max(...pts.map((p) => p[k]));
+  let lo = 0, hi = 0;
+  for (const p of pts) { lo = Math.min(lo, p[k]); hi = Math.max(hi, p[k]); }
   if (hi <= lo) hi = lo + 1;
   const L = 40, R = 8, T = 8, B = 18, w = c.width - L - R, h = c.height - T - B;
   g.strokeStyle = "#b0bec5"; g.lineWidth = 1;
