@@ -766,7 +766,8 @@ const std::vector<HelpEntry>& help_entries() {
    "record start DIR | record stop                              CSV recording\n",
    "record start DIR\n"
    "record stop\n"
-   "  Writes DIR/metrics.csv and DIR/positions.csv (DIR is created; files are overwritten).\n"
+   "  Writes DIR/metrics.csv, positions.csv, commands.csv and centre.csv (docs/RECORDING.md;\n"
+   "  DIR is created; files are overwritten).\n"
    "  Quote DIR if it contains spaces. record stop closes the files (or says nothing is recording).\n"},
   {"help",
    "help [COMMAND]                                              this list, or details\n",

@@ -22,7 +22,7 @@
 #include "dds/node.hpp"
 #include "dds/participant.hpp"
 #include "presentation.hpp"
-#include "recorder.hpp"
+#include "record/recorder.hpp"
 #include "swarm_monitor.hpp"
 #include "util/log.hpp"
 #include "util/proc_stats.hpp"
@@ -100,6 +100,8 @@ class Supervisor {
   std::string publisher() const;
   /// {"epoch", "issuer", "publisher", "own"} of the command in force, for the JSON events.
   nlohmann::json in_force_json() const;
+  /// Seconds since the supervisor started: a recording's wall_s.
+  double wall_s(std::int64_t now) const { return static_cast<double>(now - start_ns_) * 1e-9; }
   /// Model time of the epoch in force by the supervisor's clock; it stands still while held.
   double model_time(std::int64_t now) const {
     if (epoch() == 0 || current_.hold) return 0.0;
@@ -146,14 +148,16 @@ class Supervisor {
   void execute(const Action& a, std::int64_t now);
   /// The pending action's outcome: nullopt while it blocks, else whether it succeeded (false: timed out).
   std::optional<bool> wait_outcome(const Action& a, std::int64_t now);
-  void start_recording(const std::string& dir);
+  void start_recording(const std::string& dir, std::int64_t now);
+  /// commands.csv: the command in force (when one is) from now.
+  void record_command(std::int64_t now);
   Summary summary(std::int64_t now) const;
 
   const config::Config& cfg_;
   SupervisorOptions opt_;
   Output out_;
   SwarmMonitor monitor_;
-  Recorder recorder_;
+  record::Recorder recorder_;
   /// The command in force, as this supervisor knows it: its own or another participant's, heard on
   /// the command topic (the publisher's sample, or the copy every agent re-offers).
   dds::CommandArbiter arbiter_;
@@ -247,6 +251,7 @@ void Supervisor::learnt(std::int64_t now) {
   epoch_start_ns_ = now;
   clock_synced_ = false;
   monitor_.set_command(current_, c.id, now);
+  record_command(now);
   const bool replaced_own = own_epoch_ != 0 && superseded_ != own_epoch_;
   if (replaced_own) superseded_ = own_epoch_;
   const std::string who = publisher();
@@ -366,8 +371,9 @@ void Supervisor::publish_target(std::int64_t now) {
   // Another participant's command: its publisher publishes the target (or the agents follow its path).
   if (!own() || !current_.tracking.enabled || current_.hold) return;
   const double t = model_time(now);
-  target_writer_.write(dds::to_msg(dds::TargetSample{arbiter_.id(), t, core::centre_at(current_.tracking.path, t),
-                                                     core::centre_velocity(current_.tracking.path, t), now}));
+  const core::Vec2 c = core::centre_at(current_.tracking.path, t);
+  target_writer_.write(dds::to_msg(dds::TargetSample{arbiter_.id(), t, c, core::centre_velocity(current_.tracking.path, t), now}));
+  recorder_.write_centre(wall_s(now), t, epoch(), c.x(), c.y());
 }
 
 void Supervisor::publish_command(const core::CompiledCommand& cmd, std::int64_t now) {
@@ -387,6 +393,7 @@ void Supervisor::publish_command(const core::CompiledCommand& cmd, std::int64_t 
   epoch_start_ns_ = now;
   clock_synced_ = true;
   monitor_.set_command(cmd, sample.id, now);
+  record_command(now);
   if (!command_writer_.write(dds::to_msg(cmd, sample.id, own_name_))) util::log_warn("command write failed");
   out_.human() << "epoch " << own_epoch_ << ": " << describe_command(cmd) << std::endl;
   nlohmann::json j = in_force_json();
@@ -411,13 +418,14 @@ void Supervisor::metrics_tick(std::int64_t now) {
   // at one instant).
   const SwarmMonitor::Sample s = current_.hold ? monitor_.measure(t, now) : monitor_.update(t, now);
   if (epoch() != 0) metrics_writer_.write(dds::to_msg(s.metrics, epoch(), t, now, s.converged));
-  const double wall = static_cast<double>(now - start_ns_) * 1e-9;
+  const double wall = wall_s(now);
   if (recorder_.is_open()) {
     try {
       recorder_.write_metrics({wall, t, epoch(), s.alive, s.metrics, s.converged});
       const auto step = static_cast<std::int64_t>(std::llround(t / current_.dt));
-      for (const auto& [id, x] : monitor_.alive_positions(now, t)) recorder_.write_positions(wall, t, step, id, x.x(), x.y());
-      recorder_.flush_if_due(Recorder::Clock::now());
+      for (const auto& [id, x] : monitor_.alive_positions(now, t))
+        recorder_.write_positions(wall, t, step, monitor_.agents().at(id).command.epoch, id, x.x(), x.y());
+      recorder_.flush_if_due(record::Recorder::Clock::now());
     } catch (const std::exception& e) {
       throttled_.error("record", std::string("recording: ") + e.what());
     }
@@ -469,9 +477,20 @@ std::optional<bool> Supervisor::wait_outcome(const Action& a, std::int64_t now) 
   return timed_out ? std::optional<bool>(true) : std::nullopt;  // Sleep
 }
 
-void Supervisor::start_recording(const std::string& dir) {
+void Supervisor::start_recording(const std::string& dir, std::int64_t now) {
   recorder_.open(dir);  // closes the current recording only once the new one is open
+  record_command(now);  // a recording begins with the command its rows are measured against
   out_.event("record", {{"dir", dir}, {"open", true}});
+}
+
+void Supervisor::record_command(std::int64_t now) {
+  if (!arbiter_.has_command() || !recorder_.is_open()) return;
+  try {
+    recorder_.write_command(wall_s(now), model_time(now), epoch(), dds::to_string(arbiter_.id().issuer),
+                            arbiter_.current().issuer_name, current_);
+  } catch (const std::exception& e) {
+    throttled_.error("record", std::string("recording: ") + e.what());
+  }
 }
 
 void Supervisor::execute(const Action& a, std::int64_t now) {
@@ -557,7 +576,7 @@ void Supervisor::execute(const Action& a, std::int64_t now) {
           block(act.seconds);
         } else if constexpr (std::is_same_v<T, RecordStart>) {
           try {
-            start_recording(act.dir);
+            start_recording(act.dir, now);
             out << "recording into " << act.dir << std::endl;
           } catch (const std::exception& e) {
             std::cerr << "record start: " << e.what() << std::endl;
@@ -732,7 +751,7 @@ int Supervisor::run() {
   }
   if (!opt_.record_dir.empty()) {
     try {
-      start_recording(opt_.record_dir);
+      start_recording(opt_.record_dir, util::steady_ns());
     } catch (const std::exception& e) {
       std::cerr << "shapeform_supervisor: --record: " << e.what() << std::endl;
       return kExitBadInput;

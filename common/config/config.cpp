@@ -768,8 +768,10 @@ void put_list(YAML::Emitter& e, const char* key, const std::vector<std::string>&
   e << YAML::EndSeq;
 }
 
-/// One key of the table with its value, spelled so that it reads back the same.
-void put_value(YAML::Emitter& e, const char* key, const Param& p, const params::Value& v) {
+/// One key of a table (the config table or the command table) with its value, spelled so that it
+/// reads back the same.
+template <class T>
+void put_value(YAML::Emitter& e, const char* key, const params::Param<T>& p, const params::Value& v) {
   switch (p.type) {
     case Type::Real: {
       const double x = std::get<double>(v);
@@ -898,13 +900,24 @@ std::string to_yaml(const Config& c) {
 namespace {
 
 /// The value as to_yaml writes it (one line).
-std::string yaml_text(const Param& p, const params::Value& v) {
+template <class T>
+std::string yaml_text(const params::Param<T>& p, const params::Value& v) {
   YAML::Emitter e;
   e << YAML::BeginMap;
   put_value(e, "k", p, v);
   e << YAML::EndMap;
   return std::string(e.c_str()).substr(3);  // after "k: "
 }
+
+}  // namespace
+
+std::vector<std::pair<std::string, std::string>> command_settings(const core::Command& c) {
+  std::vector<std::pair<std::string, std::string>> out;
+  for (const auto& p : params::command_table()) out.emplace_back(p.key, yaml_text(p, p.get(c)));
+  return out;
+}
+
+namespace {
 
 std::string code(const std::string& s) { return "`" + s + "`"; }
 

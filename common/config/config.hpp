@@ -99,6 +99,12 @@ Config load_string(const std::string& yaml_text, const std::vector<std::string>&
 /// The effective configuration as YAML (printed once at start-up by every executable).
 std::string to_yaml(const Config& c);
 
+/// Every command key of the config table (the sections shape, tracking, dynamics, integration and
+/// safety, in table order) with the command's value spelled as `--set` takes it ("shape.r0" -> "1.5",
+/// "shape.centre" -> "[0.0, 2.0]"), so that load("", {"key=value", ...}) rebuilds exactly this command.
+/// What a recording's commands.csv holds (docs/RECORDING.md).
+std::vector<std::pair<std::string, std::string>> command_settings(const core::Command& c);
+
 /// The markdown key table of one top-level section ("" = the top-level keys, "swarm", ...,
 /// "supervisor" with supervisor.converge): key, type, unit, default, range, description.
 /// Throws std::invalid_argument for a section without keys.

@@ -9,13 +9,16 @@
 #include "app/app.hpp"
 #include "app/json.hpp"
 #include "core/params.hpp"
+#include "record/recorder.hpp"
 
 int main(int argc, char** argv) {
   using namespace shapeform;
   app::App app("shapeform_sim",
                 "shapeform_sim: N agents of the configured law (" + core::params::join(core::params::names(core::params::kLawNames), " or ") + ") in one process, no DDS. Prints one JSON object.");
   CLI::App& cli = app.cli();
-  std::string init_path, csv_path, positions_path, integrator;
+  std::string init_path, csv_path, positions_path, record_dir, integrator;
+  std::uint64_t epoch = 1;
+  double outline_time = -1.0;
   int agents = 0;
   std::string seed, steps;  // checked by the config loader (as swarm.seed and sim.steps)
   double dt = 0.0;
@@ -31,7 +34,14 @@ int main(int argc, char** argv) {
                  core::params::join(core::params::names(core::params::kIntegratorNames), " | ") +
                      " (overrides integration.integrator)");
   cli.add_option("--init", init_path, "CSV of starting positions, one x1,x2 row per agent");
-  cli.add_option("--csv", csv_path, "write per-step metrics to this CSV file")->check(app::writable_file());
+  cli.add_option("--record", record_dir,
+                 "record every step into this folder, in the supervisor's layout (metrics, positions, command, "
+                 "tracked centre: docs/RECORDING.md)")
+      ->check(app::writable_dir());
+  cli.add_option("--epoch", epoch, "the command's epoch in the --record files (default 1)")
+      ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 53));
+  cli.add_option("--csv", csv_path, "write per-step metrics (step,model_time,<metrics>) to this CSV file")
+      ->check(app::writable_file());
   cli.add_option("--positions", positions_path, "write per-step positions (step,agent,x1,x2) to this CSV file")
       ->check(app::writable_file());
   cli.add_flag("--verbose", verbose, "print the effective configuration on stderr");
@@ -41,6 +51,10 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"auto", "agent", "batch"}));
   cli.add_option("--outline", outline, "add `outline`: this many points along the shape at the final time")
       ->check(CLI::Range(0, 100000));
+  cli.add_option("--outline-time", outline_time,
+                 "draw the outline at this model time instead of the final one (a tracked shape moves); with "
+                 "--steps 0 and --init, the commanded shape around recorded positions")
+      ->check(CLI::Range(0.0, 1e15));
   if (const auto rc = app.parse(argc, argv)) return *rc;
 
   // Flags are overrides like any other, so the one validation applies to them.
@@ -93,8 +107,24 @@ int main(int argc, char** argv) {
                : kernel == "batch" ? core::Kernel::Batch
                                    : sim::auto_kernel(static_cast<int>(start.size()));
 
+  record::Recorder recorder;
+  if (!record_dir.empty()) {
+    try {
+      recorder.open(record_dir);
+    } catch (const std::exception& e) {
+      return fail(std::string("--record: ") + e.what());
+    }
+    opt.recorder = &recorder;
+    opt.epoch = epoch;
+  }
   const core::CompiledCommand& cmd = cfg.command;
   const sim::SimResult r = sim::run_simulation(cmd, start, cfg.sim.steps, opt);
+  recorder.close();
+  if (recorder.write_errors() != 0) {
+    std::cerr << "shapeform_sim: --record " << record_dir << ": " << recorder.write_errors() << " failed writes"
+              << std::endl;
+    return 1;  // a runtime failure
+  }
 
   nlohmann::json j = app::metrics_json(r.metrics);
   j["name"] = cfg.name;
@@ -118,7 +148,7 @@ int main(int argc, char** argv) {
     j.erase("ring_error");
   }
   if (outline > 0) {
-    const core::ShapeSpec s = core::shape_at(cmd, r.model_time);
+    const core::ShapeSpec s = core::shape_at(cmd, outline_time >= 0 ? outline_time : r.model_time);
     const core::Curve* curve = &cmd.curve();
     // The line is infinite: draw the stretch the agents span, with a margin.
     double lo = 0, hi = s.scale * curve->length();  // world units, as closest_point's s

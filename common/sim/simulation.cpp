@@ -7,6 +7,8 @@
 #include <stdexcept>
 
 #include "core/metric_table.hpp"
+#include "record/recorder.hpp"
+#include "util/clock.hpp"
 #include "util/text.hpp"
 
 namespace shapeform::sim {
@@ -20,6 +22,20 @@ std::string metric_csv_values(const core::Metrics& m) {
     if (const auto v = info.get(m)) out += info.count ? std::to_string(std::llround(*v)) : util::format_g10(*v);
   }
   return out;
+}
+}  // namespace
+
+namespace {
+/// One step of the recording: metrics, positions, and the tracked centre.
+void record_step(record::Recorder& rec, double wall, long k, std::uint64_t epoch, const core::CompiledCommand& cmd,
+                 double t, const std::vector<core::Vec2>& x, const core::Metrics& m, bool converged) {
+  rec.write_metrics({wall, t, epoch, static_cast<int>(x.size()), m, converged});
+  for (std::size_t i = 0; i < x.size(); ++i)
+    rec.write_positions(wall, t, k, epoch, static_cast<std::int32_t>(i), x[i].x(), x[i].y());
+  if (cmd.tracking.enabled) {
+    const core::Vec2 c = core::centre_at(cmd.tracking.path, t);
+    rec.write_centre(wall, t, epoch, c.x(), c.y());
+  }
 }
 }  // namespace
 
@@ -42,13 +58,18 @@ SimResult run_simulation(const core::CompiledCommand& cmd, std::vector<core::Vec
     *opt.metrics_csv << '\n';
   }
   if (opt.positions_csv) *opt.positions_csv << "step,agent,x1,x2\n";
+  const std::int64_t start_ns = util::steady_ns();
+  const auto wall_s = [start_ns] { return static_cast<double>(util::steady_ns() - start_ns) * 1e-9; };
+  if (opt.recorder) opt.recorder->write_command(wall_s(), swarm.time(), opt.epoch, "", "shapeform_sim", cmd);
   for (long k = 0;; ++k) {
     const auto& x = swarm.positions();
-    // The O(N^2) metrics are only needed per step when a metrics CSV is written.
-    const core::Metrics m = core::compute_metrics(cmd, x, swarm.time(), opt.metrics_csv != nullptr);
+    // The O(N^2) metrics are only needed per step when they are written.
+    const bool full = opt.metrics_csv != nullptr || opt.recorder != nullptr;
+    const core::Metrics m = core::compute_metrics(cmd, x, swarm.time(), full);
     err.push_back(m.shape_error_mean.value_or(0.0));
     gap.push_back(core::uniformity(cmd, m));
     verdict.add(swarm.time(), m.shape_error_mean, gap.back(), core::spread(x));
+    if (opt.recorder) record_step(*opt.recorder, wall_s(), k, opt.epoch, cmd, swarm.time(), x, m, verdict.converged());
     if (opt.metrics_csv) *opt.metrics_csv << k << ',' << util::format_g10(swarm.time()) << ',' << metric_csv_values(m) << '\n';
     if (opt.positions_csv)
       for (std::size_t i = 0; i < x.size(); ++i)

@@ -1,5 +1,6 @@
 #pragma once
 /// The headless simulator: N agents in one process, each stepped with core::agent_step.
+#include <cstdint>
 #include <iosfwd>
 #include <optional>
 #include <string>
@@ -8,6 +9,10 @@
 #include "core/metrics.hpp"
 #include "core/swarm.hpp"
 
+namespace shapeform::record {
+class Recorder;
+}
+
 namespace shapeform::sim {
 
 struct SimOptions {
@@ -15,6 +20,11 @@ struct SimOptions {
   /// ("" for undefined values)
   std::ostream* metrics_csv = nullptr;
   std::ostream* positions_csv = nullptr;  ///< per-step positions: step,agent,x1,x2
+  /// An open recording (docs/RECORDING.md), the supervisor's layout: the command (issuer "", issuer_name
+  /// shapeform_sim) at step 0, then per step the metrics, every agent's position and, when tracking,
+  /// C(t). wall_s is the seconds since run_simulation began.
+  record::Recorder* recorder = nullptr;
+  std::uint64_t epoch = 1;  ///< the command's epoch in the recording
   core::SettleParams settle;
   core::ConvergenceParams converge;  ///< the verdict (core::ConvergenceDetector), as the supervisor's
   core::Kernel kernel = core::Kernel::Agent;  ///< see core::Kernel (Batch applies to paper law + Euler)

@@ -1,6 +1,7 @@
 #include "config/config.hpp"
 
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
@@ -1109,4 +1110,67 @@ TEST_CASE("a config outside the envelope is refused at the key and line that car
   const auto implicit = problems_of("schema_version: 1\nshape:\n  kind: implicit\n  f_expr: sin(x*50)*sin(y*50)-0.5\n");
   REQUIRE(implicit.size() == 1);
   CHECK(implicit[0].rfind("shape.f_expr: implicit curve: f(x, y) = 0 falls into more than 16 separate pieces", 0) == 0);
+}
+
+// ---------------------------------------------------------------------------------------------
+// command_settings: a recording's commands.csv
+
+namespace {
+std::vector<std::string> as_sets(const std::vector<std::pair<std::string, std::string>>& settings) {
+  std::vector<std::string> out;
+  for (const auto& [key, value] : settings) out.push_back(key + "=" + value);
+  return out;
+}
+
+/// Every command field equal, bit for bit (the curve is compiled from the shape, checked apart).
+void require_same_command(const core::Command& a, const core::Command& b) {
+  for (const auto& p : core::params::command_table()) {
+    INFO(p.key);
+    CHECK(p.get(a) == p.get(b));
+  }
+}
+}  // namespace
+
+TEST_CASE("command_settings names every command key once, in table order") {
+  const auto settings = config::command_settings(Config{}.command);
+  const auto& table = core::params::command_table();
+  REQUIRE(settings.size() == table.size());
+  for (std::size_t i = 0; i < table.size(); ++i) CHECK(settings[i].first == table[i].key);
+  const std::vector<std::string> sections = {"shape", "tracking", "dynamics", "integration", "safety"};
+  for (const auto& [key, value] : settings) {
+    INFO(key);
+    CHECK(std::find(sections.begin(), sections.end(), key.substr(0, key.find('.'))) != sections.end());
+    CHECK(value.find('\n') == std::string::npos);  // one line each: a --set argument
+  }
+}
+
+TEST_CASE("command_settings round-trips every shipped scenario's command through --set") {
+  for (const auto& entry : std::filesystem::directory_iterator(kSourceDir + "/config/scenarios")) {
+    INFO(entry.path().string());
+    const Config c = load(entry.path().string());
+    const Config back = load("", as_sets(config::command_settings(c.command)));
+    require_same_command(c.command, back.command);
+    CHECK(compiled_from_shape(back.command));
+    CHECK(config::command_settings(back.command) == config::command_settings(c.command));
+  }
+}
+
+TEST_CASE("command_settings round-trips held commands, rotations, expressions and polygons") {
+  const std::vector<std::vector<std::string>> cases = {
+      {"dynamics.hold=true", "shape.rotation_deg=33.3", "shape.centre=[0.1, -2]"},
+      {"shape.kind=polar", "shape.r_expr=1 + 0.3*cos(3*phi)"},
+      {"shape.kind=parametric", "shape.x_expr=cos(2*pi*s)", "shape.y_expr=0.5*sin(2*pi*s)"},
+      {"shape.kind=polygon", "shape.vertices=[[0, 0], [2, 0], [1, 1.5]]", "shape.closed=true"},
+      {"tracking.enabled=true", "tracking.path=circle", "tracking.radius=2", "tracking.period=100",
+       "tracking.phase=0.1", "dynamics.law=arc", "integration.integrator=rk4", "integration.dt=0.5"},
+  };
+  for (const auto& sets : cases) {
+    INFO(sets.front());
+    const Config c = load("", sets);
+    const Config back = load("", as_sets(config::command_settings(c.command)));
+    require_same_command(c.command, back.command);
+  }
+  const auto settings = config::command_settings(load("", {"dynamics.hold=true"}).command);
+  CHECK(std::find(settings.begin(), settings.end(), std::make_pair(std::string("dynamics.hold"), std::string("true"))) !=
+        settings.end());
 }

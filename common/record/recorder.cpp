@@ -7,9 +7,12 @@
 #include <system_error>
 #include <type_traits>
 
+#include <nlohmann/json.hpp>
+
+#include "config/config.hpp"
 #include "core/metric_table.hpp"
 
-namespace shapeform::supervisor {
+namespace shapeform::record {
 namespace {
 
 /// Appends v in its shortest round-trip form ("0.1", "-2", "1e-05"); non-finite: nothing.
@@ -27,7 +30,6 @@ void append(std::string& out, Int v) {
   out.append(buf, res.ptr);
 }
 
-
 void open_file(std::ofstream& f, const std::filesystem::path& path, const std::string& header) {
   f.open(path, std::ios::out | std::ios::trunc);
   if (!f) throw std::runtime_error("cannot open " + path.string() + " for writing");
@@ -35,12 +37,32 @@ void open_file(std::ofstream& f, const std::filesystem::path& path, const std::s
   if (!f) throw std::runtime_error("cannot write " + path.string());
 }
 
+/// The file names, in Recorder::File order.
+constexpr const char* kFileNames[] = {"metrics.csv", "positions.csv", "commands.csv", "centre.csv"};
+
 }  // namespace
 
 std::string metrics_header() {
   std::string h = "wall_s,model_time,epoch,agents_alive";
   for (const core::MetricInfo& info : core::kMetricTable) (h += ',') += info.name;
   return h + ",converged";
+}
+
+std::string command_json(const core::Command& c) {
+  nlohmann::ordered_json j = nlohmann::ordered_json::object();
+  for (const auto& [key, value] : config::command_settings(c)) j[key] = value;
+  // A received expression is not checked for UTF-8: a stray byte becomes U+FFFD, never an exception.
+  return j.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
+}
+
+std::string csv_field(std::string_view s) {
+  if (s.find_first_of(",\"\r\n") == std::string_view::npos) return std::string(s);
+  std::string out = "\"";
+  for (const char ch : s) {
+    if (ch == '"') out += '"';
+    out += ch;
+  }
+  return out + '"';
 }
 
 Recorder::Recorder(double flush_s) {
@@ -63,16 +85,22 @@ void Recorder::open(const std::filesystem::path& dir) {
                              ec.message());
   }
   // The new files first: if they cannot be made, a recording in progress goes on untouched.
-  std::ofstream metrics, positions;
-  open_file(metrics, dir / "metrics.csv", metrics_header());
-  open_file(positions, dir / "positions.csv", kPositionsHeader);
+  const std::string headers[kFiles] = {metrics_header(), kPositionsHeader, kCommandsHeader, kCentreHeader};
+  std::array<std::ofstream, kFiles> files;
+  for (std::size_t f = 0; f < kFiles; ++f) open_file(files[f], dir / kFileNames[f], headers[f]);
   close();
-  metrics_ = std::move(metrics);
-  positions_ = std::move(positions);
+  files_ = std::move(files);
   dir_ = dir;
-  metrics_rows_ = position_rows_ = write_errors_ = 0;
+  rows_ = {};
+  write_errors_ = 0;
   open_ = true;
   last_flush_ = Clock::now();
+}
+
+void Recorder::add_row(File f, const std::string& line) {
+  files_[f] << line;
+  ++rows_[f];
+  check_streams();
 }
 
 void Recorder::write_metrics(const MetricsRow& row) {
@@ -94,13 +122,11 @@ void Recorder::write_metrics(const MetricsRow& row) {
     }
   }
   line += row.converged ? ",1\n" : ",0\n";
-  metrics_ << line;
-  ++metrics_rows_;
-  check_streams();
+  add_row(kMetrics, line);
 }
 
 void Recorder::write_positions(double wall_s, double model_time, std::optional<std::int64_t> step,
-                               std::int32_t agent, double x1, double x2) {
+                               std::uint64_t epoch, std::int32_t agent, double x1, double x2) {
   if (!open_) return;
   std::string line;
   line.reserve(96);
@@ -110,15 +136,52 @@ void Recorder::write_positions(double wall_s, double model_time, std::optional<s
   line += ',';
   if (step) append(line, *step);
   line += ',';
+  append(line, epoch);
+  line += ',';
   append(line, static_cast<std::int64_t>(agent));
   line += ',';
   append(line, x1);
   line += ',';
   append(line, x2);
   line += '\n';
-  positions_ << line;
-  ++position_rows_;
-  check_streams();
+  add_row(kPositions, line);
+}
+
+void Recorder::write_command(double wall_s, double model_time, std::uint64_t epoch, std::string_view issuer,
+                             std::string_view issuer_name, const core::Command& command) {
+  if (!open_) return;
+  std::string line;
+  append(line, wall_s);
+  line += ',';
+  append(line, model_time);
+  line += ',';
+  append(line, epoch);
+  line += ',';
+  line += csv_field(issuer);
+  line += ',';
+  line += csv_field(issuer_name);
+  line += ',';
+  line += csv_field(command_json(command));
+  line += '\n';
+  add_row(kCommands, line);
+  flush();  // rare, and what every other row is read against
+}
+
+void Recorder::write_centre(double wall_s, double model_time, std::uint64_t epoch, double c1, double c2) {
+  if (!open_) return;
+  std::string line;
+  line.reserve(80);
+  append(line, wall_s);
+  line += ',';
+  append(line, model_time);
+  line += ',';
+  append(line, epoch);
+  line += ',';
+  append(line, c1);
+  line += ',';
+  append(line, c2);
+  line += '\n';
+  add_row(kCentre, line);
 }
 
 void Recorder::flush_if_due(Clock::time_point now) {
@@ -127,8 +190,7 @@ void Recorder::flush_if_due(Clock::time_point now) {
 
 void Recorder::flush() {
   if (!open_) return;
-  metrics_.flush();
-  positions_.flush();
+  for (auto& f : files_) f.flush();
   check_streams();
   last_flush_ = Clock::now();
 }
@@ -136,22 +198,22 @@ void Recorder::flush() {
 void Recorder::close() {
   if (!open_) return;
   flush();
-  metrics_.close();
-  positions_.close();
-  if (!metrics_ || !positions_) ++write_errors_;
-  metrics_.clear();
-  positions_.clear();
+  for (auto& f : files_) {
+    f.close();
+    if (!f) ++write_errors_;
+    f.clear();
+  }
   open_ = false;
 }
 
 void Recorder::check_streams() {
   // A failed write leaves the stream in a failed state; count it and keep trying later rows.
-  for (std::ofstream* f : {&metrics_, &positions_}) {
-    if (!*f) {
+  for (auto& f : files_) {
+    if (!f) {
       ++write_errors_;
-      f->clear();
+      f.clear();
     }
   }
 }
 
-}  // namespace shapeform::supervisor
+}  // namespace shapeform::record

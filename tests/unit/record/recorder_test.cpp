@@ -1,4 +1,4 @@
-#include "recorder.hpp"
+#include "record/recorder.hpp"
 
 #include <unistd.h>
 
@@ -12,8 +12,12 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
+#include "config/config.hpp"
+
 using namespace shapeform;
-using namespace shapeform::supervisor;
+using namespace shapeform::record;
 namespace fs = std::filesystem;
 
 namespace {
@@ -69,7 +73,7 @@ MetricsRow full_row() {
 
 }  // namespace
 
-TEST_CASE("open creates the directory and writes both headers", "[supervisor][recorder]") {
+TEST_CASE("open creates the directory and writes every header", "[record]") {
   TempDir tmp;
   const fs::path dir = tmp.path() / "nested" / "run1";
   Recorder rec;
@@ -85,10 +89,13 @@ TEST_CASE("open creates the directory and writes both headers", "[supervisor][re
                                  "centroid_error,ring_error,curve_error_mean,curve_error_max,"
                                  "arc_gap_cv,converged"});
   CHECK(read_lines(dir / "positions.csv") ==
-        std::vector<std::string>{"wall_s,model_time,step,agent,x1,x2"});
+        std::vector<std::string>{"wall_s,model_time,step,epoch,agent,x1,x2"});
+  CHECK(read_lines(dir / "commands.csv") ==
+        std::vector<std::string>{"wall_s,model_time,epoch,issuer,issuer_name,command"});
+  CHECK(read_lines(dir / "centre.csv") == std::vector<std::string>{"wall_s,model_time,epoch,c1,c2"});
 }
 
-TEST_CASE("metrics rows: values, empty fields for undefined values", "[supervisor][recorder]") {
+TEST_CASE("metrics rows: values, empty fields for undefined values", "[record]") {
   TempDir tmp;
   Recorder rec;
   rec.open(tmp.path());
@@ -122,47 +129,47 @@ TEST_CASE("metrics rows: values, empty fields for undefined values", "[superviso
   }
 }
 
-TEST_CASE("position rows, with and without a step", "[supervisor][recorder]") {
+TEST_CASE("position rows, with and without a step", "[record]") {
   TempDir tmp;
   Recorder rec;
   rec.open(tmp.path());
-  rec.write_positions(0.5, 12.0, 12, 3, 1.25, -4.0);
-  rec.write_positions(0.5, 12.0, std::nullopt, 17, 0.1, 1e-300);
-  rec.write_positions(0.75, 13.0, std::int64_t{1} << 40, 0, 0.0, -0.0);
+  rec.write_positions(0.5, 12.0, 12, 2, 3, 1.25, -4.0);
+  rec.write_positions(0.5, 12.0, std::nullopt, 2, 17, 0.1, 1e-300);
+  rec.write_positions(0.75, 13.0, std::int64_t{1} << 40, 0, 0, 0.0, -0.0);
   CHECK(rec.position_rows() == 3);
   rec.close();
   const auto lines = read_lines(tmp.path() / "positions.csv");
   REQUIRE(lines.size() == 4);
-  CHECK(lines[1] == "0.5,12,12,3,1.25,-4");
-  CHECK(lines[2] == "0.5,12,,17,0.1,1e-300");
-  CHECK(lines[3] == "0.75,13,1099511627776,0,0,-0");
+  CHECK(lines[1] == "0.5,12,12,2,3,1.25,-4");
+  CHECK(lines[2] == "0.5,12,,2,17,0.1,1e-300");
+  CHECK(lines[3] == "0.75,13,1099511627776,0,0,0,-0");
 }
 
-TEST_CASE("numbers round-trip exactly", "[supervisor][recorder]") {
+TEST_CASE("numbers round-trip exactly", "[record]") {
   TempDir tmp;
   Recorder rec;
   rec.open(tmp.path());
   const double x = 0.1 + 0.2;  // 0.30000000000000004
-  rec.write_positions(1.0 / 3.0, 2.0 / 3.0, 1, 1, x, -x);
+  rec.write_positions(1.0 / 3.0, 2.0 / 3.0, 1, 1, 1, x, -x);
   rec.close();
   const auto lines = read_lines(tmp.path() / "positions.csv");
   REQUIRE(lines.size() == 2);
   std::istringstream fields(lines[1]);
   std::vector<double> v;
   for (std::string f; std::getline(fields, f, ',');) v.push_back(std::stod(f));
-  REQUIRE(v.size() == 6);
+  REQUIRE(v.size() == 7);
   CHECK(v[0] == 1.0 / 3.0);
   CHECK(v[1] == 2.0 / 3.0);
-  CHECK(v[4] == x);
-  CHECK(v[5] == -x);
+  CHECK(v[5] == x);
+  CHECK(v[6] == -x);
 }
 
-TEST_CASE("flush_if_due flushes once flush_s has passed", "[supervisor][recorder]") {
+TEST_CASE("flush_if_due flushes once flush_s has passed", "[record]") {
   TempDir tmp;
   Recorder rec(2.0);
   const auto t0 = Recorder::Clock::now();
   rec.open(tmp.path());
-  rec.write_positions(0.0, 1.0, 1, 1, 2.0, 3.0);
+  rec.write_positions(0.0, 1.0, 1, 1, 1, 2.0, 3.0);
   const fs::path file = tmp.path() / "positions.csv";
 
   // Not due yet: the row stays in the stream buffer (small rows are buffered by std::filebuf).
@@ -181,7 +188,7 @@ TEST_CASE("flush_if_due flushes once flush_s has passed", "[supervisor][recorder
 }
 
 TEST_CASE("close flushes; closing twice and writing after close are harmless",
-          "[supervisor][recorder]") {
+          "[record]") {
   TempDir tmp;
   Recorder rec;
   rec.close();  // never opened
@@ -191,24 +198,26 @@ TEST_CASE("close flushes; closing twice and writing after close are harmless",
   rec.close();
   CHECK_FALSE(rec.is_open());
   rec.write_metrics(full_row());  // ignored
-  rec.write_positions(0.0, 0.0, 0, 0, 0.0, 0.0);
+  rec.write_positions(0.0, 0.0, 0, 0, 0, 0.0, 0.0);
+  rec.write_centre(0.0, 0.0, 1, 0.0, 0.0);
   rec.flush();
   rec.flush_if_due(Recorder::Clock::now() + std::chrono::hours(1));
   CHECK(read_lines(tmp.path() / "metrics.csv").size() == 2);
   CHECK(read_lines(tmp.path() / "positions.csv").size() == 1);
+  CHECK(read_lines(tmp.path() / "centre.csv").size() == 1);
 }
 
-TEST_CASE("the destructor flushes and closes", "[supervisor][recorder]") {
+TEST_CASE("the destructor flushes and closes", "[record]") {
   TempDir tmp;
   {
     Recorder rec;
     rec.open(tmp.path());
-    rec.write_positions(0.0, 1.0, 1, 1, 2.0, 3.0);
+    rec.write_positions(0.0, 1.0, 1, 1, 1, 2.0, 3.0);
   }
   CHECK(read_lines(tmp.path() / "positions.csv").size() == 2);
 }
 
-TEST_CASE("reopening starts new files; the old recording is closed", "[supervisor][recorder]") {
+TEST_CASE("reopening starts new files; the old recording is closed", "[record]") {
   TempDir tmp;
   Recorder rec;
   rec.open(tmp.path() / "a");
@@ -222,7 +231,7 @@ TEST_CASE("reopening starts new files; the old recording is closed", "[superviso
   CHECK(read_lines(tmp.path() / "a" / "metrics.csv").size() == 1);
 }
 
-TEST_CASE("open failures throw naming the path", "[supervisor][recorder]") {
+TEST_CASE("open failures throw naming the path", "[record]") {
   TempDir tmp;
   fs::create_directories(tmp.path());
   Recorder rec;
@@ -272,7 +281,7 @@ TEST_CASE("open failures throw naming the path", "[supervisor][recorder]") {
   CHECK(read_lines(tmp.path() / "ok" / "metrics.csv").size() == 3);
 }
 
-TEST_CASE("reopening the folder being recorded starts it afresh", "[supervisor][recorder]") {
+TEST_CASE("reopening the folder being recorded starts it afresh", "[record]") {
   TempDir tmp;
   Recorder rec;
   rec.open(tmp.path() / "a");
@@ -283,9 +292,86 @@ TEST_CASE("reopening the folder being recorded starts it afresh", "[supervisor][
   CHECK(read_lines(tmp.path() / "a" / "metrics.csv").size() == 2);
 }
 
-TEST_CASE("flush period must be positive", "[supervisor][recorder]") {
+TEST_CASE("flush period must be positive", "[record]") {
   CHECK_THROWS_AS(Recorder(0.0), std::invalid_argument);
   CHECK_THROWS_AS(Recorder(-1.0), std::invalid_argument);
   CHECK_THROWS_AS(Recorder(std::numeric_limits<double>::quiet_NaN()), std::invalid_argument);
   CHECK_NOTHROW(Recorder(0.001));
+}
+
+namespace {
+/// The fields of one CSV line (RFC 4180: quoted fields, doubled quotes inside).
+std::vector<std::string> csv_fields(const std::string& line) {
+  std::vector<std::string> out(1);
+  bool quoted = false;
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    const char ch = line[i];
+    if (quoted) {
+      if (ch == '"' && i + 1 < line.size() && line[i + 1] == '"') out.back() += '"', ++i;
+      else if (ch == '"') quoted = false;
+      else out.back() += ch;
+    } else if (ch == '"') {
+      quoted = true;
+    } else if (ch == ',') {
+      out.emplace_back();
+    } else {
+      out.back() += ch;
+    }
+  }
+  return out;
+}
+}  // namespace
+
+TEST_CASE("csv_field quotes only what needs it", "[record]") {
+  CHECK(csv_field("") == "");
+  CHECK(csv_field("abc") == "abc");
+  CHECK(csv_field("a,b") == "\"a,b\"");
+  CHECK(csv_field("say \"hi\"") == "\"say \"\"hi\"\"\"");
+  CHECK(csv_field("two\nlines") == "\"two\nlines\"");
+}
+
+TEST_CASE("command rows hold the whole command, and it rebuilds through --set", "[record]") {
+  TempDir tmp;
+  const config::Config cfg = config::load("", {"shape.kind=polar", "shape.r_expr=1 + 0.3*cos(3*phi)",
+                                               "dynamics.hold=true", "shape.rotation_deg=30"});
+  Recorder rec;
+  rec.open(tmp.path());
+  rec.write_command(0.25, 0.0, 7, "0123456789abcdef01234567", "supervisor on host, pid 9", cfg.command);
+  CHECK(rec.command_rows() == 1);
+  // Written through at once: a reader sees the command before the rows measured against it.
+  auto lines = read_lines(tmp.path() / "commands.csv");
+  REQUIRE(lines.size() == 2);
+  const auto f = csv_fields(lines[1]);
+  REQUIRE(f.size() == 6);
+  CHECK(f[0] == "0.25");
+  CHECK(f[1] == "0");
+  CHECK(f[2] == "7");
+  CHECK(f[3] == "0123456789abcdef01234567");
+  CHECK(f[4] == "supervisor on host, pid 9");
+  const nlohmann::ordered_json j = nlohmann::ordered_json::parse(f[5]);
+  const auto settings = config::command_settings(cfg.command);
+  REQUIRE(j.size() == settings.size());
+  std::vector<std::string> sets;
+  std::size_t i = 0;
+  for (const auto& [key, value] : j.items()) {
+    CHECK(key == settings[i].first);  // table order
+    CHECK(value.get<std::string>() == settings[i++].second);
+    sets.push_back(key + "=" + value.get<std::string>());
+  }
+  CHECK(j["dynamics.hold"] == "true");
+  CHECK(j["shape.kind"] == "polar");
+  const config::Config back = config::load("", sets);
+  CHECK(command_json(back.command) == command_json(cfg.command));
+  CHECK(back.command.shape.rotation == cfg.command.shape.rotation);
+  rec.close();
+}
+
+TEST_CASE("centre rows", "[record]") {
+  TempDir tmp;
+  Recorder rec;
+  rec.open(tmp.path());
+  rec.write_centre(1.5, 20.0, 3, -0.5, 2.25);
+  CHECK(rec.centre_rows() == 1);
+  rec.close();
+  CHECK(read_lines(tmp.path() / "centre.csv") == std::vector<std::string>{"wall_s,model_time,epoch,c1,c2", "1.5,20,3,-0.5,2.25"});
 }

@@ -1,0 +1,113 @@
+#pragma once
+/// A run's recording: the one layout that the supervisor (--record, `record start`) and the simulator
+/// (--record) write, and that shapeform_view --replay and scripts/plot_run.py read. docs/RECORDING.md
+/// documents every file and column with its unit. No DDS, no clocks: the caller gives every time.
+///
+///   DIR/metrics.csv    one row per metrics sample
+///   DIR/positions.csv  one row per agent per sample
+///   DIR/commands.csv   one row per command that comes in force (the full command, as --set settings)
+///   DIR/centre.csv     one row per published tracked centre (header only when nothing is tracked)
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "core/command.hpp"
+#include "core/metrics.hpp"
+
+namespace shapeform::record {
+
+/// One row of metrics.csv. Undefined metrics (std::nullopt) and non-finite numbers are written as
+/// empty fields.
+struct MetricsRow {
+  double wall_s = 0.0;      ///< seconds since the writing program started (steady clock)
+  double model_time = 0.0;  ///< model time of the sample, in the epoch's own clock
+  std::uint64_t epoch = 0;  ///< epoch of the command measured against (the one in force; 0: none)
+  int agents_alive = 0;
+  core::Metrics metrics;   ///< metrics.agents is not written (agents_alive is)
+  bool converged = false;  ///< written as 0 / 1
+};
+
+/// Header line of metrics.csv (without the newline): wall_s,model_time,epoch,agents_alive, the
+/// names of core::kMetricTable, converged.
+std::string metrics_header();
+/// Header lines of the other files (without the newline).
+inline constexpr const char* kPositionsHeader = "wall_s,model_time,step,epoch,agent,x1,x2";
+inline constexpr const char* kCommandsHeader = "wall_s,model_time,epoch,issuer,issuer_name,command";
+inline constexpr const char* kCentreHeader = "wall_s,model_time,epoch,c1,c2";
+
+/// The `command` field of commands.csv: one JSON object mapping every command key of the config table to
+/// its value as --set takes it (config::command_settings), in table order, e.g.
+/// {"shape.kind":"circle","shape.r0":"1.0",...,"dynamics.hold":"false",...}.
+std::string command_json(const core::Command& c);
+/// `s` as one CSV field (RFC 4180): as it is, or double-quoted with inner quotes doubled when it holds
+/// a comma, a double quote or a line break.
+std::string csv_field(std::string_view s);
+
+/// Writes the four CSV files. Not thread-safe: use from one thread (the writing program's loop).
+/// Numbers are written locale-independently in their shortest round-trip form.
+class Recorder {
+ public:
+  using Clock = std::chrono::steady_clock;
+
+  /// flush_s: longest time between flushes when flush_if_due() is called every tick (> 0).
+  explicit Recorder(double flush_s = 1.0);
+  ~Recorder();
+  Recorder(const Recorder&) = delete;
+  Recorder& operator=(const Recorder&) = delete;
+
+  /// Creates `dir` (and parents) and opens the four files in it, truncating them, and writes their
+  /// headers; then closes a previous recording.
+  /// Throws std::runtime_error naming the path on failure; a recording in progress then goes on.
+  void open(const std::filesystem::path& dir);
+  bool is_open() const { return open_; }
+  /// The directory of the current (or last) recording.
+  const std::filesystem::path& dir() const { return dir_; }
+
+  /// Appends a metrics row. Ignored when not open (as every write_*).
+  void write_metrics(const MetricsRow& row);
+  /// Appends one agent position (shape units) with the epoch of the command the agent follows; step
+  /// nullopt (unknown) is an empty field.
+  void write_positions(double wall_s, double model_time, std::optional<std::int64_t> step, std::uint64_t epoch,
+                       std::int32_t agent, double x1, double x2);
+  /// Appends a command that came in force: issuer is its publisher's GUID prefix (24 hex digits; ""
+  /// when it has none, as in the simulator), issuer_name its publisher in words.
+  void write_command(double wall_s, double model_time, std::uint64_t epoch, std::string_view issuer,
+                     std::string_view issuer_name, const core::Command& command);
+  /// Appends one tracked centre C(model_time), shape units.
+  void write_centre(double wall_s, double model_time, std::uint64_t epoch, double c1, double c2);
+
+  /// Flushes when at least flush_s has passed since the last flush (or open).
+  void flush_if_due(Clock::time_point now);
+  /// Flushes every file now.
+  void flush();
+  /// Flushes and closes; safe to call when not open and more than once.
+  void close();
+
+  /// Rows written since open().
+  std::uint64_t metrics_rows() const { return rows_[kMetrics]; }
+  std::uint64_t position_rows() const { return rows_[kPositions]; }
+  std::uint64_t command_rows() const { return rows_[kCommands]; }
+  std::uint64_t centre_rows() const { return rows_[kCentre]; }
+  /// Failed writes or flushes since open() (disk full, ...). The loop reports and carries on.
+  std::uint64_t write_errors() const { return write_errors_; }
+
+ private:
+  enum File : std::size_t { kMetrics, kPositions, kCommands, kCentre, kFiles };
+  void add_row(File f, const std::string& line);
+  void check_streams();
+
+  Clock::duration flush_period_;
+  std::filesystem::path dir_;
+  std::array<std::ofstream, kFiles> files_;
+  std::array<std::uint64_t, kFiles> rows_{};
+  bool open_ = false;
+  Clock::time_point last_flush_{};
+  std::uint64_t write_errors_ = 0;
+};
+
+}  // namespace shapeform::record
