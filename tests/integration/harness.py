@@ -24,6 +24,7 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts", "lib"))
+import netlab  # noqa: E402
 import shapeform_procs as procs  # noqa: E402
 from shapeform_procs import (Proc, events, last_json_line, poll, processes_in_group, read_csv,  # noqa: E402,F401
                              read_text, shapeform_processes_on_domain, shm_files, summary)
@@ -197,13 +198,19 @@ class SwarmTestCase(unittest.TestCase):
         self.procs.append(p)
         return p
 
-    def start_agent(self, i, config, domain=None, extra=(), seed=None, name=None):
+    def on_host(self, host, argv):
+        """argv as run on `host` (LanSwarmTestCase); here every process runs on this host."""
+        if host is not None:
+            raise ValueError("host %r: only a LanSwarmTestCase has test hosts" % host)
+        return argv
+
+    def start_agent(self, i, config, domain=None, extra=(), seed=None, name=None, host=None):
         argv = [bin_path("shapeform_agent"), "--id", str(i), "--config", config, "--json",
                 "--domain", str(self.domain if domain is None else domain)]
         if seed is not None:
             argv += ["--seed", str(seed)]
         argv += list(extra)
-        return self.start(name or "agent_%d" % i, argv, cls=Agent)
+        return self.start(name or "agent_%d" % i, self.on_host(host, argv), cls=Agent)
 
     def start_group(self, ids, config, extra=(), seed=1, name="group"):
         """An agent group process hosting `ids` ("A-B"), run with --json."""
@@ -234,7 +241,7 @@ class SwarmTestCase(unittest.TestCase):
         return sup, agents
 
     def start_supervisor(self, config, domain=None, script=None, record=None, extra=(), console=True,
-                         name="supervisor"):
+                         name="supervisor", host=None):
         """A supervisor run with --json (every answer, event and the summary are JSON lines on stdout)."""
         argv = [bin_path("shapeform_supervisor"), "--config", config, "--json",
                 "--domain", str(self.domain if domain is None else domain)]
@@ -243,7 +250,7 @@ class SwarmTestCase(unittest.TestCase):
         if record is not None:
             argv += ["--record", record]
         argv += list(extra)
-        return self.start(name, argv, stdin="pipe" if console else None, cls=Supervisor)
+        return self.start(name, self.on_host(host, argv), stdin="pipe" if console else None, cls=Supervisor)
 
     def write(self, name, text):
         path = os.path.join(self.run_dir, name)
@@ -259,6 +266,37 @@ class SwarmTestCase(unittest.TestCase):
     def assert_all_alive(self, processes):
         dead = ["%s (status %s)" % (p.name, p.returncode) for p in processes if not p.running()]
         self.assertEqual(dead, [], "processes that stopped")
+
+
+class LanSwarmTestCase(SwarmTestCase):
+    """Processes on HOSTS test hosts (network namespaces on one private bridge, scripts/netlab.sh), each
+    with the lan profile bound to its host's address. The lab is named after the test's domain and its
+    subnet is 10.200.(2 * domain): tests never see each other. After the test, besides SwarmTestCase's
+    checks: the lab is removed (its namespaces, links, bridges and rules) and nothing of it is left."""
+
+    HOSTS = 4
+
+    def setUp(self):
+        why = netlab.available()
+        if why:
+            self.fail("test hosts cannot be made here: " + why)  # a failure, never a silent skip
+        super().setUp()
+        self.lab = netlab.NetLab("d%d" % self.domain, self.HOSTS, "10.200.%d" % (2 * self.domain))
+        self.lab.up()
+
+    def tearDown(self):
+        try:
+            super().tearDown()
+        finally:
+            self.lab.down()
+            left = self.lab.leftovers()
+            if left:
+                self.fail("after the test, left on the machine: " + ", ".join(left))
+
+    def on_host(self, host, argv):
+        if host is None:
+            raise ValueError("a LanSwarmTestCase runs every process on a test host (h1..h%d)" % self.HOSTS)
+        return self.lab.on(host, list(argv) + self.lab.lan_sets(host))
 
 
 def main():

@@ -23,7 +23,7 @@ class VerdictTest(harness.SwarmTestCase):
         build = os.path.dirname(harness.CONFIG["bin"])
         argv = ["bash", os.path.join(harness.CONFIG["source"], "scripts", "launch_swarm.sh"), "--build", build,
                 "--runs", os.path.join(self.run_dir, "runs"), "--domain", str(self.domain), "-n", "12",
-                "--scenario", "circle", "--set", "swarm.init_half_width=20", "--timeout", "30", "--json"]
+                "--scenario", "circle", "--set", "swarm.init_half_width=20", "--timeout", "15", "--json"]
         p = self.start("launcher", argv)
         self.assertEqual(p.wait(120), 3, "the launcher's exit status: not converged")
         s = harness.summary(p.out())
@@ -46,7 +46,7 @@ class VerdictTest(harness.SwarmTestCase):
     def test_growing_line_is_not_converged(self):
         config = harness.scenario("line")
         sup, agents = self.start_commanded_swarm(8, config, ["--set", "swarm.agents=8"])
-        self.assertFalse(sup.wait_converged(20), "a line that keeps growing is not converged")
+        self.assertFalse(sup.wait_converged(10), "a line that keeps growing is not converged")
         first = sup.metrics()
         self.assertEqual((first["converged"], first["verdict"]), (False, "growing"))
         self.assertLess(first["shape_error_mean"], 0.05, "every agent is on the line")
