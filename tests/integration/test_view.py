@@ -2,7 +2,8 @@
 """shapeform_view in a real browser (headless Chromium from Debian, driven by Selenium).
 
 The page exposes what it drew as window.shapeformDrawn = {agents: [{id, x1, x2, state, model_time}],
-outline_points, chart_points, model_time, frames, mode, replay}; the test compares that with the
+outline_points, chart_points, chart_model_time (of the charts' newest point), model_time, frames,
+mode, replay}; the test compares that with the
 supervisor's recording, never with pixels.
 
 - live: the viewer and the page first, then an 8-agent lockstep swarm with the supervisor recording.
@@ -10,7 +11,7 @@ supervisor's recording, never with pixels.
   (the agents' own step), and every drawn agent carries the model time of the state drawn: a drawn
   agent is compared with the recorded row of the same agent and model time (the same state twice,
   so within 0.05 means equal up to the page's number handling). While the swarm forms: 8 agents
-  drawn alive, the commanded outline drawn, the charts gaining points, frames at >= 10 per second.
+  drawn alive, the commanded outline drawn, the charts advancing, frames at >= 10 per second.
 - replay: the same page on `shapeform_view --replay` of that recording: paused, the agents drawn are
   the recorded rows of the model time shown and the model time stands still; a seek (the page's
   slider) shows the rows of the recording at the moment sought; play moves model time on.
@@ -131,7 +132,9 @@ class ViewTest(harness.SwarmTestCase):
             time.sleep(0.05)
         last = self.drawn()
         elapsed = time.monotonic() - t0
-        self.assertGreater(last["chart_points"], first["chart_points"], "the charts gain points")
+        # The charts advance: their newest point is later (a long series is thinned, so its count may drop).
+        self.assertGreater(last["chart_points"], 0, "chart points drawn")
+        self.assertGreater(last["chart_model_time"], first["chart_model_time"], "the charts advance")
         self.assertGreater(last["model_time"], first["model_time"], "model time advances on the page")
         self.assertGreaterEqual((last["frames"] - first["frames"]) / elapsed, 10, "frames per second")
         self.assertEqual({s[0] for s in seen}, set(range(AGENTS)))

@@ -12,7 +12,8 @@ let last = null;        // the newest frame
 let frames = 0;
 const arrivals = [];    // arrival times of recent frames (ms), for the frame rate shown
 
-window.shapeformDrawn = { agents: [], outline_points: 0, chart_points: 0, model_time: null, frames: 0 };
+window.shapeformDrawn = { agents: [], outline_points: 0, chart_points: 0, chart_model_time: null, model_time: null,
+  frames: 0 };
 
 function fmt(v, digits) {
   return v === null || v === undefined ? "–" : Number(v).toFixed(digits);
@@ -189,6 +190,7 @@ function on_frame(f) {
     agents: s.drawn.map((a) => ({ id: a.id, x1: a.x1, x2: a.x2, state: a.state, model_time: a.model_time })),
     outline_points: s.outline_points,
     chart_points: chart_points,
+    chart_model_time: f.chart.points.length ? f.chart.points[f.chart.points.length - 1][0] : null,
     model_time: f.model_time,
     epoch: f.epoch,
     frames: frames,
