@@ -118,7 +118,7 @@ class ViewTest(harness.SwarmTestCase):
         self.open_page(launching, url)
 
         # -- live: 8 agents alive, the outline, charts that grow, 10 frames/s or more
-        d = poll(lambda: (lambda d: d if d and d["mode"] == "live" and d["epoch"] == 1 and
+        d = poll(lambda: (lambda d: d if d and d.get("mode") == "live" and d["epoch"] == 1 and d["chart_model_time"] is not None and
                           sum(a["state"] == "alive" for a in d["agents"]) == AGENTS else None)(self.drawn()),
                  20, "the page to draw %d alive agents following epoch 1" % AGENTS)
         self.assertEqual(sorted(a["id"] for a in d["agents"]), list(range(AGENTS)))
@@ -148,7 +148,7 @@ class ViewTest(harness.SwarmTestCase):
         # -- replay of that recording, in the same page
         view, url = self.start_view(["--replay", self.run_dir], name="replay")
         self.browser.get(url)
-        poll(lambda: (lambda d: d and d["mode"] == "replay" and len(d["agents"]) == AGENTS)(self.drawn()), 15,
+        poll(lambda: (lambda d: d and d.get("mode") == "replay" and len(d["agents"]) == AGENTS)(self.drawn()), 15,
              "the replay to draw %d agents" % AGENTS)
         self.browser.find_element("id", "play").click()  # pause
         d = poll(lambda: (lambda d: d if d["replay"] and not d["replay"]["playing"] else None)(self.drawn()), 5,

@@ -13,7 +13,7 @@ let frames = 0;
 const arrivals = [];    // arrival times of recent frames (ms), for the frame rate shown
 
 window.shapeformDrawn = { agents: [], outline_points: 0, chart_points: 0, chart_model_time: null, model_time: null,
-  frames: 0 };
+  frames: 0, mode: null, replay: null };
 
 function fmt(v, digits) {
   return v === null || v === undefined ? "–" : Number(v).toFixed(digits);
