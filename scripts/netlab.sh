@@ -6,7 +6,8 @@
 #   scripts/netlab.sh exec LAB HOST CMD [ARG...]  run CMD on host HOST (h1..hK) of LAB
 #   scripts/netlab.sh fault LAB HOST loss PCT     drop PCT % (0..100) of UDP datagrams in and out
 #   scripts/netlab.sh fault LAB HOST partition    drop all traffic in and out of HOST
-#   scripts/netlab.sh fault LAB HOST heal         remove HOST's loss or partition
+#   scripts/netlab.sh fault LAB HOST nomulticast  drop multicast (224.0.0.0/4) in and out of HOST
+#   scripts/netlab.sh fault LAB HOST heal         remove HOST's loss, partition or nomulticast
 #   scripts/netlab.sh pause LAB HOST [PID]        SIGSTOP PID, or every process on HOST
 #   scripts/netlab.sh resume LAB HOST [PID]       SIGCONT PID, or every process on HOST
 #   scripts/netlab.sh show [LAB]                  the labs, hosts, addresses, faults, processes
@@ -177,8 +178,12 @@ cmd_fault() {
     partition)
       in_ns "$ns" iptables -F SHAPEFORM || exit 1
       in_ns "$ns" iptables -A SHAPEFORM -i eth0 -j DROP && in_ns "$ns" iptables -A SHAPEFORM -o eth0 -j DROP || exit 1 ;;
+    nomulticast) # a network that carries no multicast (the rules' counters tell what was dropped)
+      in_ns "$ns" iptables -F SHAPEFORM || exit 1
+      in_ns "$ns" iptables -A SHAPEFORM -i eth0 -d 224.0.0.0/4 -j DROP &&
+        in_ns "$ns" iptables -A SHAPEFORM -o eth0 -d 224.0.0.0/4 -j DROP || exit 1 ;;
     heal) in_ns "$ns" iptables -F SHAPEFORM || exit 1 ;;
-    *) die "fault: expected loss PCT, partition or heal, got '${what:0:40}'" ;;
+    *) die "fault: expected loss PCT, partition, nomulticast or heal, got '${what:0:40}'" ;;
   esac
 }
 

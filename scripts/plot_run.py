@@ -131,6 +131,8 @@ class Outlines:
         self.warned = False
 
     def at(self, epoch, model_time, positions):
+        if epoch == 0:
+            return None  # before any command: there is no commanded shape
         settings = self.commands.get(epoch)
         if settings is None or self.sim is None:
             if not self.warned:
@@ -318,7 +320,7 @@ def plot(rec, out, animate, sim):
             ax.set_yscale("log")
         ax.set_ylabel(label, fontsize=9)
         ax.grid(alpha=0.3)
-    for n, (ep, offset, _) in enumerate(segs):
+    for n, (ep, offset, _) in enumerate(s for s in segs if s[0] != 0):  # epoch 0: before any command
         for ax in axes:
             ax.axvline(offset, color="tab:red", ls="--", lw=0.8, alpha=0.7)
         axes[0].annotate("epoch %d: %s" % (ep, describe(data["commands"].get(ep))), (offset, 1.0),

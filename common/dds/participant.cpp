@@ -46,6 +46,9 @@ frtps::Locator_t udp_locator(const std::array<std::uint8_t, 4>& ip, std::uint32_
 
 frtps::Locator_t loopback_locator(std::uint32_t port) { return udp_locator({127, 0, 0, 1}, port); }
 
+/// RTPS well-known discovery multicast port of a domain: PB + DG * domain + d0 = 7400 + 250 d.
+std::uint32_t metatraffic_multicast_port(int domain) { return 7400u + 250u * static_cast<std::uint32_t>(domain); }
+
 /// RTPS well-known user-data multicast port of a domain: PB + DG * domain + d2 = 7400 + 250 d + 1.
 std::uint32_t user_multicast_port(int domain) { return 7400u + 250u * static_cast<std::uint32_t>(domain) + 1u; }
 
@@ -134,14 +137,28 @@ fdds::DomainParticipantQos participant_qos(const TransportConfig& cfg, const std
     builtin.metatrafficUnicastLocatorList.push_back(loopback_locator(0));
     pq.wire_protocol().default_unicast_locator_list.push_back(loopback_locator(0));
   } else if (cfg.profile == kLan) {
-    // validate() checked every address.
+    // validate() checked every address. With a whitelist, Fast DDS 2.9 binds every socket to the listed
+    // addresses, sends multicast from one socket per listed interface (IP_MULTICAST_IF) and joins groups
+    // on the listed interfaces only (UDPv4Transport::OpenInputChannel, OpenOutputChannel).
     for (const std::string& address : cfg.interfaces) udp->interfaceWhiteList.push_back(address);
-    for (const std::string& peer : cfg.peers) {
-      std::array<std::uint8_t, 4> ip{};
-      util::parse_ipv4(peer, ip);
-      builtin.initialPeersList.push_back(udp_locator(ip, 0));
+    // 0.0.0.0 port 0: Fast DDS fills in the participant slot's port and expands the address to each
+    // allowed interface's (NormalizeLocators), so peers learn only addresses of those interfaces.
+    builtin.metatrafficUnicastLocatorList.push_back(udp_locator({0, 0, 0, 0}, 0));
+    pq.wire_protocol().default_unicast_locator_list.push_back(udp_locator({0, 0, 0, 0}, 0));
+    if (cfg.peers.empty()) {
+      // Multicast discovery: announcements to and from the domain's discovery group (port filled in:
+      // 7400 + 250 domain), which is also the initial peer (Fast DDS copies it when the list is empty).
+      builtin.metatrafficMulticastLocatorList.push_back(udp_locator(kMulticastGroup, 0));
+    } else {
+      // Unicast only: no multicast metatraffic locator (Fast DDS would add the default group when both
+      // metatraffic lists are empty, and route endpoint discovery to it); each peer probed over the
+      // participant slots 0..max_participants-1 (port 0, maxInitialPeersRange).
+      for (const std::string& peer : cfg.peers) {
+        std::array<std::uint8_t, 4> ip{};
+        util::parse_ipv4(peer, ip);
+        builtin.initialPeersList.push_back(udp_locator(ip, 0));
+      }
     }
-    // No peers: Fast DDS uses the default multicast discovery locator as the initial peer.
   } else if (cfg.profile == kDiscoveryServer) {
     std::array<std::uint8_t, 4> server_ip{};
     std::uint16_t server_port = 0;
@@ -171,7 +188,7 @@ fdds::DomainParticipantQos participant_qos(const TransportConfig& cfg, const std
 
 frtps::Locator_t data_multicast_locator(const TransportConfig& cfg) {
   validate(cfg);
-  return udp_locator(kDataMulticastGroup, user_multicast_port(cfg.domain));
+  return udp_locator(kMulticastGroup, user_multicast_port(cfg.domain));
 }
 
 fdds::DomainParticipant* create_participant(const TransportConfig& cfg, const std::string& name,
@@ -221,11 +238,11 @@ std::string describe(const TransportConfig& cfg) {
       for (std::size_t i = 0; i < cfg.interfaces.size(); ++i) os << (i ? "," : "") << cfg.interfaces[i];
     }
     if (cfg.peers.empty()) {
-      os << ", multicast discovery)";
+      os << ", multicast discovery on 239.255.0.1:" << metatraffic_multicast_port(cfg.domain) << ")";
     } else {
       os << ", unicast peers ";
       for (std::size_t i = 0; i < cfg.peers.size(); ++i) os << (i ? "," : "") << cfg.peers[i];
-      os << " ids 0.." << (cfg.max_participants - 1) << ")";
+      os << " ids 0.." << (cfg.max_participants - 1) << ", no multicast)";
     }
   } else if (cfg.profile == kDiscoveryServer) {
     os << "discovery-server (client of " << cfg.discovery_server << ")";

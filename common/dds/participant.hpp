@@ -18,18 +18,23 @@ namespace shapeform::dds {
 inline constexpr const char* kDiscoveryServerPrefix = "44.53.00.5f.45.50.52.4f.53.49.4d.41";
 /// Discovery-server client sync period, seconds (Fast DDS default 0.45 s; 0.1 s discovers faster).
 inline constexpr double kDiscoveryServerSyncPeriod_s = 0.1;
-/// Multicast group of State samples when transport.multicast_data is on (administratively scoped,
-/// Fast DDS's default group; with the loopback profile it is joined and sent on lo only).
-inline constexpr std::array<std::uint8_t, 4> kDataMulticastGroup = {239, 255, 0, 1};
+/// The project's one multicast group (administratively scoped, Fast DDS's default): lan's multicast
+/// discovery on port 7400 + 250 domain, State samples on port 7400 + 250 domain + 1 when
+/// transport.multicast_data is on. Joined and sent on the profile's interfaces only.
+inline constexpr std::array<std::uint8_t, 4> kMulticastGroup = {239, 255, 0, 1};
 
 /// The participant QoS of a transport profile, built by hand (never the factory default, which an XML
 /// file could change): builtin transports off, one UDPv4 descriptor, no shared memory.
 ///  - "loopback": UDPv4 whitelisted to 127.0.0.1; initial peer 127.0.0.1 port 0 expanded to
 ///    participant ids 0..max_participants-1; metatraffic and default unicast locators on 127.0.0.1,
 ///    no multicast locator at all (pure unicast on lo).
-///  - "lan": UDPv4 bound to `interfaces` (all when empty); unicast initial peers `peers` (port 0,
-///    ids 0..max_participants-1) when given, else multicast discovery. List this host in `peers` too
-///    if local participants must meet.
+///  - "lan": UDPv4 whitelisted to `interfaces` (all when empty): every socket bound to them, multicast
+///    sent and joined on them only; metatraffic and default unicast locators 0.0.0.0 (Fast DDS lists
+///    each allowed interface's address). No `peers`: multicast discovery, metatraffic multicast
+///    locator kMulticastGroup (port 7400 + 250 domain), which is also the initial peer. With `peers`:
+///    unicast initial peers (port 0, ids 0..max_participants-1) and no multicast locator at all, so
+///    nothing is sent to or joined on a group. List this host in `peers` too if local participants
+///    must meet.
 ///  - "discovery-server": CLIENT of server id 0 at `discovery_server` "host:port" (host an IPv4
 ///    address or "localhost"); UDPv4 whitelisted to 127.0.0.1 when the host is a loopback address.
 /// A participant whose port slot is taken moves to the next one, up to slot max_participants - 1
@@ -38,7 +43,8 @@ inline constexpr std::array<std::uint8_t, 4> kDataMulticastGroup = {239, 255, 0,
 /// UDP send and receive buffer sizes (the kernel caps them at net.core.rmem_max / wmem_max).
 /// Every participant announces its host name and process id in discovery (the propagated
 /// properties kHostProperty and kPidProperty of dds/discovery.hpp), for shapeform_topics.
-/// multicast_data (loopback only) changes no participant setting: see data_multicast_locator().
+/// multicast_data (loopback, lan without peers) changes no participant setting: see
+/// data_multicast_locator().
 /// Pure: creates nothing.
 /// Throws std::runtime_error naming the offending field (validate(): "transport.domain: must be in 0..232,
 /// got 300").
@@ -48,7 +54,8 @@ eprosima::fastdds::dds::DomainParticipantQos participant_qos(const TransportConf
 /// The multicast locator readers of the State topic listen on when cfg.multicast_data is set:
 /// 239.255.0.1:(7400 + 250 domain + 1), the domain's user multicast port. A writer whose matched readers
 /// share it sends each sample once (UDPTransportInterface::select_locators) and the kernel fans it out;
-/// with the loopback profile's 127.0.0.1 whitelist it is joined and sent on lo only. Such readers
+/// it is joined and sent on the whitelisted interfaces only (lo for loopback, transport.interfaces for
+/// lan). Such readers
 /// advertise no unicast locator: a writer switching from the group to the unicast locator of its last
 /// reader would send to a locator Fast DDS 2.9 never registered and abort on an assert
 /// (statistics/rtps/messages/OutputTrafficManager.hpp:87). Throws like participant_qos().
@@ -67,7 +74,8 @@ eprosima::fastdds::dds::DomainParticipant* create_participant(
 void delete_participant(eprosima::fastdds::dds::DomainParticipant* participant);
 
 /// One line for logs, e.g. "loopback (UDPv4 127.0.0.1 only, unicast discovery of ids 0..119),
-/// domain 0, lease 2 s, announce 0.5 s". Never throws, even for an invalid config.
+/// domain 0, lease 2 s, announce 0.5 s" or "lan (UDPv4 on 10.0.0.2, multicast discovery on
+/// 239.255.0.1:7400), ...". Never throws, even for an invalid config.
 std::string describe(const TransportConfig& cfg);
 
 }  // namespace shapeform::dds

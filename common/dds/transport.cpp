@@ -25,6 +25,10 @@ P param(params::Type type, std::string key, std::string unit, params::Range rang
 /// What transport.discovery_server accepts, as the docs and the error both say it.
 const std::string kHostPortRule = "host:port with host an IPv4 address or localhost and port 1..65535";
 constexpr unsigned long kMaxPort = 65535;
+/// Where transport.multicast_data works, as the docs and the error both say it.
+const std::string kMulticastDataRule =
+    "needs `profile: loopback`, `lan` without `peers`, or `discovery-server` with a server on "
+    "`127.x`/`localhost`";
 
 std::vector<P> build_table() {
   using params::Type;
@@ -51,10 +55,16 @@ std::vector<P> build_table() {
       "Slots from 120 up use ports of the next domain's block",
       "", [](auto& c) -> auto& { return c.max_participants; }));
   t.push_back(param<std::vector<std::string>>(
-      Type::TextList, "transport.interfaces", "", {}, "lan: IPv4 addresses to bind (empty = all)", ipv4_list,
-      [](auto& c) -> auto& { return c.interfaces; }));
+      Type::TextList, "transport.interfaces", "", {},
+      "lan: addresses of this host's interfaces to use (empty = all): every datagram, unicast or multicast, is "
+      "sent from and received on these only, multicast groups are joined on these only",
+      ipv4_list, [](auto& c) -> auto& { return c.interfaces; }));
   t.push_back(param<std::vector<std::string>>(
-      Type::TextList, "transport.peers", "", {}, "lan: unicast peer addresses (empty = multicast discovery)",
+      Type::TextList, "transport.peers", "", {},
+      "lan: unicast peer addresses, for networks without multicast: discovery probes participant slots "
+      "0..max_participants-1 of each, and nothing is sent to or joined on a multicast group (list this "
+      "host's own address too if its processes must meet). Empty = multicast discovery on 239.255.0.1, port "
+      "7400 + 250 domain",
       ipv4_list, [](auto& c) -> auto& { return c.peers; }));
   t.push_back(param<std::string>(
       Type::Text, "transport.discovery_server", "", {}, "discovery-server: address of the server",
@@ -80,12 +90,11 @@ std::vector<P> build_table() {
   t.push_back(param<bool>(
       Type::Bool, "transport.multicast_data", "", {},
       "readers of the state topic listen on the multicast group 239.255.0.1, port 7400 + 250 domain + 1, "
-      "instead "
-      "of a unicast port, so a writer sends one datagram per sample instead of one per reader (the kernel "
-      "fans it "
-      "out); with the 127.0.0.1 whitelist the group is joined and sent on `lo` only. Every other topic and "
-      "discovery stay unicast",
-      "; needs `profile: loopback`, or `discovery-server` with a server on `127.x`/`localhost`",
+      "instead of a unicast port, so a writer sends one datagram per sample instead of one per reader (the "
+      "kernel or the switch fans it out); the group is joined and sent on the profile's interfaces only (`lo` "
+      "for loopback and a discovery server on loopback, `transport.interfaces` for lan). Every other topic "
+      "stays unicast",
+      "; " + kMulticastDataRule,
       [](auto& c) -> auto& { return c.multicast_data; }));
   return t;
 }
@@ -173,12 +182,18 @@ std::vector<TransportProblem> transport_problems(const TransportConfig& cfg) {
                    "must be < transport.lease_s (" + params::format_number(cfg.lease_s) + ")",
                    params::format_number(cfg.announce_s), "transport.lease_s"});
   }
-  if (cfg.multicast_data && !cfg.on_loopback()) {
-    out.push_back(
-        {"transport.multicast_data",
-         "needs transport.profile loopback, or discovery-server with a server on 127.x (profile is " +
-             cfg.profile + ")",
-         "true", "transport.profile"});
+  if (cfg.multicast_data && cfg.profile == kLan && !cfg.peers.empty()) {
+    // The peers variant is for networks that carry no multicast: its participants join no group, so
+    // state readers listening on one would hear nothing.
+    out.push_back({"transport.multicast_data",
+                   "cannot be used with transport.peers (lan with peers sends no multicast at all; remove the "
+                   "peers for multicast discovery and data)",
+                   "true", "transport.peers"});
+  } else if (cfg.multicast_data && !cfg.on_loopback() && cfg.profile != kLan) {
+    out.push_back({"transport.multicast_data",
+                   "needs transport.profile loopback, lan without peers, or discovery-server with a server on "
+                   "127.x (profile is " + cfg.profile + ")",
+                   "true", "transport.profile"});
   }
   return out;
 }

@@ -25,20 +25,24 @@ struct TransportConfig {
   std::string profile = kLoopback;      ///< one of kProfiles
   int domain = 0;                       ///< DDS domain id, 0..kMaxDomainId
   int max_participants = 120;           ///< participant ids probed by loopback initial peers
-  std::vector<std::string> interfaces;  ///< lan: IPv4 addresses to bind (empty = all)
-  std::vector<std::string> peers;       ///< lan: unicast peer addresses (empty = multicast discovery)
+  /// lan: IPv4 addresses of this host's interfaces to use (empty = all); nothing is sent from, received on
+  /// or joined on any other interface.
+  std::vector<std::string> interfaces;
+  /// lan: unicast peer addresses (no multicast at all, for networks without it); empty = multicast
+  /// discovery on 239.255.0.1.
+  std::vector<std::string> peers;
   std::string discovery_server = "127.0.0.1:11811";  ///< discovery-server: host:port
   double lease_s = 2.0;                              ///< participant lease duration
   double announce_s = 0.5;                           ///< participant announcement period
   int socket_buffer_bytes = 0;                       ///< UDP send/receive buffer size; 0 = OS default
   /// State-topic readers listen on the multicast group 239.255.0.1 (the domain's user multicast port)
   /// instead of a unicast port: a writer sends one datagram per sample instead of one per reader.
-  /// Loopback profile, or discovery-server with a server on 127.x / localhost (whitelist 127.0.0.1,
-  /// so the group stays on lo). Off by default.
+  /// Loopback profile or discovery-server with a server on 127.x / localhost (whitelist 127.0.0.1, so
+  /// the group stays on lo), or lan without peers (the group on `interfaces` only). Off by default.
   bool multicast_data = false;
 
   /// Whether every participant's traffic stays on lo: the loopback profile, or a discovery server on
-  /// 127.x / localhost. multicast_data needs it (the validator checks).
+  /// 127.x / localhost. multicast_data needs it, or lan without peers (the validator checks).
   bool on_loopback() const {
     return profile == kLoopback ||
            (profile == kDiscoveryServer &&
@@ -60,7 +64,8 @@ struct TransportProblem {
 
 /// Every problem of cfg, in the table's key order: each number within its declared range, the profile
 /// known, interfaces and peers IPv4 addresses, discovery_server "host:port" (host an IPv4 address or
-/// localhost, port 1..65535), announce_s < lease_s, multicast_data only on loopback. Empty when valid.
+/// localhost, port 1..65535), announce_s < lease_s, multicast_data only on loopback (or a discovery
+/// server on it) or lan without peers. Empty when valid.
 std::vector<TransportProblem> transport_problems(const TransportConfig& cfg);
 
 /// "host:port" with host an IPv4 literal or "localhost" (read as 127.0.0.1) and port 1..65535

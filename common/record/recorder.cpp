@@ -30,6 +30,24 @@ void append(std::string& out, Int v) {
   out.append(buf, res.ptr);
 }
 
+/// An unknown value: nothing.
+void append(std::string& out, const std::optional<std::int64_t>& v) {
+  if (v) append(out, *v);
+}
+
+/// A field already in CSV form (csv_field).
+void append(std::string& out, std::string_view field) { out += field; }
+
+/// One CSV line of the fields, comma-separated, with its line end.
+template <class... Fields>
+std::string csv_row(const Fields&... fields) {
+  std::string line;
+  line.reserve(96);
+  bool first = true;
+  ((line += first ? "" : ",", first = false, append(line, fields)), ...);
+  return line += '\n';
+}
+
 void open_file(std::ofstream& f, const std::filesystem::path& path, const std::string& header) {
   f.open(path, std::ios::out | std::ios::trunc);
   if (!f) throw std::runtime_error("cannot open " + path.string() + " for writing");
@@ -128,60 +146,20 @@ void Recorder::write_metrics(const MetricsRow& row) {
 void Recorder::write_positions(double wall_s, double model_time, std::optional<std::int64_t> step,
                                std::uint64_t epoch, std::int32_t agent, double x1, double x2) {
   if (!open_) return;
-  std::string line;
-  line.reserve(96);
-  append(line, wall_s);
-  line += ',';
-  append(line, model_time);
-  line += ',';
-  if (step) append(line, *step);
-  line += ',';
-  append(line, epoch);
-  line += ',';
-  append(line, static_cast<std::int64_t>(agent));
-  line += ',';
-  append(line, x1);
-  line += ',';
-  append(line, x2);
-  line += '\n';
-  add_row(kPositions, line);
+  add_row(kPositions, csv_row(wall_s, model_time, step, epoch, static_cast<std::int64_t>(agent), x1, x2));
 }
 
 void Recorder::write_command(double wall_s, double model_time, std::uint64_t epoch, std::string_view issuer,
                              std::string_view issuer_name, const core::Command& command) {
   if (!open_) return;
-  std::string line;
-  append(line, wall_s);
-  line += ',';
-  append(line, model_time);
-  line += ',';
-  append(line, epoch);
-  line += ',';
-  line += csv_field(issuer);
-  line += ',';
-  line += csv_field(issuer_name);
-  line += ',';
-  line += csv_field(command_json(command));
-  line += '\n';
-  add_row(kCommands, line);
+  add_row(kCommands, csv_row(wall_s, model_time, epoch, csv_field(issuer), csv_field(issuer_name),
+                             csv_field(command_json(command))));
   flush();  // rare, and what every other row is read against
 }
 
 void Recorder::write_centre(double wall_s, double model_time, std::uint64_t epoch, double c1, double c2) {
   if (!open_) return;
-  std::string line;
-  line.reserve(80);
-  append(line, wall_s);
-  line += ',';
-  append(line, model_time);
-  line += ',';
-  append(line, epoch);
-  line += ',';
-  append(line, c1);
-  line += ',';
-  append(line, c2);
-  line += '\n';
-  add_row(kCentre, line);
+  add_row(kCentre, csv_row(wall_s, model_time, epoch, c1, c2));
 }
 
 void Recorder::flush_if_due(Clock::time_point now) {

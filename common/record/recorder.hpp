@@ -74,7 +74,7 @@ class Recorder {
   /// nullopt (unknown) is an empty field.
   void write_positions(double wall_s, double model_time, std::optional<std::int64_t> step, std::uint64_t epoch,
                        std::int32_t agent, double x1, double x2);
-  /// Appends a command that came in force: issuer is its publisher's GUID prefix (24 hex digits; ""
+  /// Appends a command that came in force: issuer is its publisher's GUID prefix (dds::to_string; ""
   /// when it has none, as in the simulator), issuer_name its publisher in words.
   void write_command(double wall_s, double model_time, std::uint64_t epoch, std::string_view issuer,
                      std::string_view issuer_name, const core::Command& command);

@@ -98,7 +98,7 @@ class RecordingTest(harness.SwarmTestCase):
         cmds = commands(record)
         self.assertEqual(sorted(cmds), [1, 2])
         for c in cmds.values():
-            self.assertRegex(c["issuer"], r"^[0-9a-f]{24}$")
+            self.assertRegex(c["issuer"], r"^[0-9a-f]{2}(\.[0-9a-f]{2}){11}$")  # as the "epoch" events show it
             self.assertIn("shapeform_supervisor", c["issuer_name"])
             self.assertEqual(float(c["model_time"]), 0.0)
         first, held = json.loads(cmds[1]["command"]), json.loads(cmds[2]["command"])

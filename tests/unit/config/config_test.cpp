@@ -671,7 +671,7 @@ TEST_CASE("out-of-range values are reported with the range") {
         "supervisor.converge.hold: must be >= 0, got -1 (line 4)");
 }
 
-TEST_CASE("multicast_data is off by default, read as a bool, and needs the loopback profile") {
+TEST_CASE("multicast_data is off by default, read as a bool, and needs loopback or lan without peers") {
   CHECK_FALSE(load_string("schema_version: 1\n").transport.multicast_data);
   const Config c = load_string("schema_version: 1\ntransport:\n  multicast_data: true\n");
   CHECK(c.transport.multicast_data);
@@ -680,9 +680,11 @@ TEST_CASE("multicast_data is off by default, read as a bool, and needs the loopb
   CHECK(to_yaml(c).find("multicast_data: true") != std::string::npos);
   CHECK(load_string(to_yaml(c)).transport.multicast_data);
   CHECK(problem_of("schema_version: 1\ntransport:\n  multicast_data: 3\n").find("transport.multicast_data:") == 0);
-  CHECK(problem_of("schema_version: 1\ntransport:\n  profile: lan\n  multicast_data: true\n") ==
-        "transport.multicast_data: needs transport.profile loopback, or discovery-server with a server on 127.x "
-        "(profile is lan), got true (line 4)");
+  CHECK(load_string("schema_version: 1\ntransport:\n  profile: lan\n  multicast_data: true\n")
+            .transport.multicast_data);
+  CHECK(problem_of("schema_version: 1\ntransport:\n  profile: lan\n  peers: [10.0.0.2]\n  multicast_data: true\n") ==
+        "transport.multicast_data: cannot be used with transport.peers (lan with peers sends no multicast at all; "
+        "remove the peers for multicast discovery and data), got true (line 5)");
   CHECK(problem_of("schema_version: 1\ntransport:\n  profile: discovery-server\n  discovery_server: 10.0.0.5:11811\n"
                    "  multicast_data: true\n")
             .find("transport.multicast_data: needs") == 0);

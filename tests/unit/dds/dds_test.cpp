@@ -850,35 +850,68 @@ TEST_CASE("multicast_data: State readers listen on one group on lo, nothing else
     cfg.discovery_server = "localhost:11811";
     CHECK_NOTHROW(dds::participant_qos(cfg, "x"));
   }
-  SECTION("profiles that may leave loopback refuse it") {
-    auto refused = [&](const dds::TransportConfig& c) {
+  SECTION("lan without peers may use it: the participant is the plain lan one") {
+    cfg.profile = "lan";
+    cfg.interfaces = {"10.0.0.2"};
+    const fdds::DomainParticipantQos lan = dds::participant_qos(cfg, "agent-1");
+    cfg.multicast_data = false;
+    CHECK(lan.wire_protocol() == dds::participant_qos(cfg, "agent-1").wire_protocol());
+    cfg.multicast_data = true;
+    CHECK(dds::data_multicast_locator(cfg) == group);
+    CHECK(dds::reader_qos(dds::TopicId::State, cfg).endpoint().multicast_locator_list.size() == 1);
+  }
+  SECTION("lan with peers, or a remote discovery server, refuse it") {
+    auto refusal = [&](const dds::TransportConfig& c) {
       try {
         dds::participant_qos(c, "x");
       } catch (const std::runtime_error& e) {
-        return std::string(e.what()).find("transport.multicast_data:") == 0;
+        return std::string(e.what());
       }
-      return false;
+      return std::string();
     };
     cfg.profile = "lan";
-    CHECK(refused(cfg));
+    cfg.peers = {"10.0.0.2"};
+    CHECK(refusal(cfg).find("transport.multicast_data: cannot be used with transport.peers") == 0);
     CHECK_THROWS_AS(dds::data_multicast_locator(cfg), std::runtime_error);
     cfg.profile = "discovery-server";
+    cfg.peers.clear();
     cfg.discovery_server = "10.0.0.5:11811";
-    CHECK(refused(cfg));
+    CHECK(refusal(cfg).find("transport.multicast_data: needs transport.profile loopback, lan without peers") == 0);
   }
 }
 
-TEST_CASE("lan profile: interfaces and peers", "[dds][qos]") {
+/// The one locator of `list` as "a.b.c.d:port"; "" when the list does not hold exactly one.
+std::string only_locator(const frtps::LocatorList_t& list) {
+  if (list.size() != 1) return "";
+  return frtps::IPLocator::toIPv4string(*list.begin()) + ":" + std::to_string(list.begin()->port);
+}
+
+TEST_CASE("lan profile: multicast discovery, or unicast peers and no multicast at all", "[dds][qos]") {
   dds::TransportConfig cfg;
   cfg.profile = "lan";
+  cfg.domain = 4;
+  // Locators with address 0.0.0.0 and port 0: Fast DDS fills in the slot's port and lists the address of
+  // each whitelisted interface (so peers never learn an address of another interface).
   SECTION("no peers: multicast discovery on all interfaces") {
     const auto q = dds::participant_qos(cfg, "sup");
     CHECK_FALSE(q.transport().use_builtin_transports);
     CHECK(only_udp(q)->interfaceWhiteList.empty());
-    CHECK(q.wire_protocol().builtin.initialPeersList.empty());
-    CHECK(q.wire_protocol().builtin.metatrafficUnicastLocatorList.empty());
+    const auto& b = q.wire_protocol().builtin;
+    CHECK(b.initialPeersList.empty());  // Fast DDS then announces to the multicast locator
+    CHECK(only_locator(b.metatrafficMulticastLocatorList) == "239.255.0.1:0");
+    CHECK(only_locator(b.metatrafficUnicastLocatorList) == "0.0.0.0:0");
+    CHECK(only_locator(q.wire_protocol().default_unicast_locator_list) == "0.0.0.0:0");
+    CHECK(q.wire_protocol().default_multicast_locator_list.empty());
+    CHECK(dds::describe(cfg).find("lan (UDPv4 on all interfaces, multicast discovery on 239.255.0.1:8400)") == 0);
   }
-  SECTION("interfaces and peers") {
+  SECTION("interfaces, no peers: the same on the listed interfaces") {
+    cfg.interfaces = {"10.200.8.1"};
+    const auto q = dds::participant_qos(cfg, "sup");
+    CHECK(only_udp(q)->interfaceWhiteList == std::vector<std::string>{"10.200.8.1"});
+    CHECK(only_locator(q.wire_protocol().builtin.metatrafficMulticastLocatorList) == "239.255.0.1:0");
+    CHECK(dds::describe(cfg).find("lan (UDPv4 on 10.200.8.1, multicast discovery") == 0);
+  }
+  SECTION("interfaces and peers: unicast discovery over the participant slots, no multicast locator") {
     cfg.interfaces = {"192.168.1.10"};
     cfg.peers = {"192.168.1.10", "192.168.1.11"};
     cfg.max_participants = 30;
@@ -886,13 +919,23 @@ TEST_CASE("lan profile: interfaces and peers", "[dds][qos]") {
     auto udp = only_udp(q);
     CHECK(udp->interfaceWhiteList == std::vector<std::string>{"192.168.1.10"});
     CHECK(udp->maxInitialPeersRange == 30u);
-    const auto& peers = q.wire_protocol().builtin.initialPeersList;
+    const auto& b = q.wire_protocol().builtin;
+    CHECK(b.mutation_tries == 29u);
+    const auto& peers = b.initialPeersList;
     REQUIRE(peers.size() == 2);
     auto it = peers.begin();
     CHECK(frtps::IPLocator::toIPv4string(*it) == "192.168.1.10");
     CHECK(it->port == 0u);
     ++it;
     CHECK(frtps::IPLocator::toIPv4string(*it) == "192.168.1.11");
+    CHECK(it->port == 0u);
+    // Both metatraffic lists empty would make Fast DDS add the default multicast group.
+    CHECK(b.metatrafficMulticastLocatorList.empty());
+    CHECK(only_locator(b.metatrafficUnicastLocatorList) == "0.0.0.0:0");
+    CHECK(only_locator(q.wire_protocol().default_unicast_locator_list) == "0.0.0.0:0");
+    CHECK(q.wire_protocol().default_multicast_locator_list.empty());
+    CHECK(dds::describe(cfg).find("lan (UDPv4 on 192.168.1.10, unicast peers 192.168.1.10,192.168.1.11 ids 0..29, "
+                                  "no multicast)") == 0);
   }
 }
 
@@ -996,8 +1039,8 @@ TEST_CASE("the transport's one validator reports every problem by key", "[dds][q
                     "transport.peers: must be a list of IPv4 addresses (\"01.2.3.4\" is not one), got [\"10.0.0.1\", "
                     "\"01.2.3.4\"]",
                     "transport.announce_s: must be < transport.lease_s (1), got 1",
-                    "transport.multicast_data: needs transport.profile loopback, or discovery-server with a server on "
-                    "127.x (profile is lan), got true"});
+                    "transport.multicast_data: cannot be used with transport.peers (lan with peers sends no "
+                    "multicast at all; remove the peers for multicast discovery and data), got true"});
   std::string thrown;
   try {
     dds::validate(c);
