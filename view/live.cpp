@@ -19,18 +19,19 @@ struct LiveFeed::Impl {
         targets(node.reader<msg::TrackingTarget>(dds::TopicId::Target)),
         metrics(node.reader<msg::SwarmMetrics>(dds::TopicId::Metrics)) {}
 
-  dds::Node node;
+  dds::Node node;  // readers only: the viewer never writes a topic
+  // Each reader with the buffer its samples are drained into.
   dds::Reader<msg::AgentState> states;
-  dds::Reader<msg::AgentStatus> statuses;
-  dds::Reader<msg::ShapeCommand> commands;
-  dds::Reader<msg::TrackingTarget> targets;
-  dds::Reader<msg::SwarmMetrics> metrics;
-  dds::CommandArbiter arbiter;
   std::vector<dds::Received<msg::AgentState>> state_buf;
+  dds::Reader<msg::AgentStatus> statuses;
   std::vector<dds::Received<msg::AgentStatus>> status_buf;
+  dds::Reader<msg::ShapeCommand> commands;
   std::vector<dds::Received<msg::ShapeCommand>> command_buf;
+  dds::Reader<msg::TrackingTarget> targets;
   std::vector<dds::Received<msg::TrackingTarget>> target_buf;
+  dds::Reader<msg::SwarmMetrics> metrics;
   std::vector<dds::Received<msg::SwarmMetrics>> metrics_buf;
+  dds::CommandArbiter arbiter;
 };
 
 LiveFeed::LiveFeed(const config::Config& cfg) : impl_(std::make_unique<Impl>(cfg)) {}

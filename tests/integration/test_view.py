@@ -169,6 +169,8 @@ class ViewTest(harness.SwarmTestCase):
         self.assertGreater(d2["frames"], d["frames"], "frames keep coming while paused")
         self.assertEqual(d2["model_time"], d["model_time"], "paused: model time stands still")
         self.assertEqual(d2["replay"]["position_s"], d["replay"]["position_s"])
+        self.assertGreater(d2["outline_points"], 0, "the recorded command (commands.csv) is drawn")
+        self.assertEqual(d2["epoch"], 1)
         alive = [a for a in d2["agents"] if a["state"] == "alive"]
         self.assertEqual(len(alive), AGENTS)
         for a in alive:
