@@ -421,8 +421,8 @@ void AgentNode::publish_status(bool json) {
     status_writer_.write(dds::to_msg(st));
     if (opt_.json && json)
       emit({{"event", "status"}, {"id", st.id}, {"neighbours_heard", st.neighbours_heard}, {"epoch", st.epoch},
-            {"model_time", l->model_time()}, {"ticks", st.ticks}, {"samples_rejected", st.samples_rejected},
-            {"steps_clamped", k.steps_clamped}});
+            {"model_time", l->model_time()}, {"x", l->position().x()}, {"y", l->position().y()},
+            {"ticks", st.ticks}, {"samples_rejected", st.samples_rejected}, {"steps_clamped", k.steps_clamped}});
   }
   ages_us_.clear();
 }

@@ -1,17 +1,22 @@
 #!/usr/bin/env bash
-# Launches a swarm of shapeform agent processes and a supervisor running one scenario, on loopback.
+# Launches a swarm of shapeform agent processes and a supervisor running one scenario, on loopback,
+# or on the hosts of a fleet file.
 #
 #   scripts/launch_swarm.sh -n N --scenario NAME [--domain D] [--rate HZ] [--record DIR] [--init CSV]
 #                           [--seed S] [--steps K] [--timeout S] [--set key=value]... [--json]
 #                           [--build DIR] [--runs DIR] [--view]
+#   scripts/launch_swarm.sh --fleet FILE --scenario NAME [the same options but -n]
 #
 #   -n N            number of agent processes, ids 0..N-1 (default: the rows of --init, else the
 #                   scenario's swarm.agents)
 #   --scenario NAME config/scenarios/NAME.yaml, or a path to a YAML file
+#   --fleet FILE    run on the hosts of a fleet file (config/fleets/*.yaml, format in
+#                   config/fleets/README.md): each process on its host with the lan profile bound to the
+#                   host's address; test hosts the fleet asks for are made first and removed on exit
 #   --domain D      DDS domain id 0..232 (default: 10..100, derived from the PID, skipping domains
 #                   in use on this host)
 #   --rate HZ       agent loop rate (agent.rate_hz and supervisor.target_rate_hz)
-#   --record DIR    record metrics.csv and positions.csv into DIR (default: RUN/record)
+#   --record DIR    record the run into DIR (default: RUN/record; its files: docs/RECORDING.md)
 #   --init CSV      agent i starts at row i (x1,x2; optional header); N must equal the row count
 #   --seed S        seeded starts: agent i starts where shapeform_sim --seed S puts agent i
 #                   (default: the scenario's swarm.seed)
@@ -30,9 +35,13 @@
 #
 # One run folder per launch: RUNS/<UTC timestamp>-<scenario>-n<N>/ with agent_<i>.log (stderr),
 # agent_<i>.out (the agent's JSON event lines: status, command), supervisor.log (stderr: progress),
-# supervisor.out (stdout: answers and summary; JSON event lines with --json), script.txt and record/. Progress goes to stderr. On exit, error or Ctrl-C only this launcher's own children are
-# stopped (SIGTERM, then SIGKILL after 5 s). Exit status: the supervisor's (0 ok, 1 runtime failure,
-# 2 bad input, 3 a wait timed out); 2 for bad launcher arguments; 130/143 when interrupted.
+# supervisor.out (stdout: answers and summary; JSON event lines with --json), script.txt and record/
+# (with --fleet also fleet.yaml, the file, and fleet.txt, the plan followed; an ssh host's streams come
+# back through ssh into these files). Progress goes to stderr. On exit, error or Ctrl-C only this
+# launcher's own children are stopped (SIGTERM, then SIGKILL after 5 s; on an ssh host the process
+# group it started there), and test hosts it made are removed. Exit status: the supervisor's (0 ok,
+# 1 runtime failure, 2 bad input, 3 a wait timed out); 2 for bad launcher arguments or fleet file;
+# 130/143 when interrupted.
 set -uo pipefail
 
 readonly prog=launch_swarm
@@ -52,7 +61,7 @@ is_posnum() { [[ $1 =~ ^([0-9]+([.][0-9]*)?|[.][0-9]+)([eE][-+]?[0-9]+)?$ ]] && 
 # ------------------------------------------------------------------------------------------------
 # Arguments
 
-n="" scenario="" domain="" rate="" record="" init="" seed="" steps="" timeout="" json=0
+n="" scenario="" fleet="" domain="" rate="" record="" init="" seed="" steps="" timeout="" json=0
 build="build" runs="runs" view=0
 sets=()
 need_value() { # flag remaining-args value
@@ -63,6 +72,7 @@ while [ $# -gt 0 ]; do
   case "$1" in
     -n|--agents) need_value "$1" $# "${2-}"; n=$2; shift 2 ;;
     --scenario) need_value "$1" $# "${2-}"; scenario=$2; shift 2 ;;
+    --fleet) need_value "$1" $# "${2-}"; fleet=$2; shift 2 ;;
     --domain) need_value "$1" $# "${2-}"; domain=$2; shift 2 ;;
     --rate) need_value "$1" $# "${2-}"; rate=$2; shift 2 ;;
     --record) need_value "$1" $# "${2-}"; record=$2; shift 2 ;;
@@ -81,6 +91,7 @@ while [ $# -gt 0 ]; do
 done
 
 [ -n "$scenario" ] || die "--scenario: required (one of: $(cd "$root/config/scenarios" && ls ./*.yaml | sed 's|^\./||; s|\.yaml$||' | tr '\n' ' '))"
+[ -z "$fleet" ] || [ -z "$n" ] || die "-n: not with --fleet (the fleet file says which agents run where)"
 if [ -n "$n" ]; then
   { is_uint "$n" && [ "$n" -ge 1 ] && [ "$n" -le 1000 ]; } || die "-n: expected an integer 1..1000, got '$n'"
 fi
@@ -127,6 +138,49 @@ fi
 name=$(basename "$config" .yaml)
 
 # ------------------------------------------------------------------------------------------------
+# Fleet: read once by scripts/lib/fleet.py (a bad file is one line naming the key, exit 2). Without
+# --fleet every process runs here, on the host "" (plain commands, the configuration's own transport).
+
+declare -A host_addr=() host_kind=() host_target=()
+hosts=() agent_host=() sup_host="" fleet_name="" fleet_peers="" lab=() lab_made=""
+if [ -n "$fleet" ]; then
+  [ -f "$fleet" ] && [ -r "$fleet" ] || die "--fleet: cannot read '${fleet:0:200}'"
+  fleet=$(cd "$(dirname "$fleet")" && pwd)/$(basename "$fleet")
+  /usr/bin/python3 -c 'import yaml' 2>/dev/null ||
+    die "--fleet: reading fleet files needs /usr/bin/python3 with python3-yaml (scripts/install_deps.sh)"
+  plan=$(/usr/bin/python3 "$root/scripts/lib/fleet.py" "$fleet" --prog "$prog: --fleet") || exit 2
+  while read -r what a b c d; do
+    case "$what" in
+      fleet) fleet_name=$a; n=$b ;;
+      lab) lab=("$a" "$b" "$c") ;;
+      peers) fleet_peers=$a ;;
+      host) hosts+=("$a"); host_addr[$a]=$b; host_kind[$a]=$c; host_target[$a]=$d ;;
+      agent) agent_host[$a]=$b ;;
+      supervisor) sup_host=$a ;;
+    esac
+  done <<<"$plan"
+  for h in "${hosts[@]}"; do
+    [ "${host_kind[$h]}" = netns ] || continue
+    [ "$(id -u)" -eq 0 ] || die "--fleet: host $h runs in the network namespace ${host_target[$h]}: needs root"
+    [ ${#lab[@]} -gt 0 ] && [[ ${host_target[$h]} == sf-${lab[0]}-h* ]] && continue
+    ip netns list 2>/dev/null | awk '{print $1}' | grep -qx -- "${host_target[$h]}" ||
+      die "--fleet: host $h: no network namespace ${host_target[$h]} on this machine"
+  done
+  [ ${#lab[@]} -eq 0 ] || [ "$(id -u)" -eq 0 ] || die "--fleet: lab: making test hosts needs root"
+  if [ ${#lab[@]} -gt 0 ] && [ -e "/run/shapeform-netlab/${lab[0]}" ]; then
+    die "--fleet: lab.name: the test hosts '${lab[0]}' exist already (made by another run?): scripts/netlab.sh down ${lab[0]}"
+  fi
+fi
+on_ssh() { [ -n "$1" ] && [ "${host_kind[$1]}" = ssh ]; }
+# The --set flags of a process on host $1 (the lan profile bound to the host's address), in hsets.
+host_sets() {
+  hsets=()
+  [ -n "$1" ] || return 0
+  hsets=(--set transport.profile=lan --set "transport.interfaces=[${host_addr[$1]}]")
+  [ -z "$fleet_peers" ] || hsets+=(--set "transport.peers=[$fleet_peers]")
+}
+
+# ------------------------------------------------------------------------------------------------
 # Validate the whole configuration once, with the simulator (0 steps): the same loader and checks
 # as the processes, so a bad --set or --init is one clear message and nothing starts.
 
@@ -135,6 +189,8 @@ simargs=(--config "$config" --steps 0 --verbose)
 [ -n "$seed" ] && simargs+=(--seed "$seed")
 [ -n "$init" ] && simargs+=(--init "$init")
 for s in "${sets[@]+"${sets[@]}"}"; do simargs+=(--set "$s"); done
+host_sets "$sup_host"
+simargs+=("${hsets[@]+"${hsets[@]}"}")
 simerr=$(mktemp)
 simout=$("$bin/shapeform_sim" "${simargs[@]}" 2>"$simerr")
 simrc=$?
@@ -169,9 +225,17 @@ if [ -n "$init" ]; then
 fi
 [ -n "$n" ] || n=$cfg_agents
 [ -n "$seed" ] || seed=$cfg_seed
-# N agents and the supervisor each take one of the domain's participant slots on this host.
+# N agents and the supervisor each take one of the domain's participant slots on their host.
 max_participants=$(yaml_key transport max_participants)
-if [ -n "$max_participants" ] && [ $((n + 1)) -gt "$max_participants" ]; then
+if [ -n "$max_participants" ] && [ -n "$fleet" ]; then
+  for h in "${hosts[@]}"; do
+    k=0
+    for i in "${!agent_host[@]}"; do [ "${agent_host[$i]}" = "$h" ] && k=$((k + 1)); done
+    [ "$sup_host" = "$h" ] && k=$((k + 1))
+    [ "$k" -le "$max_participants" ] ||
+      die "--fleet: host $h runs $k processes, transport.max_participants is $max_participants (--set transport.max_participants=$k or more)"
+  done
+elif [ -n "$max_participants" ] && [ $((n + 1)) -gt "$max_participants" ]; then
   die "-n $n: $n agents and the supervisor need $((n + 1)) participants on this host, transport.max_participants is $max_participants (--set transport.max_participants=$((n + 1)) or more)"
 fi
 # Every process sees the swarm size, so seeded starts match shapeform_sim --agents N --seed S.
@@ -222,6 +286,11 @@ else
   case "$record" in /*) ;; *) record="$PWD/$record" ;; esac
 fi
 
+if [ -n "$fleet" ]; then
+  cp -- "$fleet" "$run/fleet.yaml"
+  printf '%s\n' "$plan" >"$run/fleet.txt"
+fi
+
 agents_timeout=$((30 + n / 2))
 {
   echo "# generated by scripts/launch_swarm.sh"
@@ -241,7 +310,7 @@ agents_timeout=$((30 + n / 2))
 # ------------------------------------------------------------------------------------------------
 # Children and cleanup
 
-sup_pid="" tail_pids=() agent_pids=() view_pid=""
+sup_pid="" tail_pids=() agent_pids=() ssh_agent_pids=() view_pid=""
 interrupted=""
 shm_list() { ls /dev/shm 2>/dev/null | grep -E '^(sem\.)?(fastrtps|fast_datasharing|fastdds)' | sort; }
 shm_before=$(shm_list)
@@ -267,13 +336,71 @@ stop_pids() {
   fi
 }
 
+# ------------------------------------------------------------------------------------------------
+# Hosts: a command runs on host "" (here), in a network namespace, or through ssh. An ssh host runs it
+# from the same paths (build, configuration) in a new session whose id, the process group, is written
+# into the host's remote folder; stopping kills those groups there (the local ssh client's end alone
+# would leave them running). Its stdout and stderr come back through ssh into the run folder.
+
+ssh_opts=(-o BatchMode=yes -o ConnectTimeout=10)
+remote_dir="/tmp/shapeform-$(basename "$run")"
+# Starts NAME's CMD... on HOST in the background, stdout in $run/NAME.out, stderr in $run/NAME.log;
+# its local pid in started_pid (the background subshell execs: the pid is the process itself, or the
+# ssh client).
+start_on() {
+  local host=$1 proc=$2
+  shift 2
+  case "${host:+${host_kind[$host]}}" in
+    "" | local) exec "$@" ;;
+    netns) exec ip netns exec "${host_target[$host]}" "$@" ;;
+    ssh) exec ssh -n "${ssh_opts[@]}" -- "${host_target[$host]}" "$(printf 'cd %q && mkdir -p %q && exec setsid -w sh -c %q %q' \
+           "$root" "$remote_dir" 'echo $$ >"$0" && exec "$@"' "$remote_dir/$proc.pid")$(printf ' %q' "$@")" ;;
+  esac </dev/null >"$run/$proc.out" 2>"$run/$proc.log" &
+  started_pid=$!
+}
+# Stops on ssh host $1 the process groups it started there (all, or only process $2's): SIGTERM, up
+# to 5 s, then SIGKILL.
+remote_stop() {
+  ssh "${ssh_opts[@]}" -- "${host_target[$1]}" sh -s -- "$(printf '%q' "$remote_dir")" "${2-}" <<'EOF' >&2
+cd "$1" 2>/dev/null || exit 0
+if [ -n "$2" ]; then files="$2.pid"; else files=$(ls ./*.pid 2>/dev/null); fi
+groups=""
+for f in $files; do [ -f "$f" ] && groups="$groups $(cat "$f")"; done
+for g in $groups; do kill -s TERM -- "-$g" 2>/dev/null; done
+i=0
+while [ $i -lt 50 ]; do
+  left=""
+  for g in $groups; do kill -s 0 -- "-$g" 2>/dev/null && left="$left $g"; done
+  [ -n "$left" ] || exit 0
+  sleep 0.1
+  i=$((i + 1))
+done
+echo "$(hostname): process groups$left ignored SIGTERM for 5 s: SIGKILL" >&2
+for g in $left; do kill -s KILL -- "-$g" 2>/dev/null; done
+EOF
+}
+ssh_hosts() { for h in "${hosts[@]+"${hosts[@]}"}"; do on_ssh "$h" && echo "$h"; done; }
+# Waits up to 5 s for the given pids to end by themselves (ssh clients whose remote command was stopped).
+settle() {
+  local p i any
+  for ((i = 0; i < 50; i++)); do
+    any=0
+    for p in "$@"; do alive "$p" && any=1; done
+    [ $any -eq 0 ] && return 0
+    sleep 0.1
+  done
+}
+
 cleanup() {
-  local rc=$? i p st bad=0 new_shm
+  local rc=$? i p st bad=0 new_shm h
   trap - INT TERM EXIT
   [ -n "$interrupted" ] && rc=$interrupted
   # The supervisor first, so its recording and summary see the swarm to the end; then the agents.
+  if [ -n "$sup_pid" ] && on_ssh "$sup_host"; then remote_stop "$sup_host" supervisor && settle "$sup_pid"; fi
   [ -n "$sup_pid" ] && stop_pids "$sup_pid"
   [ -n "$view_pid" ] && stop_pids "$view_pid" && wait "$view_pid" 2>/dev/null
+  for h in $(ssh_hosts); do remote_stop "$h"; done # every group started there (and one started as we stopped)
+  settle "${ssh_agent_pids[@]+"${ssh_agent_pids[@]}"}"
   stop_pids "${agent_pids[@]+"${agent_pids[@]}"}"
   for i in "${!agent_pids[@]}"; do
     wait "${agent_pids[$i]}" 2>/dev/null
@@ -293,9 +420,22 @@ cleanup() {
   done
   stop_pids "${tail_pids[@]+"${tail_pids[@]}"}"
   wait 2>/dev/null
+  # A supervisor on an ssh host recorded there: its recording comes here; then the remote folders go.
+  if [ -n "$sup_pid" ] && on_ssh "$sup_host"; then
+    mkdir -p "$record" && ssh -n "${ssh_opts[@]}" -- "${host_target[$sup_host]}" \
+      "$(printf 'cd %q && tar -cf - .' "$remote_dir/record")" | tar -xf - -C "$record" ||
+      say "warning: could not copy the recording from $sup_host ($remote_dir/record)"
+  fi
+  for h in $(ssh_hosts); do
+    ssh -n "${ssh_opts[@]}" -- "${host_target[$h]}" "$(printf 'rm -rf %q' "$remote_dir")" ||
+      say "warning: could not remove $remote_dir on $h"
+  done
+  if [ -n "$lab_made" ]; then
+    "$root/scripts/netlab.sh" down "${lab[0]}" || { say "warning: scripts/netlab.sh down ${lab[0]} failed"; rc=1; }
+  fi
   if [ -n "$sup_pid" ]; then
     [ $json -eq 1 ] && grep -E '"event": ?"summary"' "$run/supervisor.out" | tail -n 1
-    [ -d "$record" ] && say "recording: $record (metrics.csv, positions.csv)"
+    [ -d "$record" ] && say "recording: $record (metrics, positions, commands, centre: docs/RECORDING.md)"
     [ -n "$view_pid" ] && say "replay: $bin/shapeform_view --replay $run"
     say "logs: $run (supervisor.log, supervisor.out, agent_0..$((n - 1)).log and .out, script.txt)"
   fi
@@ -322,17 +462,38 @@ trap 'on_signal 143' TERM
 say "run folder $run"
 if [ $json -eq 1 ]; then
   json_str() { local s=${1//\\/\\\\}; printf '"%s"' "${s//\"/\\\"}"; }
-  printf '{"event":"run","dir":%s,"domain":%d,"agents":%d}\n' "$(json_str "$run")" "$domain" "$n"
+  printf '{"event":"run","dir":%s,"domain":%d,"agents":%d%s}\n' "$(json_str "$run")" "$domain" "$n" \
+    "${fleet:+,\"fleet\":$(json_str "$fleet_name")}"
 fi
 say "scenario $name ($config), $n agents, domain $domain ($domain_note), rate ${rate_eff} Hz," \
   "$([ -n "$init" ] && echo "starts from $init" || echo "seed $seed")," \
   "$([ -n "$steps" ] && echo "$steps iterations" || echo "until converged")"
 
-supargs=(--config "$config" --domain "$domain" --script "$run/script.txt" --record "$record" "${setargs[@]}")
+if [ -n "$fleet" ]; then
+  for h in "${hosts[@]}"; do
+    ids=()
+    for i in "${!agent_host[@]}"; do [ "${agent_host[$i]}" = "$h" ] && ids+=("$i"); done
+    say "fleet $fleet_name: $h ${host_addr[$h]} (${host_kind[$h]} ${host_target[$h]}):" \
+      "$([ ${#ids[@]} -gt 0 ] && echo "agents ${ids[*]}" || echo "no agent")$([ "$sup_host" = "$h" ] && echo ", the supervisor")"
+  done
+  if [ ${#lab[@]} -gt 0 ]; then
+    lab_made=1 # before `up`: an interrupted or failed `up` is removed as well (down removes what up recorded)
+    "$root/scripts/netlab.sh" up "${lab[0]}" "${lab[1]}" --subnet "${lab[2]}" || exit 1
+  fi
+fi
+
+supscript="$run/script.txt" suprecord="$record"
+if on_ssh "$sup_host"; then # the script goes there; the recording comes back on exit
+  supscript="$remote_dir/script.txt" suprecord="$remote_dir/record"
+  ssh "${ssh_opts[@]}" -- "${host_target[$sup_host]}" "$(printf 'mkdir -p %q && cat >%q' "$remote_dir" "$supscript")" \
+    <"$run/script.txt" || { say "cannot copy the script to $sup_host (${host_target[$sup_host]})"; exit 1; }
+fi
+host_sets "$sup_host"
+supargs=(--config "$config" --domain "$domain" --script "$supscript" --record "$suprecord" "${setargs[@]}"
+  "${hsets[@]+"${hsets[@]}"}")
 [ $json -eq 1 ] && supargs+=(--json)
-"$bin/shapeform_supervisor" "${supargs[@]}" \
-  </dev/null >"$run/supervisor.out" 2>"$run/supervisor.log" &
-sup_pid=$!
+start_on "$sup_host" supervisor "$bin/shapeform_supervisor" "${supargs[@]}"
+sup_pid=$started_pid
 # Progress on the terminal: the supervisor's stderr (and, in text mode, its answers and summary).
 tail -q -n +1 -s 0.2 -F --pid="$sup_pid" "$run/supervisor.log" >&2 2>/dev/null &
 tail_pids+=($!)
@@ -364,9 +525,11 @@ for ((i = 0; i < n; i++)); do
   else
     startarg=(--seed "$seed")
   fi
-  "$bin/shapeform_agent" --id "$i" --config "$config" --domain "$domain" "${startarg[@]}" "${setargs[@]}" \
-    --json </dev/null >"$run/agent_$i.out" 2>"$run/agent_$i.log" &
-  agent_pids+=($!)
+  host_sets "${agent_host[$i]-}"
+  start_on "${agent_host[$i]-}" "agent_$i" "$bin/shapeform_agent" --id "$i" --config "$config" --domain "$domain" \
+    "${startarg[@]}" "${setargs[@]}" "${hsets[@]+"${hsets[@]}"}" --json
+  agent_pids+=("$started_pid")
+  on_ssh "${agent_host[$i]-}" && ssh_agent_pids+=("$started_pid")
   sleep 0.02 # a slight stagger avoids a discovery storm
 done
 say "started $n agents (pids ${agent_pids[0]}..${agent_pids[$((n - 1))]}) and the supervisor (pid $sup_pid)"

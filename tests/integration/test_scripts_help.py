@@ -69,6 +69,30 @@ class ScriptsHelp(unittest.TestCase):
                 changed = sorted({p for p, _, _ in before ^ tree_state()})
                 self.assertEqual(changed, [], "%s --help changed the tree" % rel)
 
+    def test_reliability_refuses_bad_arguments_before_starting_anything(self):
+        # Each is checked before root, the build or a test host: exit 2, a message naming the option.
+        script = os.path.join(SOURCE, "scripts", "reliability.sh")
+        env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1")
+        for args, named in ((["--quick", "--runs", "0", "--only", "kill"], "--runs"),
+                            (["--runs", "x"], "--runs"),
+                            (["--only", "kill,nosuch"], "nosuch"),
+                            (["--laws", "paper,spiral"], "spiral"),
+                            (["--losses", "0,120"], "--losses"),
+                            (["--frobnicate"], "--frobnicate")):
+            with self.subTest(args=args):
+                before = tree_state()
+                r = subprocess.run([script] + args, capture_output=True, text=True, timeout=60, cwd=SOURCE,
+                                   stdin=subprocess.DEVNULL, env=env)
+                self.assertEqual(r.returncode, 2, "reliability.sh %s: exit %d, stderr %r" % (args, r.returncode,
+                                                                                              r.stderr[-500:]))
+                self.assertIn(named, r.stderr)
+                self.assertEqual(sorted({p for p, _, _ in before ^ tree_state()}), [], "the tree changed")
+        # A valid plan only prints itself with --dry-run.
+        r = subprocess.run([script, "--quick", "--runs", "1", "--only", "kill", "--dry-run"], capture_output=True,
+                           text=True, timeout=60, cwd=SOURCE, stdin=subprocess.DEVNULL, env=env)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("kill, arc law, loss 0 %: 1 runs", r.stdout)
+
 
 def main():
     global SOURCE
