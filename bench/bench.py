@@ -78,6 +78,7 @@ class Row:
     stagger_s: float = 0.0
     group: int = 0       # agents per process (kind == group)
     section: str = "main"
+    view: bool = False   # shapeform_view beside the swarm, one browser-like client reading its event stream
 
     @property
     def id(self) -> str:
@@ -89,6 +90,8 @@ class Row:
             s += f"-{self.preset}"
         if self.stagger_s > 0:
             s += f"-st{int(round(self.stagger_s * 1000))}"
+        if self.view:
+            s += "-view"
         return s
 
 
@@ -185,6 +188,14 @@ LEVERS: list[dict] = [
                  "5 threads (main loop, Fast DDS event thread, receive threads); 2.9 has no setting that removes "
                  "any of them.",
      "pairs": []},
+    {"name": "8. The browser view beside the swarm",
+     "question": "`shapeform_view` (read-only participant: state, status, command, target, metrics) beside 100 "
+                 "agents, with one client reading its Server-Sent Events as a browser does (15 frames/s, each "
+                 "frame the whole scene as JSON: agents, trails, outline, charts). Its own CPU and RSS are "
+                 "sampled from /proc like the supervisor's; the agents' figures show what it costs them.",
+     "rows": [_lv(A, 100, "mcbufann"), Row(A, 100, 20.0, "mcbufann", 0.0, 0, "lever", True)],
+     "pairs": [(_lv(A, 100, "mcbufann"), Row(A, 100, 20.0, "mcbufann", 0.0, 0, "lever", True))],
+     "view": True},
 ]
 # The rows of a lever, unless listed: the members of its pairs, in order.
 for _lever in LEVERS:
@@ -289,6 +300,36 @@ class Sampler(threading.Thread):
     def window(self, t0: int, t1: int):
         inside = [s for s in self.samples if t0 <= s["t"] <= t1]
         return (inside[0], inside[-1]) if len(inside) >= 2 else (None, None)
+
+
+class EventClient(threading.Thread):
+    """Reads a shapeform_view event stream (/events) as a browser does and counts the frames."""
+
+    def __init__(self, url: str):
+        super().__init__(daemon=True)
+        self.url = url
+        self.frames: list[int] = []  # arrival times, ns
+        self._halt = threading.Event()
+
+    def run(self):
+        import urllib.request
+        try:
+            with urllib.request.urlopen(self.url + "events", timeout=10) as stream:
+                for line in stream:
+                    if line.startswith(b"data: "):
+                        self.frames.append(now_ns())
+                    if self._halt.is_set():
+                        return
+        except OSError as e:
+            log(f"view client: {e}")
+
+    def stop(self):
+        self._halt.set()
+        self.join(5)
+
+    def rate(self, t0: int, t1: int) -> float | None:
+        n = sum(1 for t in self.frames if t0 <= t <= t1)
+        return n / ((t1 - t0) / 1e9) if t1 > t0 else None
 
 
 def read_csv(path: Path) -> list[dict]:
@@ -402,6 +443,7 @@ def run_once(ctx: Ctx, row: Row, run_idx: int) -> dict:
 
     sampler = Sampler()
     started: list[procs.Proc] = []
+    client = None
 
     def spawn(name: str, argv: list[str]) -> procs.Proc:
         p = procs.Proc(name, argv, rdir, cwd=rdir, err_suffix=".err")
@@ -437,6 +479,13 @@ def run_once(ctx: Ctx, row: Row, run_idx: int) -> dict:
                                        "--script", str(script), "--json"] + common +
                         procs.sets_args(rate_sets + ctx.scenario_sets))
             sampler.pids["sup"] = sup.pid
+        if row.view:
+            view = spawn("view", [str(ctx.bin / "shapeform_view"), "--config", str(ctx.scenario), "--port", "0",
+                                  "--json"] + common + procs.sets_args(rate_sets + ctx.scenario_sets))
+            start = view.wait_event("start", 30)
+            sampler.pids["view"] = view.pid
+            client = EventClient(start["url"])
+            client.start()
         workers: list[procs.Proc] = []
         if row.kind == "group":
             for first in range(0, row.n, row.group):
@@ -487,11 +536,16 @@ def run_once(ctx: Ctx, row: Row, run_idx: int) -> dict:
     finally:
         if sampler.is_alive():
             sampler.stop()
+        if client is not None:
+            client.stop()
         # After an error part-way: stop whatever this run started and is still alive (ours only).
         procs.stop_all([p for p in started if p is not ds_proc and p.running()], grace=10)
         if ds_proc is not None:
             procs.stop_all([ds_proc], grace=5)
     analyse(ctx, row, rdir, result, sampler)
+    if client is not None:
+        w1 = result["t_end"] - 0.5e9
+        result["view_fps"] = client.rate(max(result["t0"], w1 - ctx.window_s * 1e9 + 1e9), w1)
     return result
 
 
@@ -601,7 +655,7 @@ def analyse(ctx: Ctx, row: Row, rdir: Path, res: dict, sampler: Sampler) -> None
         span_s = (b["t"] - a["t"]) / 1e9
         dt_total = b["host_total"] - a["host_total"]
         res["host_busy_pct"] = 100 * (1 - (b["host_idle"] - a["host_idle"]) / dt_total) if dt_total else None
-        for name in ("sup", "ds"):
+        for name in ("sup", "ds", "view"):
             if a.get(name) is not None and b.get(name) is not None:
                 res[f"{name}_cpu_pct"] = 100 * (b[name] - a[name]) / CLK_TCK / span_s
                 res[f"{name}_rss_mb"] = b.get(name + "_rss")
@@ -781,7 +835,7 @@ def main(argv=None) -> int:
     ap.add_argument("--window", type=float, help="measurement window, s (default: max(30, 1100 ticks); 12 with --quick)")
     ap.add_argument("--only", action="append", default=[], help="row id or prefix to run (repeatable)")
     ap.add_argument("--row", action="append", default=[],
-                    help="ad-hoc row KIND:N:RATE[:PRESET[:STAGGER_S[:GROUP]]] (stored, shown under experiments)")
+                    help="ad-hoc row KIND:N:RATE[:PRESET[:STAGGER_S[:GROUP[:view]]]] (stored, shown under experiments)")
     ap.add_argument("--levers", action="store_true", help="also run the lever rows")
     ap.add_argument("--lever-runs", type=int, default=1, help="runs per lever row that is not a main row (default 1)")
     ap.add_argument("--no-main", action="store_true", help="skip the main rows")
@@ -866,7 +920,8 @@ def main(argv=None) -> int:
     for spec in args.row:
         parts = spec.split(":")
         r = Row(parts[0], int(parts[1]), float(parts[2]), parts[3] if len(parts) > 3 else "default",
-                float(parts[4]) if len(parts) > 4 else 0.0, int(parts[5]) if len(parts) > 5 else 0, "experiment")
+                float(parts[4]) if len(parts) > 4 else 0.0, int(parts[5]) if len(parts) > 5 else 0, "experiment",
+                len(parts) > 6 and parts[6] == "view")
         if r.preset not in PRESETS:
             print(f"bench: unknown preset {r.preset}; known: {', '.join(PRESETS)}", file=sys.stderr)
             return 2
@@ -1040,7 +1095,8 @@ def report_plan(store: dict) -> dict:
                           "not need them). The levers below compare them with the defaults.",
             "levers": [{"name": lv["name"], "question": lv["question"], "rows": [r.id for r in lv["rows"]],
                         "pairs": [(a.id, b.id) for a, b in lv.get("pairs", [])],
-                        "note": lv.get("note", ""), "extra": lv.get("extra", False)} for lv in LEVERS],
+                        "note": lv.get("note", ""), "extra": lv.get("extra", False),
+                        "view": lv.get("view", False)} for lv in LEVERS],
             "levers_intro": "Single runs unless a row is also a main row (then the median of its runs). The extra tables "
                             "give the kernel's UDP counters over the window (all processes of the host).",
             "presets": {k: v["about"] for k, v in PRESETS.items()}, "method": method}
@@ -1051,7 +1107,7 @@ def rerun_command(row: Row, args, runs: int) -> str:
     if args.quick:
         cmd += " --quick"
     if row.section == "experiment":
-        spec = f"{row.kind}:{row.n}:{row.rate:g}:{row.preset}:{row.stagger_s:g}:{row.group}"
+        spec = f"{row.kind}:{row.n}:{row.rate:g}:{row.preset}:{row.stagger_s:g}:{row.group}" + (":view" if row.view else "")
         return f"{cmd} --runs {runs} --row {spec} --only {row.id}"
     return f"{cmd} --runs {runs} --only {row.id}"
 

@@ -321,6 +321,14 @@ def render(store: dict, path: Path, plan: dict) -> None:
         for rid in present:
             o.append(table_line(rid, rows[rid]))
         o.append("\n")
+        if lv.get("view") and any(rows[rid]["row"].get("view") for rid in present):
+            o.append("| row | viewer CPU (% of one core) | viewer RSS MB | frames/s received |\n|---|---|---|---|\n")
+            for rid in present:
+                a = rows[rid]["agg"]
+                if rows[rid]["row"].get("view"):
+                    o.append(f"| `{rid}` | {f_num(a.get('view_cpu_pct'))} | {f_num(a.get('view_rss_mb'))} "
+                             f"| {f_num(a.get('view_fps'))} |\n")
+            o.append("\n")
         extra = lv.get("extra")
         if extra:
             o.append("| row | UDP datagrams in/s | UDP out/s | receive-buffer drops/s | our CPU (% of one core) |\n|---|---|---|---|---|\n")

@@ -4,7 +4,7 @@
 #
 #   scripts/launch_swarm.sh -n N --scenario NAME [--domain D] [--rate HZ] [--record DIR] [--init CSV]
 #                           [--seed S] [--steps K] [--timeout S] [--set key=value]... [--json]
-#                           [--build DIR] [--runs DIR]
+#                           [--build DIR] [--runs DIR] [--view]
 #   scripts/launch_swarm.sh --fleet FILE --scenario NAME [the same options but -n]
 #
 #   -n N            number of agent processes, ids 0..N-1 (default: the rows of --init, else the
@@ -29,6 +29,9 @@
 #                   summary (its "summary" event)
 #   --build DIR     build folder holding bin/ (default: build)
 #   --runs DIR      where run folders are made (default: runs)
+#   --view          also start shapeform_view (the swarm in a web browser, on 127.0.0.1 and a free
+#                   port) beside the supervisor, and print its URL (with --json also the line
+#                   {"event":"view","url":URL}); it stops with the run (replay: shapeform_view --replay RUN)
 #
 # One run folder per launch: RUNS/<UTC timestamp>-<scenario>-n<N>/ with agent_<i>.log (stderr),
 # agent_<i>.out (the agent's JSON event lines: status, command), supervisor.log (stderr: progress),
@@ -59,7 +62,7 @@ is_posnum() { [[ $1 =~ ^([0-9]+([.][0-9]*)?|[.][0-9]+)([eE][-+]?[0-9]+)?$ ]] && 
 # Arguments
 
 n="" scenario="" fleet="" domain="" rate="" record="" init="" seed="" steps="" timeout="" json=0
-build="build" runs="runs"
+build="build" runs="runs" view=0
 sets=()
 need_value() { # flag remaining-args value
   [ "$2" -ge 2 ] || die "$1: missing value"
@@ -81,6 +84,7 @@ while [ $# -gt 0 ]; do
     --build) need_value "$1" $# "${2-}"; build=$2; shift 2 ;;
     --runs) need_value "$1" $# "${2-}"; runs=$2; shift 2 ;;
     --json) json=1; shift ;;
+    --view) view=1; shift ;;
     -h|--help) usage; exit 0 ;;
     *) die "unknown argument '$1' (see --help)" ;;
   esac
@@ -306,7 +310,7 @@ agents_timeout=$((30 + n / 2))
 # ------------------------------------------------------------------------------------------------
 # Children and cleanup
 
-sup_pid="" tail_pids=() agent_pids=() ssh_agent_pids=()
+sup_pid="" tail_pids=() agent_pids=() ssh_agent_pids=() view_pid=""
 interrupted=""
 shm_list() { ls /dev/shm 2>/dev/null | grep -E '^(sem\.)?(fastrtps|fast_datasharing|fastdds)' | sort; }
 shm_before=$(shm_list)
@@ -394,6 +398,7 @@ cleanup() {
   # The supervisor first, so its recording and summary see the swarm to the end; then the agents.
   if [ -n "$sup_pid" ] && on_ssh "$sup_host"; then remote_stop "$sup_host" supervisor && settle "$sup_pid"; fi
   [ -n "$sup_pid" ] && stop_pids "$sup_pid"
+  [ -n "$view_pid" ] && stop_pids "$view_pid" && wait "$view_pid" 2>/dev/null
   for h in $(ssh_hosts); do remote_stop "$h"; done # every group started there (and one started as we stopped)
   settle "${ssh_agent_pids[@]+"${ssh_agent_pids[@]}"}"
   stop_pids "${agent_pids[@]+"${agent_pids[@]}"}"
@@ -431,6 +436,7 @@ cleanup() {
   if [ -n "$sup_pid" ]; then
     [ $json -eq 1 ] && grep -E '"event": ?"summary"' "$run/supervisor.out" | tail -n 1
     [ -d "$record" ] && say "recording: $record (metrics, positions, commands, centre: docs/RECORDING.md)"
+    [ -n "$view_pid" ] && say "replay: $bin/shapeform_view --replay $run"
     say "logs: $run (supervisor.log, supervisor.out, agent_0..$((n - 1)).log and .out, script.txt)"
   fi
   new_shm=$(comm -13 <(printf '%s\n' "$shm_before") <(shm_list) | sed '/^$/d')
@@ -494,6 +500,23 @@ tail_pids+=($!)
 if [ $json -eq 0 ]; then
   tail -q -n +1 -s 0.2 -F --pid="$sup_pid" "$run/supervisor.out" 2>/dev/null &
   tail_pids+=($!)
+fi
+
+# The browser view (--view): after the supervisor, on the same domain and config; its URL printed.
+if [ $view -eq 1 ]; then
+  [ -x "$bin/shapeform_view" ] || die "--view: $bin/shapeform_view not found (run ./scripts/build.sh first)"
+  "$bin/shapeform_view" --config "$config" --domain "$domain" "${setargs[@]}" --port 0 --json \
+    </dev/null >"$run/view.out" 2>"$run/view.log" &
+  view_pid=$!
+  url="" i=0
+  while [ -z "$url" ] && [ $i -lt 100 ] && alive "$view_pid"; do
+    url=$(grep -o '"url":"[^"]*"' "$run/view.out" 2>/dev/null | head -1 | cut -d'"' -f4)
+    [ -n "$url" ] || sleep 0.1
+    i=$((i + 1))
+  done
+  [ -n "$url" ] || die "--view: shapeform_view printed no URL (see $run/view.log)"
+  say "view: $url"
+  [ $json -eq 1 ] && printf '{"event":"view","url":"%s"}\n' "$url"
 fi
 
 for ((i = 0; i < n; i++)); do

@@ -24,6 +24,7 @@ ALLOWED = {
     "supervisor": {"core", "shapes", "dds", "config", "util", "app", "record"},
     "bench": {"core", "dds", "config", "util", "app", "shapeform"},
     "tools": {"core", "dds", "config", "util", "app"},
+    "view": {"core", "shapes", "dds", "config", "util", "app"},
 }
 # Third-party headers each folder may use: core is pure maths, and only common/dds sees Fast DDS.
 FORBIDDEN_SYSTEM = {
@@ -37,6 +38,7 @@ FORBIDDEN_SYSTEM = {
     "agent": re.compile(r"^(fastdds|fastrtps|fastcdr|yaml-cpp)"),
     "supervisor": re.compile(r"^(fastdds|fastrtps|fastcdr|yaml-cpp)"),
     "tools": re.compile(r"^(fastdds|fastrtps|fastcdr|yaml-cpp)"),
+    "view": re.compile(r"^(fastdds|fastrtps|fastcdr|yaml-cpp)"),
 }
 # Libraries a folder's CMake targets must not link.
 FORBIDDEN_LINKS = {

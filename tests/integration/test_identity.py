@@ -33,6 +33,7 @@ CONFIG_READERS = [
     ("shapeform_bench_probe", ["--out", "{run_dir}/probe"]),
     ("shapeform_topics", []),
     ("shapeform_echo", ["shapeform/state"]),
+    ("shapeform_view", ["--port", "0"]),
     ("shapeform_rogue_publisher", ["--topic", "state"]),
 ]
 

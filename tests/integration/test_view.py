@@ -1,0 +1,224 @@
+#!/usr/bin/env python3
+"""shapeform_view in a real browser (headless Chromium from Debian, driven by Selenium).
+
+The page exposes what it drew as window.shapeformDrawn = {agents: [{id, x1, x2, state, model_time}],
+outline_points, chart_points, chart_model_time (of the charts' newest point), model_time, frames,
+mode, replay}; the test compares that with the
+supervisor's recording, never with pixels.
+
+- live: the viewer and the page first, then an 8-agent lockstep swarm with the supervisor recording.
+  In lockstep the supervisor records every agent's position at the model time of the row (the
+  agents' own step), and every drawn agent carries the model time of the state drawn: a drawn agent
+  is compared with the recorded row of the same agent at that model time: most lie within 0.05 of it
+  (the same state twice), every one within 0.5 (the supervisor's label can be a step off when it heard
+  an agent late: see the comment there).
+  While the swarm forms: 8 agents drawn alive, the commanded outline drawn, the charts advancing,
+  frames at >= 10 per second.
+- replay: the same page on `shapeform_view --replay` of that recording: paused, the agents drawn are
+  the recorded rows of the model time shown and the model time stands still; a seek (the page's
+  slider) shows the rows of the recording at the moment sought; play moves model time on.
+- screenshot (not in the suite; regenerates docs/figures/view.png): a 12-agent circle forming live.
+      python3 tests/integration/test_view.py --bin build/bin --source . --domain 132 ViewTest.test_screenshot
+"""
+import os
+import sys
+import threading
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import harness  # noqa: E402
+from harness import bin_path, poll, read_csv  # noqa: E402
+
+from selenium import webdriver  # noqa: E402  (Debian: python3-selenium)
+from selenium.webdriver.chrome.service import Service  # noqa: E402
+
+AGENTS = 8
+TOLERANCE = 0.05
+CHROMEDRIVER = "/usr/bin/chromedriver"
+
+
+class ViewTest(harness.SwarmTestCase):
+
+    def setUp(self):
+        super().setUp()
+        self.browser = None
+
+    def tearDown(self):
+        if self.browser is not None:
+            self.browser.quit()
+        super().tearDown()
+
+    def launch_browser(self):
+        """Starts headless Chromium on a thread of its own (it takes seconds): join the thread returned."""
+        def launch():
+            options = webdriver.ChromeOptions()
+            for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--no-first-run",
+                        "--disable-extensions", "--disable-background-networking", "--disable-component-update",
+                        "--disable-sync", "--window-size=1240,900",
+                        "--user-data-dir=" + os.path.join(self.run_dir, "chromium")):
+                options.add_argument(arg)
+            service = Service(CHROMEDRIVER, log_path=os.path.join(self.run_dir, "chromedriver.log"))
+            self.browser = webdriver.Chrome(service=service, options=options)
+        thread = threading.Thread(target=launch)
+        thread.start()
+        return thread
+
+    def open_page(self, launching, url):
+        launching.join(60)
+        self.assertIsNotNone(self.browser, "headless Chromium started (see chromedriver.log)")
+        self.browser.get(url)
+
+    def drawn(self):
+        return self.browser.execute_script("return window.shapeformDrawn")
+
+    def start_view(self, args, name="view"):
+        view = self.start(name, [bin_path("shapeform_view"), "--port", "0", "--json"] + list(args))
+        return view, view.wait_event("start", 20)["url"]
+
+    def swarm_config(self, extra_sets=()):
+        sets = ["agent.sync=lockstep", "supervisor.agent_timeout_s=5"] + list(extra_sets)
+        return [a for s in sets for a in ("--set", s)]
+
+    @staticmethod
+    def rows_by_state(rows):
+        """{agent: {model_time: (x1, x2)}} of positions.csv."""
+        out = {}
+        for r in rows:
+            out.setdefault(int(r["agent"]), {})[r["model_time"]] = (r["x1"], r["x2"])
+        return out
+
+    def assert_drawn_match(self, seen, recorded, what, need, share=1.0, bound=TOLERANCE):
+        """Of the drawn (id, model_time, x1, x2) with a recorded row of that agent at that model time (at
+        least `need` of them), at least `share` lie within TOLERANCE of it and every one within `bound`."""
+        matched, close = 0, 0
+        for (i, t, x1, x2) in seen:
+            row = recorded.get(i, {}).get(t)
+            if row is None:
+                continue
+            matched += 1
+            off = max(abs(x1 - row[0]), abs(x2 - row[1]))
+            close += off <= TOLERANCE
+            self.assertLessEqual(off, bound, "%s: agent %d at model time %g drawn at (%g, %g), recorded at (%g, %g)"
+                                 % (what, i, t, x1, x2, row[0], row[1]))
+        self.assertGreaterEqual(matched, need, "%s: drawn states with a recorded row at their model time" % what)
+        sys.stderr.write("%s: %d of %d drawn states within %g of the recorded row\n" % (what, close, matched, TOLERANCE))
+        self.assertGreaterEqual(close, share * matched, "%s: drawn states within %g of the recorded row" % (what, TOLERANCE))
+
+    def check_bad_arguments(self):
+        """Bad flags and a missing recording: exit 2 at once, naming the flag or the file."""
+        missing = os.path.join(self.run_dir, "no_run")
+        for args, message in ((["--bind", "localhost:1"], "--bind"), (["--port", "70000"], "--port"),
+                              (["--fps", "0"], "--fps"), (["--replay", missing], missing + "/metrics.csv"),
+                              (["--frobnicate"], "frobnicate")):
+            with self.subTest(args=args):
+                r = harness.procs.run([bin_path("shapeform_view")] + args, timeout=10, check=False)
+                self.assertEqual(r.returncode, 2, r.stderr)
+                self.assertIn(message, r.stderr)
+
+    def test_live_and_replay(self):
+        launching = self.launch_browser()  # meanwhile: the bad arguments, the viewer and the swarm
+        self.check_bad_arguments()
+        config = harness.scenario("circle")
+        extra = self.swarm_config()
+        record = os.path.join(self.run_dir, "record")
+        view, url = self.start_view(["--config", config, "--domain", str(self.domain)] + extra)
+        sup, agents = self.start_commanded_swarm(AGENTS, config, extra=extra, record=record)
+        self.open_page(launching, url)
+
+        # -- live: 8 agents alive, the outline, charts that grow, 10 frames/s or more
+        d = poll(lambda: (lambda d: d if d and d.get("mode") == "live" and d["epoch"] == 1 and d["chart_model_time"] is not None and
+                          sum(a["state"] == "alive" for a in d["agents"]) == AGENTS else None)(self.drawn()),
+                 20, "the page to draw %d alive agents following epoch 1" % AGENTS)
+        self.assertEqual(sorted(a["id"] for a in d["agents"]), list(range(AGENTS)))
+        self.assertGreater(d["outline_points"], 0, "the commanded circle is drawn")
+        seen = set()
+        first = d
+        t0 = time.monotonic()
+        while time.monotonic() - t0 < 3.0:
+            d = self.drawn()
+            seen |= {(a["id"], a["model_time"], a["x1"], a["x2"]) for a in d["agents"] if a["state"] == "alive"}
+            time.sleep(0.05)
+        last = self.drawn()
+        elapsed = time.monotonic() - t0
+        # The charts advance: their newest point is later (a long series is thinned, so its count may drop).
+        self.assertGreater(last["chart_points"], 0, "chart points drawn")
+        self.assertGreater(last["chart_model_time"], first["chart_model_time"], "the charts advance")
+        self.assertGreater(last["model_time"], first["model_time"], "model time advances on the page")
+        self.assertGreaterEqual((last["frames"] - first["frames"]) / elapsed, 10, "frames per second")
+        self.assertEqual({s[0] for s in seen}, set(range(AGENTS)))
+
+        sup.stop()  # flushes the recording
+        harness.procs.stop_all(agents, grace=5.0)
+        recorded = self.rows_by_state(read_csv(os.path.join(record, "positions.csv"), numeric=True))
+        # The supervisor labels a row with the slowest agent's model time and takes an agent one step
+        # ahead at its previous position; an agent it last heard two steps ahead (the slowest one's newest
+        # sample still in flight) is then recorded a step off, and one step of the paper's law moves an
+        # agent by up to about 0.1. So most drawn states, not all, equal their row; every one lies within
+        # 0.5 of it (a wrong agent, axis or scale would be off by a neighbour's distance, about 2).
+        self.assert_drawn_match(seen, recorded, "live", need=AGENTS, share=0.7, bound=0.5)
+        view.stop()
+
+        # -- replay of that recording, in the same page
+        view, url = self.start_view(["--replay", self.run_dir], name="replay")
+        self.browser.get(url)
+        poll(lambda: (lambda d: d and d.get("mode") == "replay" and len(d["agents"]) == AGENTS)(self.drawn()), 15,
+             "the replay to draw %d agents" % AGENTS)
+        self.browser.find_element("id", "play").click()  # pause
+        d = poll(lambda: (lambda d: d if d["replay"] and not d["replay"]["playing"] else None)(self.drawn()), 5,
+                 "the replay to pause")
+        time.sleep(1.0)  # paused: nothing may move meanwhile
+        d2 = self.drawn()
+        self.assertGreater(d2["frames"], d["frames"], "frames keep coming while paused")
+        self.assertEqual(d2["model_time"], d["model_time"], "paused: model time stands still")
+        self.assertEqual(d2["replay"]["position_s"], d["replay"]["position_s"])
+        alive = [a for a in d2["agents"] if a["state"] == "alive"]
+        self.assertEqual(len(alive), AGENTS)
+        for a in alive:
+            self.assertEqual(a["model_time"], d2["model_time"], "agents drawn at the model time shown")
+        self.assert_drawn_match({(a["id"], a["model_time"], a["x1"], a["x2"]) for a in alive}, recorded,
+                                "replay (paused)", need=AGENTS)
+
+        # Seek with the page's slider to 1 s from the start: the rows of the last metrics tick by then.
+        metrics = read_csv(os.path.join(record, "metrics.csv"), numeric=True)
+        start = min(r["wall_s"] for r in metrics)
+        target = 1.0
+        expect_t = max(r["model_time"] for r in metrics if r["wall_s"] <= start + target + 1e-9)
+        self.browser.execute_script(
+            "const s = document.getElementById('seek'); s.value = arguments[0];"
+            "s.dispatchEvent(new Event('change'));", target)
+        d = poll(lambda: (lambda d: d if abs(d["replay"]["position_s"] - target) < 0.02 else None)(self.drawn()), 5,
+                 "the replay to show %g s" % target)
+        self.assertEqual(d["model_time"], expect_t)
+        alive = [a for a in d["agents"] if a["state"] == "alive"]
+        self.assert_drawn_match({(a["id"], a["model_time"], a["x1"], a["x2"]) for a in alive}, recorded,
+                                "replay (after the seek)", need=len(alive))
+        self.assertTrue(all(a["model_time"] == expect_t for a in alive))
+
+        self.browser.find_element("id", "play").click()  # play
+        poll(lambda: self.drawn()["model_time"] > expect_t, 5, "model time to advance after play")
+        # Once the replay reaches the recorded command (commands.csv), its shape is drawn.
+        commanded = min(float(r["wall_s"]) for r in read_csv(os.path.join(record, "commands.csv")))
+        self.browser.execute_script(
+            "const s = document.getElementById('seek'); s.value = arguments[0];"
+            "s.dispatchEvent(new Event('change'));", commanded - start + 0.5)
+        poll(lambda: (lambda d: d["epoch"] == 1 and d["outline_points"] > 0)(self.drawn()), 5,
+             "the replay to draw the recorded command")
+
+    def test_screenshot(self):
+        """Regenerates docs/figures/view.png: a 12-agent circle forming live."""
+        config = harness.scenario("circle")
+        launching = self.launch_browser()
+        view, url = self.start_view(["--config", config, "--domain", str(self.domain)])
+        self.start_commanded_swarm(12, config)
+        self.open_page(launching, url)
+        poll(lambda: (lambda d: d and d["chart_points"] > 40 and
+                      sum(a["state"] == "alive" for a in d["agents"]) == 12)(self.drawn()), 30,
+             "12 agents and some history drawn")
+        out = os.path.join(harness.CONFIG["source"], "docs", "figures", "view.png")
+        self.browser.set_window_size(1240, 820)
+        self.browser.save_screenshot(out)
+        sys.stderr.write("screenshot: %s\n" % out)
+
+
+if __name__ == "__main__":
+    harness.main()

@@ -1,0 +1,151 @@
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "core/params.hpp"
+#include "scene.hpp"
+#include "shapes/shapes.hpp"
+
+using namespace shapeform;
+using Catch::Matchers::WithinAbs;
+
+namespace {
+
+core::CompiledCommand circle(double r0, core::Vec2 centre = core::Vec2::Zero()) {
+  core::Command c;
+  c.shape.kind = core::ShapeKind::Circle;
+  c.shape.r0 = r0;
+  c.shape.centre = centre;
+  return shapes::compile(c);
+}
+
+}  // namespace
+
+TEST_CASE("outline: a circle's points lie on it, evenly spread, closed without repeating the start") {
+  const auto pts = view::outline(circle(3.0, {1.0, -2.0}), 0.0, 60);
+  REQUIRE(pts.size() == 60);
+  for (const auto& p : pts) CHECK_THAT((p - core::Vec2(1.0, -2.0)).norm(), WithinAbs(3.0, 1e-9));
+  const double gap = (pts[1] - pts[0]).norm();
+  for (std::size_t i = 1; i < pts.size(); ++i) CHECK_THAT((pts[i] - pts[i - 1]).norm(), WithinAbs(gap, 1e-6));
+  CHECK_THAT((pts.front() - pts.back()).norm(), WithinAbs(gap, 1e-6));
+}
+
+TEST_CASE("outline: the line is drawn over its half length both ways, on x2 = m x1 + c") {
+  core::Command c;
+  c.shape.kind = core::ShapeKind::Line;
+  c.shape.m = 0.5;
+  c.shape.c = 2.0;
+  const auto pts = view::outline(shapes::compile(c), 0.0, 10, 50.0);
+  REQUIRE(pts.size() == 11);
+  for (const auto& p : pts) CHECK_THAT(p.y(), WithinAbs(0.5 * p.x() + 2.0, 1e-9));
+  CHECK_THAT((pts.back() - pts.front()).norm(), WithinAbs(100.0, 1e-9));
+}
+
+TEST_CASE("outline: a tracked shape is drawn about the centre of the model time given") {
+  core::Command c = circle(2.0);
+  c.tracking.enabled = true;
+  c.tracking.path.kind = core::CentrePath::Kind::Line;
+  c.tracking.path.point = {0.0, 0.0};
+  c.tracking.path.velocity = {0.1, 0.0};
+  const auto pts = view::outline(shapes::compile(c), 50.0, 40);
+  for (const auto& p : pts) CHECK_THAT((p - core::Vec2(5.0, 0.0)).norm(), WithinAbs(2.0, 1e-9));
+}
+
+TEST_CASE("Series: bounded, thinned by half when full, the first point and the newest kept") {
+  view::Series s(8, 1);
+  for (int i = 0; i < 100; ++i) {
+    s.push({static_cast<double>(i)});
+    REQUIRE(s.size() <= 8);
+  }
+  CHECK(s.points().front()[0] == 0.0);
+  CHECK(s.points().back()[0] == 99.0);
+  for (std::size_t i = 1; i < s.size(); ++i) CHECK(s.points()[i][0] > s.points()[i - 1][0]);
+  CHECK_THROWS(s.push({1.0, 2.0}));
+}
+
+TEST_CASE("Scene: agents are alive, stale, then dead as they fall silent; disposed is dead at once") {
+  view::SceneParams p;
+  p.stale_s = 0.3;
+  p.dead_s = 1.0;
+  view::Scene scene(p);
+  scene.on_state(3, {1.0, 2.0}, 10.0, 1, 100.0);
+  scene.on_state(4, {0.0, 0.0}, 10.0, 2, 100.0);
+  const auto& a = scene.agents().at(3);
+  CHECK(std::string(scene.state(a, 100.2)) == "alive");
+  CHECK(std::string(scene.state(a, 100.5)) == "stale");
+  CHECK(std::string(scene.state(a, 101.5)) == "dead");
+  CHECK(scene.min_epoch_followed(100.1) == 1);
+  scene.on_departed(3);
+  CHECK(std::string(scene.state(scene.agents().at(3), 100.0)) == "dead");
+  CHECK(scene.min_epoch_followed(100.1) == 2);
+  scene.on_state(3, {1.0, 2.0}, 11.0, 1, 100.2);  // back: alive again
+  CHECK(std::string(scene.state(scene.agents().at(3), 100.3)) == "alive");
+}
+
+TEST_CASE("Scene::frame: exact agent positions, the outline, the table fields and the charts") {
+  view::Scene scene;
+  scene.on_command(circle(4.0), 7);
+  scene.on_state(0, {0.123456789012345, -4.0}, 12.5, 7, 1.0);
+  scene.on_status(0, 5, 250.0);
+  scene.on_status(9, 5, 250.0);  // never seen: not drawn
+  core::Metrics m;
+  m.shape_error_mean = 0.5;
+  m.gap_cv = 0.1;
+  scene.on_metrics(12.0, 7, 1, m, false);
+  const auto f = scene.frame(1.05);
+  REQUIRE(f["agents"].size() == 1);
+  CHECK(f["agents"][0]["x1"].get<double>() == 0.123456789012345);
+  CHECK(f["agents"][0]["state"] == "alive");
+  CHECK(f["agents"][0]["heard"] == 5);
+  CHECK(f["agents"][0]["lateness_us"] == 250.0);
+  CHECK(f["agents"][0]["model_time"] == 12.5);
+  CHECK(f["model_time"] == 12.0);
+  CHECK(f["epoch"] == 7);
+  CHECK(f["outline"]["closed"] == true);
+  CHECK(f["outline"]["points"].size() == 240);
+  CHECK(f["chart"]["points"].size() == 1);
+  CHECK(f["chart"]["points"][0][1] == 0.5);
+  CHECK(f["chart"]["points"][0][2] == 0.1);
+  CHECK(f["metrics"]["agents_alive"] == 1);
+  CHECK(f["metrics"]["shape_error_mean"] == 0.5);
+  CHECK(f["metrics"]["extent"].is_null());
+  CHECK(f["centre"].is_null());
+}
+
+TEST_CASE("Scene: a new epoch or a model time going back starts the charts anew; one point per model time") {
+  view::Scene scene;
+  core::Metrics m;
+  m.shape_error_mean = 1.0;
+  scene.on_metrics(1.0, 1, 3, m, false);
+  scene.on_metrics(1.0, 1, 3, m, false);
+  scene.on_metrics(2.0, 1, 3, m, false);
+  CHECK(scene.frame(0.0)["chart"]["points"].size() == 2);
+  scene.on_metrics(0.5, 2, 3, m, false);
+  CHECK(scene.frame(0.0)["chart"]["points"].size() == 1);
+  scene.on_metrics(0.2, 2, 3, m, false);
+  CHECK(scene.frame(0.0)["chart"]["points"].size() == 1);
+}
+
+TEST_CASE("Scene: trails keep the last trail_s seconds, one point per trail_step_s") {
+  view::SceneParams p;
+  p.trail_s = 2.0;
+  p.trail_step_s = 0.2;
+  view::Scene scene(p);
+  for (int k = 0; k <= 100; ++k) scene.on_state(1, {0.01 * k, 0.0}, k, 1, 0.05 * k);  // 5 s at 20 Hz
+  const auto f = scene.frame(5.0);
+  const auto& pts = f["trails"][0]["points"];
+  CHECK(pts.size() >= 9);
+  CHECK(pts.size() <= 11);
+  CHECK(pts.back()[0].get<double>() >= 0.95);
+}
+
+TEST_CASE("Scene: the centre and its path; a command without tracking hides the centre") {
+  view::Scene scene;
+  scene.on_centre({1.0, 1.0});
+  scene.on_centre({1.0, 1.0});
+  scene.on_centre({2.0, 1.0});
+  auto f = scene.frame(0.0);
+  CHECK(f["centre"] == nlohmann::json::array({2.0, 1.0}));
+  CHECK(f["centre_path"].size() == 2);
+  scene.on_command(circle(1.0), 2);
+  CHECK(scene.frame(0.0)["centre"].is_null());
+}

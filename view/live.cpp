@@ -1,0 +1,83 @@
+#include "live.hpp"
+
+#include <cmath>
+#include <vector>
+
+#include "dds/command_arbiter.hpp"
+#include "dds/convert.hpp"
+#include "dds/node.hpp"
+#include "util/log.hpp"
+
+namespace shapeform::view {
+
+struct LiveFeed::Impl {
+  explicit Impl(const config::Config& cfg)
+      : node(cfg.transport, "shapeform_view"),
+        states(node.reader<msg::AgentState>(dds::TopicId::State)),
+        statuses(node.reader<msg::AgentStatus>(dds::TopicId::Status)),
+        commands(node.reader<msg::ShapeCommand>(dds::TopicId::Command)),
+        targets(node.reader<msg::TrackingTarget>(dds::TopicId::Target)),
+        metrics(node.reader<msg::SwarmMetrics>(dds::TopicId::Metrics)) {}
+
+  dds::Node node;  // readers only: the viewer never writes a topic
+  // Each reader with the buffer its samples are drained into.
+  dds::Reader<msg::AgentState> states;
+  std::vector<dds::Received<msg::AgentState>> state_buf;
+  dds::Reader<msg::AgentStatus> statuses;
+  std::vector<dds::Received<msg::AgentStatus>> status_buf;
+  dds::Reader<msg::ShapeCommand> commands;
+  std::vector<dds::Received<msg::ShapeCommand>> command_buf;
+  dds::Reader<msg::TrackingTarget> targets;
+  std::vector<dds::Received<msg::TrackingTarget>> target_buf;
+  dds::Reader<msg::SwarmMetrics> metrics;
+  std::vector<dds::Received<msg::SwarmMetrics>> metrics_buf;
+  dds::CommandArbiter arbiter;
+};
+
+LiveFeed::LiveFeed(const config::Config& cfg) : impl_(std::make_unique<Impl>(cfg)) {}
+LiveFeed::~LiveFeed() = default;
+
+void LiveFeed::drain(Scene& scene, double now_s, double period_s) {
+  Impl& m = *impl_;
+  m.node.recover_if_stalled(period_s);
+  std::string why;
+  m.states.drain(m.state_buf);
+  for (const auto& r : m.state_buf) {
+    dds::StateSample s;
+    if (!r.valid_data) {
+      if (r.instance == dds::InstanceState::Disposed && r.key_id >= 0) scene.on_departed(r.key_id);
+    } else if (dds::from_msg(r.msg, s, why)) {
+      scene.on_state(s.id, s.x, s.model_time, s.command.epoch, now_s);
+    }
+  }
+  m.statuses.drain(m.status_buf);
+  for (const auto& r : m.status_buf) {
+    dds::StatusSample s;
+    if (r.valid_data && dds::from_msg(r.msg, s, why)) scene.on_status(s.id, s.neighbours_heard, s.lateness_p99_us);
+  }
+  // The command in force is chosen by the swarm's one rule (dds::CommandArbiter), as agents and
+  // supervisor choose it.
+  const std::uint64_t floor = scene.min_epoch_followed(now_s);
+  bool adopted = false;
+  m.commands.drain(m.command_buf);
+  for (const auto& r : m.command_buf) {
+    dds::CommandSample c;
+    if (r.valid_data && dds::from_msg(r.msg, r.source, c, why)) {
+      adopted = m.arbiter.offer(c, floor) == dds::CommandArbiter::Verdict::Adopted || adopted;
+    }
+  }
+  if (m.arbiter.has_refused() && m.arbiter.recheck(floor)) adopted = true;
+  if (adopted) scene.on_command(m.arbiter.current().command, m.arbiter.current().id.epoch);
+  m.targets.drain(m.target_buf);
+  for (const auto& r : m.target_buf) {
+    dds::TargetSample t;
+    if (r.valid_data && dds::from_msg(r.msg, t, why) && t.command.epoch == m.arbiter.id().epoch) scene.on_centre(t.centre);
+  }
+  m.metrics.drain(m.metrics_buf);
+  for (const auto& r : m.metrics_buf) {
+    if (!r.valid_data || !std::isfinite(r.msg.model_time())) continue;
+    scene.on_metrics(r.msg.model_time(), r.msg.epoch(), r.msg.agents_alive(), dds::from_msg(r.msg), r.msg.converged());
+  }
+}
+
+}  // namespace shapeform::view

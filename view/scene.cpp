@@ -1,0 +1,199 @@
+#include "scene.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+
+#include "app/json.hpp"
+
+namespace shapeform::view {
+
+namespace {
+
+double round4(double v) { return std::round(v * 1e4) / 1e4; }
+
+nlohmann::json point(const core::Vec2& x) { return nlohmann::json::array({round4(x.x()), round4(x.y())}); }
+
+nlohmann::json optional_number(const std::optional<double>& v) {
+  return v && std::isfinite(*v) ? nlohmann::json(*v) : nlohmann::json(nullptr);
+}
+
+}  // namespace
+
+std::vector<core::Vec2> outline(const core::CompiledCommand& cmd, double t, int n, double line_half_length) {
+  const core::ShapeSpec spec = core::shape_at(cmd, t);
+  const core::Curve& curve = cmd.curve();
+  const double length = curve.length();
+  std::vector<core::Vec2> out;
+  if (n < 2) return out;
+  out.reserve(static_cast<std::size_t>(n) + 1);
+  const bool closed = curve.closed() && std::isfinite(length);
+  const double from = std::isfinite(length) ? 0.0 : -line_half_length;
+  const double span = std::isfinite(length) ? length : 2.0 * line_half_length;
+  const int count = closed ? n : n + 1;
+  for (int k = 0; k < count; ++k) {
+    const double s = from + span * static_cast<double>(k) / static_cast<double>(n);
+    out.push_back(core::to_world(spec, curve.at(s)));
+  }
+  return out;
+}
+
+Series::Series(std::size_t capacity, std::size_t width) : capacity_(std::max<std::size_t>(capacity, 4)), width_(width) {
+  points_.reserve(capacity_);
+}
+
+void Series::push(const std::vector<double>& point) {
+  if (point.size() != width_) throw std::invalid_argument("Series::push: wrong number of values");
+  if (points_.size() >= capacity_) {
+    // Keep points 0, 2, 4, ...: the history at half the density.
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < points_.size(); i += 2, ++kept) {
+      if (kept != i) points_[kept] = std::move(points_[i]);
+    }
+    points_.resize(kept);
+  }
+  points_.push_back(point);
+}
+
+Scene::Scene(SceneParams p)
+    : p_(p), centre_path_(p.centre_path_capacity, 2), chart_(p.chart_capacity, 4) {}
+
+void Scene::on_state(std::int32_t id, const core::Vec2& x, double model_time, std::uint64_t epoch, double now_s) {
+  AgentInfo& a = agents_[id];
+  a.x = x;
+  a.model_time = model_time;
+  a.epoch = epoch;
+  a.last_seen_s = now_s;
+  a.departed = false;
+  if (a.trail.empty() || now_s - a.trail.back().first >= p_.trail_step_s || now_s < a.trail.back().first) {
+    a.trail.emplace_back(now_s, x);
+  }
+}
+
+void Scene::on_status(std::int32_t id, int heard, double lateness_p99_us) {
+  const auto it = agents_.find(id);
+  if (it == agents_.end()) return;  // a status before any state: nothing to draw it at
+  it->second.heard = heard;
+  it->second.lateness_p99_us = lateness_p99_us;
+}
+
+void Scene::on_departed(std::int32_t id) {
+  const auto it = agents_.find(id);
+  if (it != agents_.end()) it->second.departed = true;
+}
+
+void Scene::on_command(const core::CompiledCommand& cmd, std::uint64_t epoch) {
+  command_ = cmd;
+  epoch_ = epoch;
+  if (!cmd.tracking.enabled) centre_.reset();
+}
+
+void Scene::on_centre(const core::Vec2& c) {
+  centre_ = c;
+  const auto& pts = centre_path_.points();
+  if (pts.empty() || std::hypot(pts.back()[0] - c.x(), pts.back()[1] - c.y()) >= 1e-3) centre_path_.push({c.x(), c.y()});
+}
+
+void Scene::on_metrics(double model_time, std::uint64_t epoch, int agents_alive, const core::Metrics& m,
+                       bool converged) {
+  if (epoch != chart_epoch_ || (metrics_time_ && model_time < *metrics_time_)) {
+    chart_.clear();
+    centre_path_.clear();
+    chart_epoch_ = epoch;
+  }
+  if (!metrics_time_ || model_time != *metrics_time_ || chart_.size() == 0) {
+    const auto nan = std::numeric_limits<double>::quiet_NaN();
+    chart_.push({model_time, m.shape_error_mean.value_or(nan), m.gap_cv.value_or(nan), static_cast<double>(agents_alive)});
+  }
+  metrics_time_ = model_time;
+  metrics_ = app::metrics_json(m);
+  metrics_.erase("agents");
+  metrics_["agents_alive"] = agents_alive;
+  converged_ = converged;
+}
+
+void Scene::clear() {
+  agents_.clear();
+  command_.reset();
+  epoch_ = 0;
+  centre_.reset();
+  centre_path_.clear();
+  chart_.clear();
+  chart_epoch_ = 0;
+  metrics_time_.reset();
+  metrics_ = nullptr;
+  converged_ = false;
+}
+
+const char* Scene::state(const AgentInfo& a, double now_s) const {
+  const double silent = now_s - a.last_seen_s;
+  if (a.departed || silent > p_.dead_s) return "dead";
+  return silent > p_.stale_s ? "stale" : "alive";
+}
+
+std::uint64_t Scene::min_epoch_followed(double now_s) const {
+  std::uint64_t lo = 0;
+  for (const auto& [id, a] : agents_) {
+    if (a.epoch != 0 && std::strcmp(state(a, now_s), "alive") == 0 && (lo == 0 || a.epoch < lo)) lo = a.epoch;
+  }
+  return lo;
+}
+
+double Scene::model_time() const {
+  if (metrics_time_) return *metrics_time_;
+  double t = 0.0;
+  for (const auto& [id, a] : agents_) t = std::max(t, a.model_time);
+  return t;
+}
+
+nlohmann::json Scene::frame(double now_s) {
+  using nlohmann::json;
+  const double t = model_time();
+  json agents = json::array();
+  json trails = json::array();
+  for (auto& [id, a] : agents_) {
+    auto& tr = a.trail;
+    tr.erase(tr.begin(), std::find_if(tr.begin(), tr.end(), [&](const auto& p) { return p.first >= now_s - p_.trail_s; }));
+    agents.push_back({{"id", id},
+                      {"x1", a.x.x()},
+                      {"x2", a.x.y()},
+                      {"state", state(a, now_s)},
+                      {"model_time", a.model_time},
+                      {"epoch", a.epoch},
+                      {"heard", a.heard ? json(*a.heard) : json(nullptr)},
+                      {"lateness_us", optional_number(a.lateness_p99_us)}});
+    json pts = json::array();
+    for (const auto& p : tr) pts.push_back(point(p.second));
+    trails.push_back({{"id", id}, {"points", std::move(pts)}});
+  }
+  json out = json::object();
+  out["now_s"] = now_s;
+  out["model_time"] = t;
+  out["epoch"] = command_ ? epoch_ : chart_epoch_;  // a recording without commands.csv: the metrics' epoch
+  out["converged"] = converged_;
+  out["agents"] = std::move(agents);
+  out["trails"] = std::move(trails);
+  out["outline"] = nullptr;
+  if (command_) {
+    json pts = json::array();
+    for (const auto& x : outline(*command_, t, p_.outline_points)) pts.push_back(point(x));
+    out["outline"] = {{"points", std::move(pts)}, {"closed", command_->curve().closed()}};
+  }
+  out["centre"] = centre_ ? point(*centre_) : json(nullptr);
+  json path = json::array();
+  for (const auto& p : centre_path_.points()) path.push_back(json::array({round4(p[0]), round4(p[1])}));
+  out["centre_path"] = std::move(path);
+  json chart = json::array();
+  for (const auto& p : chart_.points()) {
+    json row = json::array();
+    for (const double v : p) row.push_back(std::isfinite(v) ? json(v) : json(nullptr));
+    chart.push_back(std::move(row));
+  }
+  out["chart"] = {{"columns", {"model_time", "shape_error_mean", "gap_cv", "agents_alive"}}, {"points", std::move(chart)}};
+  out["metrics"] = metrics_;
+  return out;
+}
+
+}  // namespace shapeform::view
