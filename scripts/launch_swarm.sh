@@ -92,6 +92,7 @@ done
 
 [ -n "$scenario" ] || die "--scenario: required (one of: $(cd "$root/config/scenarios" && ls ./*.yaml | sed 's|^\./||; s|\.yaml$||' | tr '\n' ' '))"
 [ -z "$fleet" ] || [ -z "$n" ] || die "-n: not with --fleet (the fleet file says which agents run where)"
+[ -z "$fleet" ] || [ $view -eq 0 ] || die "--view: not with --fleet yet (the view joins on this host's loopback; run shapeform_view on a host of the fleet with --set transport.profile=lan and its address, and --bind an address you can reach)"
 if [ -n "$n" ]; then
   { is_uint "$n" && [ "$n" -ge 1 ] && [ "$n" -le 1000 ]; } || die "-n: expected an integer 1..1000, got '$n'"
 fi
