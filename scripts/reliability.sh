@@ -34,7 +34,7 @@ while [ $# -gt 0 ]; do
   shift
 done
 if [ "$only" != stall ] && [ "$(id -u)" -ne 0 ]; then
-  echo "reliability: the LAN faults need root (network namespaces); run with sudo, or --only stall" >&2
+  echo "reliability: the LAN faults need root (network namespaces); run as root, or --only stall" >&2
   exit 1
 fi
 for exe in shapeform_agent shapeform_supervisor shapeform_echo; do
