@@ -16,6 +16,11 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness  # noqa: E402
 
 
+# test_every_scenario_runs runs two launches at a time: the second on this domain, kept for it in
+# tests/integration/CMakeLists.txt.
+SECOND_DOMAIN = 145
+
+
 def launcher():
     return os.path.join(harness.CONFIG["source"], "scripts", "launch_swarm.sh")
 
@@ -26,10 +31,11 @@ def build_dir():
 
 class LauncherTest(harness.SwarmTestCase):
 
-    def launch(self, args, name="launcher"):
-        """Starts the launcher with its own --runs folder (RUN_DIR/runs_NAME)."""
+    def launch(self, args, name="launcher", domain=None):
+        """Starts the launcher with its own --runs folder (RUN_DIR/runs_NAME), on the test's domain unless
+        another is given."""
         argv = ["bash", launcher(), "--build", build_dir(), "--runs", os.path.join(self.run_dir, "runs_" + name),
-                "--domain", str(self.domain)] + list(args)
+                "--domain", str(self.domain if domain is None else domain)] + list(args)
         return self.start(name, argv)
 
     def run_folder(self, proc):
@@ -47,47 +53,57 @@ class LauncherTest(harness.SwarmTestCase):
         return [e["epoch"] for e in harness.events(harness.read_text(os.path.join(run, "agent_%d.out" % i)),
                                                    "command")]
 
-    def assert_nothing_left(self, proc):
+    def assert_nothing_left(self, proc, domain=None):
         self.assertEqual(harness.processes_in_group(proc.pid), [], "processes left by the launcher")
-        self.assertEqual(harness.shapeform_processes_on_domain(self.domain), [], "shapeform processes left")
+        self.assertEqual(harness.shapeform_processes_on_domain(self.domain if domain is None else domain), [],
+                         "shapeform processes left")
         self.assertEqual(sorted(harness.shm_files() - self.shm_before), [], "new Fast DDS shm files")
 
     def test_every_scenario_runs(self):
         scenarios = sorted(glob.glob(os.path.join(harness.CONFIG["source"], "config", "scenarios", "*.yaml")))
         self.assertGreaterEqual(len(scenarios), 8)
-        for path in scenarios:
-            name = os.path.basename(path)[:-5]
-            with self.subTest(scenario=name):
+        # Two launches at a time, one on the test's domain and one on SECOND_DOMAIN: two small swarms
+        # side by side, each run checked as if alone.
+        for pair in (scenarios[k:k + 2] for k in range(0, len(scenarios), 2)):
+            runs = []
+            for path, domain in zip(pair, (self.domain, SECOND_DOMAIN)):
+                name = os.path.basename(path)[:-5]
                 expected = self.run_sim(path, ["--steps", "0"])  # the scenario's shape and size
                 # agent_timeout_s=5: an agent stalled by an overloaded host is still counted alive.
                 p = self.launch(["--scenario", name, "--steps", "60", "--rate", "50", "--json",
-                                 "--set", "supervisor.agent_timeout_s=5"], "launcher_" + name)
-                status = p.wait(120)
-                self.assertEqual(status, 0, "%s: launcher exit status" % name)
-                lines = p.out().splitlines()
-                self.assertEqual([e.get("event") for e in map(json.loads, lines)], ["run", "summary"],
-                                 "%s: stdout is the run line and the JSON summary" % name)
-                summary = json.loads(lines[-1])
-                self.assertEqual(summary["name"], expected["name"])
-                self.assertEqual(summary["shape"], expected["shape"], name)
-                self.assertEqual(summary["tracking"], expected["tracking"], name)
-                self.assertEqual(summary["agents"], expected["agents"], name)
-                self.assertEqual(summary["agents_seen"], expected["agents"], name)
-                self.assertEqual(summary["epoch"], 1)
-                self.assertEqual(summary["exit_status"], 0)
-                self.assertGreaterEqual(summary["steps"], 60)
-                run = self.run_folder(p)
-                self.assertEqual(json.loads(lines[0]), {"event": "run", "dir": run, "domain": self.domain,
-                                                        "agents": expected["agents"]})
-                self.assertTrue(os.path.basename(run).endswith("-%s-n%d" % (name, expected["agents"])), run)
-                for i in range(expected["agents"]):
-                    self.assertEqual(self.agent_epochs(run, i), [1], "%s: agent %d follows epoch 1" % (name, i))
-                self.assertIn("wait time 60", harness.read_text(os.path.join(run, "script.txt")))
-                rows = harness.read_csv(os.path.join(run, "record", "metrics.csv"))
-                self.assertTrue(any(r["epoch"] == "1" for r in rows), "%s: recorded metrics" % name)
-                self.assertEqual(summary["recording"], os.path.join(run, "record"))
-                self.assertIn("recording: " + os.path.join(run, "record"), p.log())
-                self.assert_nothing_left(p)
+                                 "--set", "supervisor.agent_timeout_s=5"], "launcher_" + name, domain)
+                runs.append((name, expected, p, domain))
+            for name, expected, p, domain in runs:
+                with self.subTest(scenario=name):
+                    self.check_scenario_run(name, expected, p, domain)
+
+    def check_scenario_run(self, name, expected, p, domain):
+        status = p.wait(120)
+        self.assertEqual(status, 0, "%s: launcher exit status" % name)
+        lines = p.out().splitlines()
+        self.assertEqual([e.get("event") for e in map(json.loads, lines)], ["run", "summary"],
+                         "%s: stdout is the run line and the JSON summary" % name)
+        summary = json.loads(lines[-1])
+        self.assertEqual(summary["name"], expected["name"])
+        self.assertEqual(summary["shape"], expected["shape"], name)
+        self.assertEqual(summary["tracking"], expected["tracking"], name)
+        self.assertEqual(summary["agents"], expected["agents"], name)
+        self.assertEqual(summary["agents_seen"], expected["agents"], name)
+        self.assertEqual(summary["epoch"], 1)
+        self.assertEqual(summary["exit_status"], 0)
+        self.assertGreaterEqual(summary["steps"], 60)
+        run = self.run_folder(p)
+        self.assertEqual(json.loads(lines[0]), {"event": "run", "dir": run, "domain": domain,
+                                                "agents": expected["agents"]})
+        self.assertTrue(os.path.basename(run).endswith("-%s-n%d" % (name, expected["agents"])), run)
+        for i in range(expected["agents"]):
+            self.assertEqual(self.agent_epochs(run, i), [1], "%s: agent %d follows epoch 1" % (name, i))
+        self.assertIn("wait time 60", harness.read_text(os.path.join(run, "script.txt")))
+        rows = harness.read_csv(os.path.join(run, "record", "metrics.csv"))
+        self.assertTrue(any(r["epoch"] == "1" for r in rows), "%s: recorded metrics" % name)
+        self.assertEqual(summary["recording"], os.path.join(run, "record"))
+        self.assertIn("recording: " + os.path.join(run, "record"), p.log())
+        self.assert_nothing_left(p, domain)
 
     def test_readme_main_command(self):
         # The README's main job, as written there (12 agent processes, the paper's circle, until
