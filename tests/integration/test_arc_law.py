@@ -42,7 +42,7 @@ class ArcLawOnProcesses(unittest.TestCase):
         self.launch("polar_star", ARGS.domain, 5.0)
 
     def test_polygon(self):
-        self.launch("polygon", ARGS.domain + 1, 5.0)
+        self.launch("polygon", ARGS.domain, 5.0)
 
 
 if __name__ == "__main__":
