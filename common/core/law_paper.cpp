@@ -48,7 +48,11 @@ Vec2 repulsion_term(std::int32_t self_id, const Vec2& xi, const std::vector<Neig
                     const Gains& g) {
   const int n = nearest_neighbour(xi, nbrs);
   if (n < 0 || g.r == 0.0) return Vec2::Zero();
-  const Vec2 d = xi - nbrs[n].x;
+  return repulsion_from(self_id, xi, nbrs[n].x, g);
+}
+
+Vec2 repulsion_from(std::int32_t self_id, const Vec2& xi, const Vec2& xn, const Gains& g) {
+  const Vec2 d = xi - xn;
   const double len = std::hypot(d.x(), d.y());
   if (len > 0.0 && std::isfinite(len)) return (g.r / len) * d;
   return g.r * escape_direction(self_id);

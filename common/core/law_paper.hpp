@@ -28,8 +28,11 @@ int nearest_neighbour(const Vec2& xi, const std::vector<Neighbour>& nbrs);
 /// the unit vector at the golden angle times id, so any two ids get different directions.
 Vec2 escape_direction(std::int32_t id);
 
-/// r (x_i - x_n)/|x_i - x_n| for the nearest neighbour n; zero without neighbours;
-/// r * escape_direction(self_id) when x_n coincides with x_i.
+/// r (x_i - x_n)/|x_i - x_n| away from a nearest neighbour at x_n; r * escape_direction(self_id) when
+/// x_n coincides with x_i.
+Vec2 repulsion_from(std::int32_t self_id, const Vec2& xi, const Vec2& xn, const Gains& g);
+
+/// repulsion_from the nearest neighbour n; zero without neighbours.
 Vec2 repulsion_term(std::int32_t self_id, const Vec2& xi, const std::vector<Neighbour>& nbrs,
                     const Gains& g);
 

@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "batch.hpp"
 #include "law.hpp"
 
 namespace shapeform::core {
@@ -13,13 +14,8 @@ std::vector<Vec2> uniform_start(int n, std::uint64_t seed, double half_width = 5
 /// How Swarm::step computes the velocities.
 enum class Kernel {
   Agent,  ///< every agent through agent_step, exactly as an agent process does (the scalar reference)
-  Batch   ///< paper law + Euler only: each pair computed once, vectorised (Eigen arrays), O(N) memory;
-          ///< the pair weights in single precision (relative error ~1e-7)
+  Batch   ///< paper law + Euler only: paper_velocities_batch (each pair once, vectorised, O(N) memory)
 };
-
-/// dx_i/dt of the paper's law for all agents at once (each pair once). v must have x's size.
-/// Equal to agent_velocity for every agent to ~1e-6 relative (single-precision weights; tested).
-void paper_velocities_batch(const CompiledCommand& cmd, const std::vector<Vec2>& x, double t, std::vector<Vec2>& v);
 
 class Swarm {
  public:
@@ -29,6 +25,8 @@ class Swarm {
   /// Batch is used only where it applies (paper law, Euler); elsewhere Agent.
   void set_kernel(Kernel k) { kernel_ = k; }
   Kernel kernel() const { return kernel_; }
+  /// How the batched kernel runs (instruction set, threads).
+  void set_batch(const BatchOptions& b) { batch_ = b; }
   void set_command(const CompiledCommand& cmd) { cmd_ = cmd; }
   const CompiledCommand& command() const { return cmd_; }
   const std::vector<Vec2>& positions() const { return x_; }
@@ -44,6 +42,7 @@ class Swarm {
   double t_ = 0.0;
   long steps_ = 0;
   Kernel kernel_ = Kernel::Agent;
+  BatchOptions batch_;
   std::vector<Vec2> v_;
 };
 

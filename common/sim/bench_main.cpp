@@ -26,14 +26,26 @@ int main(int argc, char** argv) {
   int agents = 1000;
   long steps = 100;
   std::string impl = "fast";
+  std::string simd = std::string(core::to_string(core::simd_best()));
+  int threads = 1;
   app.cli().add_option("--agents", agents, "swarm size")->check(CLI::Range(1, 1000000));
   app.cli().add_option("--steps", steps, "steps to time")->check(CLI::Range(1L, 100000000L));
   app.cli().add_option("--impl", impl, "fast (batched, vectorised) | reference (scalar, per agent)")
       ->check(CLI::IsMember({"fast", "reference"}));
+  std::vector<std::string> isas;
+  for (const core::Simd s : core::simd_available()) isas.emplace_back(core::to_string(s));
+  app.cli().add_option("--simd", simd, "instruction set of the fast kernel (default: the widest this CPU runs)")
+      ->check(CLI::IsMember(isas));
+  app.cli().add_option("--threads", threads, "threads of the fast kernel's pair pass")->check(CLI::Range(1, 64));
   if (const auto rc = app.parse(argc, argv)) return *rc;
   core::CompiledCommand cmd;  // the paper's circle
   core::Swarm swarm(cmd, core::uniform_start(agents, 1, 5.0));
   swarm.set_kernel(impl == "fast" ? core::Kernel::Batch : core::Kernel::Agent);
+  core::BatchOptions batch;
+  for (const core::Simd s : core::simd_available())
+    if (core::to_string(s) == simd) batch.simd = s;
+  batch.threads = threads;
+  swarm.set_batch(batch);
   swarm.step();  // warm-up (allocations)
   const auto t0 = std::chrono::steady_clock::now();
   for (long k = 0; k < steps; ++k) swarm.step();
@@ -42,6 +54,8 @@ int main(int argc, char** argv) {
   j["agents"] = agents;
   j["steps"] = steps;
   j["impl"] = impl;
+  j["simd"] = impl == "fast" ? nlohmann::json(simd) : nlohmann::json(nullptr);
+  j["threads"] = impl == "fast" ? threads : 1;
   j["seconds"] = secs;
   j["steps_per_s"] = static_cast<double>(steps) / secs;
   j["rss_mb"] = rss_mb();

@@ -1,0 +1,16 @@
+// The pair pass with AVX2 and FMA (built with -mavx2 -mfma; called only where the CPU has them).
+#include <immintrin.h>
+
+#include "batch_kernel.hpp"
+
+namespace shapeform::core::batch {
+namespace {
+struct Isa : Lanes<4, Isa> {
+  static V fma(V a, V b, V c) { return _mm256_fmadd_pd(a, b, c); }
+};
+}  // namespace
+
+void pairs_avx2(const PairPass& p, std::int64_t row_begin, std::int64_t row_end) {
+  PairKernel<Isa>::run(p, row_begin, row_end);
+}
+}  // namespace shapeform::core::batch

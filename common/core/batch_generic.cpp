@@ -1,0 +1,14 @@
+// The pair pass for any CPU: two-lane vectors (SSE2 on x86-64), no FMA.
+#include "batch_kernel.hpp"
+
+namespace shapeform::core::batch {
+namespace {
+struct Isa : Lanes<2, Isa> {
+  static V fma(V a, V b, V c) { return a * b + c; }
+};
+}  // namespace
+
+void pairs_generic(const PairPass& p, std::int64_t row_begin, std::int64_t row_end) {
+  PairKernel<Isa>::run(p, row_begin, row_end);
+}
+}  // namespace shapeform::core::batch
