@@ -7,6 +7,7 @@ namespace shapeform::core::batch {
 namespace {
 struct Isa : Lanes<4, Isa> {
   static V fma(V a, V b, V c) { return _mm256_fmadd_pd(a, b, c); }
+  static V fnma(V a, V b, V c) { return _mm256_fnmadd_pd(a, b, c); }
 };
 }  // namespace
 

@@ -11,11 +11,12 @@ namespace shapeform::core::batch {
 namespace {
 struct Isa : Lanes<8, Isa> {
   static V fma(V a, V b, V c) { return _mm512_fmadd_pd(a, b, c); }
+  static V fnma(V a, V b, V c) { return _mm512_fnmadd_pd(a, b, c); }
 
   /// Constants of pow_neg for one exponent: 16-entry tables (two registers each, read with one
   /// permute) and polynomials near-minimax on the reduced ranges (Chebyshev fits).
   struct Pow {
-    V mbeta, q[7], p[7], inv[2], log[2], exp[2];
+    V mbeta, q[7], p[7], inv[2], mlog[2], exp[2];
     explicit Pow(double mb) : mbeta(splat(mb)) {
       // log2(1 + r) / r for |r| <= 0.0304, degree 6 (relative error 5e-14 on a term below 0.045).
       constexpr double qc[7] = {1.4426950408889634, -0.7213475204597833, 0.4808983469765897, -0.36067362695320027,
@@ -23,7 +24,7 @@ struct Isa : Lanes<8, Isa> {
       // 2^r for |r| <= 1/32, degree 6 (relative error 8e-18).
       constexpr double pc[7] = {1.0, 0.6931471805599468, 0.24022650695910086, 0.05550410865209357,
                                 0.009618129106525682, 0.001333381881538924, 0.0001540375624545771};
-      // 1 / (1 + (j + 1/2)/16), its -log2, and 2^(j/16), j = 0..15.
+      // 1 / (1 + (j + 1/2)/16), its -log2 (here times mbeta), and 2^(j/16), j = 0..15.
       constexpr double inv_c[16] = {0.9696969696969697, 0.9142857142857143, 0.8648648648648649, 0.8205128205128205,
                                     0.7804878048780488, 0.7441860465116279, 0.7111111111111111, 0.6808510638297872,
                                     0.6530612244897959, 0.6274509803921569, 0.6037735849056604, 0.5818181818181818,
@@ -38,7 +39,8 @@ struct Isa : Lanes<8, Isa> {
                                     1.4142135623730951, 1.4768261459394993, 1.5422108254079407, 1.6104903319492543,
                                     1.681792830507429, 1.7562521603732995, 1.8340080864093424, 1.9152065613971474};
       for (int k = 0; k < 7; ++k) q[k] = splat(qc[k] * mb), p[k] = splat(pc[k]);
-      for (int h = 0; h < 2; ++h) inv[h] = load(inv_c + 8 * h), log[h] = load(log_c + 8 * h), exp[h] = load(exp_c + 8 * h);
+      for (int h = 0; h < 2; ++h)
+        inv[h] = load(inv_c + 8 * h), mlog[h] = load(log_c + 8 * h) * mb, exp[h] = load(exp_c + 8 * h);
     }
   };
 
@@ -55,8 +57,8 @@ struct Isa : Lanes<8, Isa> {
     const V r2 = r * r;
     const V q03 = fma(fma(c.q[3], r, c.q[2]), r2, fma(c.q[1], r, c.q[0]));
     const V q46 = fma(c.q[6], r2, fma(c.q[5], r, c.q[4]));
-    // t = mbeta (e + log2 m) = mbeta (e - log2 inv_j) + r mbeta q(r)
-    const V t = fma(r, fma(q46, r2 * r2, q03), c.mbeta * (e + _mm512_permutex2var_pd(c.log[0], j, c.log[1])));
+    // t = mbeta (e + log2 m) = mbeta e - mbeta log2 inv_j + r mbeta q(r)
+    const V t = fma(r, fma(q46, r2 * r2, q03), fma(c.mbeta, e, _mm512_permutex2var_pd(c.mlog[0], j, c.mlog[1])));
     // 2^t = 2^floor(n) 2^(k/16) 2^f: n = t to the nearest 16th, k = 16 n mod 16, f = t - n, |f| <= 1/32.
     const V n = _mm512_roundscale_pd(t, (4 << 4) | _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC);
     const V f = t - n;  // exact

@@ -5,6 +5,7 @@ namespace shapeform::core::batch {
 namespace {
 struct Isa : Lanes<2, Isa> {
   static V fma(V a, V b, V c) { return a * b + c; }
+  static V fnma(V a, V b, V c) { return c - a * b; }
 };
 }  // namespace
 
