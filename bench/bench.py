@@ -26,6 +26,7 @@ import subprocess
 import sys
 import threading
 import time
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -833,7 +834,8 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="1 run per row and short windows")
     ap.add_argument("--runs", type=int, help="runs per row (default 3; 1 with --quick)")
     ap.add_argument("--window", type=float, help="measurement window, s (default: max(30, 1100 ticks); 12 with --quick)")
-    ap.add_argument("--only", action="append", default=[], help="row id or prefix to run (repeatable)")
+    ap.add_argument("--only", action="append", default=[],
+                    help="row id or prefix to run (repeatable); `sim`: the simulator rows")
     ap.add_argument("--row", action="append", default=[],
                     help="ad-hoc row KIND:N:RATE[:PRESET[:STAGGER_S[:GROUP[:view]]]] (stored, shown under experiments)")
     ap.add_argument("--levers", action="store_true", help="also run the lever rows")
@@ -882,6 +884,7 @@ def main(argv=None) -> int:
             print("main  ", r.id)
         for r in lever_rows:
             print("lever ", r.id)
+        print("sim    sim (every simulator row)")
         return 0
 
     results_path = Path(args.results)
@@ -926,11 +929,13 @@ def main(argv=None) -> int:
             print(f"bench: unknown preset {r.preset}; known: {', '.join(PRESETS)}", file=sys.stderr)
             return 2
         selected.append(r)
+    run_sim = not args.no_sim and ((not args.only and not args.row) or "sim" in args.only)
+    only_rows = [o for o in args.only if o != "sim"]
     if args.only:
         pool = all_rows + lever_rows + selected
         selected = [r for r in dict((r.id, r) for r in pool).values()
-                    if any(r.id == o or r.id.startswith(o) for o in args.only)]
-        if not selected:
+                    if any(r.id == o or r.id.startswith(o) for o in only_rows)]
+        if not selected and not run_sim:
             print("bench: --only matched no row (see --list)", file=sys.stderr)
             return 2
     seen = set()
@@ -953,8 +958,12 @@ def main(argv=None) -> int:
         results_path.parent.mkdir(parents=True, exist_ok=True)
         results_path.write_text(json.dumps(store, indent=1, default=str))
         render(store, Path(args.report), report_plan(store))  # partial results stay readable
-    if not args.no_sim and not args.only and not args.row:
-        store["sim"] = sim_rows(bindir, args.quick)
+    if run_sim:
+        # Each call waits (up to a minute) for a quiet host, as the agent rows do.
+        sim_ctx = dataclasses.replace(ctx, quiet_wait_s=min(ctx.quiet_wait_s, 60.0))
+        store["sim"] = sim_rows(bindir, args.quick, before=lambda: wait_quiet(sim_ctx))
+        store["sim"]["commit"] = git_commit()
+        store["sim"]["quick"] = bool(args.quick)
         results_path.write_text(json.dumps(store, indent=1, default=str))
     render(store, Path(args.report), report_plan(store))
     log(f"wrote {args.report} and {results_path}")

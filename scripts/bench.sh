@@ -5,7 +5,8 @@
 #  - agents (one process each, or grouped) against a bare Fast DDS pub/sub baseline with the same payload,
 #    transport and rate, N = 10, 25, 50, 100 (20 Hz; 50 Hz for N <= 25);
 #  - the transport levers, measured one at a time (--levers);
-#  - simulator throughput (build/bin/shapeform_bench_sim), N = 100, 1000, 10000.
+#  - simulator throughput (build/bin/shapeform_bench_sim), N = 100, 1000, 10000, against the core's peak
+#    multiply-add rate (run alone: --only sim).
 # Rows not run keep their committed results (docs/figures/bench_results.json), so a partial run renders
 # a whole report. Run ./scripts/build.sh first. All DDS traffic stays on loopback (domains 200..229 by
 # default). The kernel's socket limits (net.core.rmem_max) are read and reported, never changed.
@@ -14,7 +15,8 @@
 #                         [--out DIR | --write-docs] [--help]
 #   --quick       1 run per row, 12 s windows (minutes instead of about an hour; lateness then includes start-up)
 #   --levers      also run the lever rows (socket buffers, multicast, announcement period, stagger, grouping)
-#   --only ROW    run only this row (or id prefix), keep the stored others, re-render the report
+#   --only ROW    run only this row (or id prefix; `sim`: the simulator rows), keep the stored others,
+#                 re-render the report
 #   --list        list the row ids
 #   --out DIR     the output folder
 #   --write-docs  rewrite the committed docs/BENCHMARKS.md and docs/figures/bench_*

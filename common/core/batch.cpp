@@ -1,6 +1,7 @@
 #include "batch.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cfloat>
 #include <cmath>
 #include <limits>
@@ -35,6 +36,25 @@ std::vector<Simd> simd_available() {
 Simd simd_best() {
   static const Simd best = simd_available().back();
   return best;
+}
+
+int simd_lanes(Simd s) { return s == Simd::Avx512 ? 8 : s == Simd::Avx2 ? 4 : 2; }
+
+double fma_peak(Simd s, double seconds) {
+  double (*chains)(std::int64_t) = batch::fma_chains_generic;
+#if defined(SHAPEFORM_BATCH_X86)
+  if (s == Simd::Avx512) chains = batch::fma_chains_avx512;
+  if (s == Simd::Avx2) chains = batch::fma_chains_avx2;
+#endif
+  // Double the rounds until one call lasts `seconds` (the first calls also warm the core up).
+  for (std::int64_t rounds = 1 << 16;; rounds *= 2) {
+    const auto t0 = std::chrono::steady_clock::now();
+    volatile double sink = chains(rounds);
+    (void)sink;
+    const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (took >= seconds || rounds >= (std::int64_t{1} << 40))
+      return 12.0 * static_cast<double>(rounds) * simd_lanes(s) / took;
+  }
 }
 
 namespace {

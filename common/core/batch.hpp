@@ -23,6 +23,14 @@ std::vector<Simd> simd_available();
 /// The widest of simd_available().
 Simd simd_best();
 
+/// Lanes per vector of s (2, 4 or 8 doubles).
+int simd_lanes(Simd s);
+
+/// Double-precision multiply-adds per second one thread sustains with s on this CPU (lanes x vector
+/// multiply-adds per second, measured over about `seconds` on independent chains): the peak the
+/// pair pass is compared with. Without FMA (Generic) a multiply and an add count as one.
+double fma_peak(Simd s, double seconds = 0.2);
+
 /// How paper_velocities_batch runs.
 struct BatchOptions {
   Simd simd = simd_best();  ///< must be one of simd_available()

@@ -12,6 +12,7 @@ namespace {
 struct Isa : Lanes<8, Isa> {
   static V fma(V a, V b, V c) { return _mm512_fmadd_pd(a, b, c); }
   static V fnma(V a, V b, V c) { return _mm512_fnmadd_pd(a, b, c); }
+  static V sqrt(V v) { return _mm512_sqrt_pd(v); }
 
   /// Constants of pow_neg for one exponent: 16-entry tables (two registers each, read with one
   /// permute) and polynomials near-minimax on the reduced ranges (Chebyshev fits).
@@ -74,4 +75,6 @@ struct Isa : Lanes<8, Isa> {
 void pairs_avx512(const PairPass& p, std::int64_t row_begin, std::int64_t row_end) {
   PairKernel<Isa>::run(p, row_begin, row_end);
 }
+
+double fma_chains_avx512(std::int64_t iterations) { return fma_chains<Isa>(iterations); }
 }  // namespace shapeform::core::batch

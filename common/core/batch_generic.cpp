@@ -12,4 +12,6 @@ struct Isa : Lanes<2, Isa> {
 void pairs_generic(const PairPass& p, std::int64_t row_begin, std::int64_t row_end) {
   PairKernel<Isa>::run(p, row_begin, row_end);
 }
+
+double fma_chains_generic(std::int64_t iterations) { return fma_chains<Isa>(iterations); }
 }  // namespace shapeform::core::batch

@@ -29,6 +29,12 @@ struct Lanes {
     return v;
   }
   static void store(double* p, V v) { __builtin_memcpy(p, &v, sizeof v); }
+  static V sqrt(V v) {  // lane by lane: the generic vectors have no square root
+    double l[W] = {};
+    store(l, v);
+    for (double& x : l) x = __builtin_sqrt(x);
+    return load(l);
+  }
 
   /// The power's constants for one exponent, made once per pass: log2 m = s q(s^2) with
   /// s = (m - 1)/(m + 1) for m in [0.75, 1.5) (q of degree 7, near-minimax: a Chebyshev fit, relative
@@ -83,6 +89,23 @@ struct PairKernel {
   using M = typename Isa::M;
   static constexpr int kW = Isa::kWidth;
 
+  /// The pair weight u^-beta, u = sigma^2 + d^2: Isa::pow_neg for any beta.
+  struct AnyBeta {
+    typename Isa::Pow c;
+    V operator()(V u) const { return Isa::pow_neg(u, c); }
+  };
+  /// ... and for beta = k/2, k = 1..4, from a square root, a product and a division, each correctly
+  /// rounded: within 2 ulp of std::pow and a quarter of the time (beta = 1: 1/u).
+  template <int k>
+  struct HalfBeta {
+    V operator()(V u) const {
+      if constexpr (k == 1) return 1.0 / Isa::sqrt(u);
+      if constexpr (k == 2) return 1.0 / u;
+      if constexpr (k == 3) return 1.0 / (u * Isa::sqrt(u));
+      return 1.0 / (u * u);
+    }
+  };
+
   /// R rows' running state: their agents' coordinates and index, and per lane the sums and the
   /// nearest partner so far.
   template <int R>
@@ -93,8 +116,8 @@ struct PairKernel {
   /// The pairs (rows' agent, j + lane) of one vector for R rows at once (consecutive agents i,
   /// i + 1, ... all below j): j's outputs read and written once for all R, each row's kept in
   /// registers. With `tail`, lanes at or past `end` take no part.
-  template <int R, bool tail>
-  static void block(const PairPass& p, const typename Isa::Pow& pow, std::int64_t j, double end, Rows<R>& rs) {
+  template <int R, bool tail, class Weight>
+  static void block(const PairPass& p, const Weight& weight, std::int64_t j, double end, Rows<R>& rs) {
     const V jv = lane() + static_cast<double>(j);
     const V xj = Isa::load(p.x + j), yj = Isa::load(p.y + j);
     V sx = Isa::load(p.sx + j), sy = Isa::load(p.sy + j), jd = Isa::load(p.nd2 + j), jid = Isa::load(p.nid + j);
@@ -102,7 +125,7 @@ struct PairKernel {
     for (int r = 0; r < R; ++r) {
       const V dx = xj - rs.x[r], dy = yj - rs.y[r];
       V d2 = dx * dx + dy * dy;  // as the per-agent law rounds it (no FMA): the same nearest neighbours
-      V w = Isa::pow_neg(p.s2 + d2, pow);
+      V w = weight(p.s2 + d2);
       if (tail) {
         const M valid = jv < end;
         w = valid ? w : V{};
@@ -133,11 +156,11 @@ struct PairKernel {
   }
 
   /// Rows i .. i + R - 1 against every j from `from` (> i + R - 1) to n.
-  template <int R>
-  static void rows(const PairPass& p, const typename Isa::Pow& pow, Rows<R>& rs, std::int64_t from) {
+  template <int R, class Weight>
+  static void rows(const PairPass& p, const Weight& weight, Rows<R>& rs, std::int64_t from) {
     std::int64_t j = from;
-    for (; j + kW <= p.n; j += kW) block<R, false>(p, pow, j, 0.0, rs);
-    if (j < p.n) block<R, true>(p, pow, j, static_cast<double>(p.n), rs);
+    for (; j + kW <= p.n; j += kW) block<R, false>(p, weight, j, 0.0, rs);
+    if (j < p.n) block<R, true>(p, weight, j, static_cast<double>(p.n), rs);
   }
 
   /// Adds row i's lanes to agent i's outputs. i's candidates so far have lower ids than any lane's,
@@ -176,9 +199,18 @@ struct PairKernel {
   /// 1.01 ns per pair for 1 to 4 rows): more rows spill registers.
   static constexpr int kRows = 2;
 
-  static void run(const PairPass& pass, std::int64_t row_begin, std::int64_t row_end) {
+  static void run(const PairPass& p, std::int64_t row_begin, std::int64_t row_end) {
+    const double k = -2.0 * p.mbeta;
+    if (k == 1.0) return run(p, row_begin, row_end, HalfBeta<1>{});
+    if (k == 2.0) return run(p, row_begin, row_end, HalfBeta<2>{});
+    if (k == 3.0) return run(p, row_begin, row_end, HalfBeta<3>{});
+    if (k == 4.0) return run(p, row_begin, row_end, HalfBeta<4>{});
+    run(p, row_begin, row_end, AnyBeta{typename Isa::Pow(p.mbeta)});
+  }
+
+  template <class Weight>
+  static void run(const PairPass& pass, std::int64_t row_begin, std::int64_t row_end, const Weight& weight) {
     const PairPass p = pass;  // a local copy: the stores below cannot change it, so it stays in registers
-    const typename Isa::Pow pow(p.mbeta);
     std::int64_t i = row_begin;
     for (; i + kRows <= row_end && i + kRows < p.n; i += kRows) {
       Rows<kRows> group;
@@ -187,20 +219,42 @@ struct PairKernel {
       for (int r = 0; r + 1 < kRows; ++r) {
         Rows<1> one;
         start(p, one, i + r);
-        block<1, true>(p, pow, i + r + 1, static_cast<double>(i + kRows), one);
+        block<1, true>(p, weight, i + r + 1, static_cast<double>(i + kRows), one);
         group.ax[r] = one.ax[0], group.ay[r] = one.ay[0], group.best[r] = one.best[0], group.best_j[r] = one.best_j[0];
       }
-      rows(p, pow, group, i + kRows);
+      rows(p, weight, group, i + kRows);
       for (int r = 0; r < kRows; ++r) finish(p, group, r, i + r);
     }
     for (; i < row_end; ++i) {
       Rows<1> one;
       start(p, one, i);
-      rows(p, pow, one, i + 1);
+      rows(p, weight, one, i + 1);
       finish(p, one, 0, i);
     }
   }
 };
+
+/// `iterations` rounds of 12 independent fused multiply-adds: 12 chains cover the latency of two
+/// pipes, so this runs at the core's peak multiply-add rate (the pair pass's yardstick). Returns a
+/// sum of the results, which keeps them live.
+template <class Isa>
+double fma_chains(std::int64_t iterations) {
+  using V = typename Isa::V;
+  const V x = Isa::splat(0.9999999), y = Isa::splat(1e-7);
+  V a0 = Isa::splat(0.0), a1 = Isa::splat(0.1), a2 = Isa::splat(0.2), a3 = Isa::splat(0.3), a4 = Isa::splat(0.4),
+    a5 = Isa::splat(0.5), a6 = Isa::splat(0.6), a7 = Isa::splat(0.7), a8 = Isa::splat(0.8), a9 = Isa::splat(0.9),
+    a10 = Isa::splat(1.0), a11 = Isa::splat(1.1);
+  for (std::int64_t k = 0; k < iterations; ++k) {
+    a0 = Isa::fma(a0, x, y), a1 = Isa::fma(a1, x, y), a2 = Isa::fma(a2, x, y), a3 = Isa::fma(a3, x, y);
+    a4 = Isa::fma(a4, x, y), a5 = Isa::fma(a5, x, y), a6 = Isa::fma(a6, x, y), a7 = Isa::fma(a7, x, y);
+    a8 = Isa::fma(a8, x, y), a9 = Isa::fma(a9, x, y), a10 = Isa::fma(a10, x, y), a11 = Isa::fma(a11, x, y);
+  }
+  double lanes[Isa::kWidth] = {};
+  Isa::store(lanes, ((a0 + a1) + (a2 + a3)) + ((a4 + a5) + (a6 + a7)) + ((a8 + a9) + (a10 + a11)));
+  double sum = 0.0;
+  for (double l : lanes) sum += l;
+  return sum;
+}
 
 }  // namespace
 }  // namespace shapeform::core::batch

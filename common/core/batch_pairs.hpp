@@ -29,9 +29,13 @@ struct PairPass {
 
 /// Adds the pairs (i, j), row_begin <= i < row_end, i < j < n, to both i's and j's outputs.
 void pairs_generic(const PairPass& p, std::int64_t row_begin, std::int64_t row_end);
+/// 12 x `iterations` independent vector multiply-adds at the core's peak rate; returns a checksum.
+double fma_chains_generic(std::int64_t iterations);
 #if defined(SHAPEFORM_BATCH_X86)
 void pairs_avx2(const PairPass& p, std::int64_t row_begin, std::int64_t row_end);    ///< AVX2 + FMA
 void pairs_avx512(const PairPass& p, std::int64_t row_begin, std::int64_t row_end);  ///< AVX-512 F + DQ
+double fma_chains_avx2(std::int64_t iterations);
+double fma_chains_avx512(std::int64_t iterations);
 #endif
 
 }  // namespace shapeform::core::batch
