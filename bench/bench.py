@@ -959,8 +959,8 @@ def main(argv=None) -> int:
         results_path.write_text(json.dumps(store, indent=1, default=str))
         render(store, Path(args.report), report_plan(store))  # partial results stay readable
     if run_sim:
-        # Each call waits (up to a minute) for a quiet host, as the agent rows do.
-        sim_ctx = dataclasses.replace(ctx, quiet_wait_s=min(ctx.quiet_wait_s, 60.0))
+        # Each call waits (up to two minutes) for a quiet host, as the agent rows do.
+        sim_ctx = dataclasses.replace(ctx, quiet_wait_s=min(ctx.quiet_wait_s, 120.0))
         store["sim"] = sim_rows(bindir, args.quick, before=lambda: wait_quiet(sim_ctx))
         store["sim"]["commit"] = git_commit()
         store["sim"]["quick"] = bool(args.quick)

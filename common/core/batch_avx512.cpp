@@ -10,8 +10,8 @@
 namespace shapeform::core::batch {
 namespace {
 struct Isa : Lanes<8, Isa> {
-  static V fma(V a, V b, V c) { return _mm512_fmadd_pd(a, b, c); }
-  static V fnma(V a, V b, V c) { return _mm512_fnmadd_pd(a, b, c); }
+  static V fma(V a, V b, V c) { return _mm512_fmadd_pd(a, b, c); }   // a b + c, rounded once
+  static V fnma(V a, V b, V c) { return _mm512_fnmadd_pd(a, b, c); }  // c - a b, rounded once
   static V sqrt(V v) { return _mm512_sqrt_pd(v); }
 
   /// Constants of pow_neg for one exponent: 16-entry tables (two registers each, read with one

@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   bool verbose = false;
   std::string kernel = "auto";
   int outline = 0;
+  int threads = 1;
   app.add_config_options("scenario YAML file (default: built-in defaults)", false);
   cli.add_option("--agents", agents, "number of agents (overrides swarm.agents)");
   cli.add_option("--seed", seed, "seed of the uniform start (overrides swarm.seed)");
@@ -47,8 +48,12 @@ int main(int argc, char** argv) {
   cli.add_flag("--verbose", verbose, "print the effective configuration on stderr");
   cli.add_option("--kernel", kernel,
                  "auto | agent (each agent through agent_step, as agent processes) | batch (paper law + Euler: "
-                 "each pair once, vectorised); auto = batch from 64 agents")
+                 "each pair once, vectorised for this CPU); auto = batch from 64 agents")
       ->check(CLI::IsMember({"auto", "agent", "batch"}));
+  cli.add_option("--threads", threads,
+                 "threads of the batched kernel's pair pass (each takes an equal share of the pairs; the sums' "
+                 "rounding depends on it)")
+      ->check(CLI::Range(1, 64));
   cli.add_option("--outline", outline, "add `outline`: this many points along the shape at the final time")
       ->check(CLI::Range(0, 100000));
   cli.add_option("--outline-time", outline_time,
@@ -106,6 +111,7 @@ int main(int argc, char** argv) {
   opt.kernel = kernel == "agent"   ? core::Kernel::Agent
                : kernel == "batch" ? core::Kernel::Batch
                                    : sim::auto_kernel(static_cast<int>(start.size()));
+  opt.batch.threads = threads;
 
   record::Recorder recorder;
   if (!record_dir.empty()) {

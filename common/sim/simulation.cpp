@@ -45,6 +45,7 @@ SimResult run_simulation(const core::CompiledCommand& cmd, std::vector<core::Vec
                          const SimOptions& opt) {
   core::Swarm swarm(cmd, std::move(start));
   swarm.set_kernel(opt.kernel);
+  swarm.set_batch(opt.batch);
   std::vector<core::Vec2> last = swarm.positions();
   core::ConvergenceDetector verdict(opt.converge);
   verdict.set_command(cmd);

@@ -28,6 +28,7 @@ struct SimOptions {
   core::SettleParams settle;
   core::ConvergenceParams converge;  ///< the verdict (core::ConvergenceDetector), as the supervisor's
   core::Kernel kernel = core::Kernel::Agent;  ///< see core::Kernel (Batch applies to paper law + Euler)
+  core::BatchOptions batch;                   ///< how the batched kernel runs (instruction set, threads)
 };
 
 /// The kernel "auto" picks: the batched one from 64 agents on, where it pays; the agent path below.
