@@ -87,7 +87,7 @@ class Capture:
             os.remove(self.path)
         where = ["ip", "netns", "exec", self.namespace] if self.namespace else []  # None: this namespace
         self.proc = subprocess.Popen(
-            where + ["tcpdump", "-i", self.iface, "-n", "-U", "--immediate-mode",
+            where + ["tcpdump", "-i", self.iface, "-n", "-U", "--immediate-mode", "-B", "32768",
              "-Z", "root", "-w", self.path, self.bpf],
             stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
         listening = threading.Event()
