@@ -77,8 +77,8 @@ struct TransportProblem {
 /// Every problem of cfg, in the table's key order: each number within its declared range, the profile
 /// known, interfaces and peers IPv4 addresses, discovery_server "host:port" (host an IPv4 address or
 /// localhost, port 1..65535), announce_s < lease_s, multicast_data only on loopback (or a discovery
-/// server on it) or lan without peers, security.keystore given when security.enabled, security.identity
-/// empty or a valid enclave name. Empty when valid.
+/// server on it) or lan without peers, security.keystore given when security.enabled and the profile not
+/// discovery-server, security.identity empty or a valid enclave name. Empty when valid.
 std::vector<TransportProblem> transport_problems(const TransportConfig& cfg);
 
 /// "host:port" with host an IPv4 literal or "localhost" (read as 127.0.0.1) and port 1..65535

@@ -172,6 +172,8 @@ TEST_CASE("security properties name the enclave's six files and the three builti
 TEST_CASE("security keys: validated, identity derived from the role", "[dds][security][config]") {
   CHECK_THROWS_WITH(config::load("", {"security.enabled=true"}),
                     Catch::Contains("security.keystore: must name a keystore folder"));
+  CHECK_THROWS_WITH(config::load("", {"security.enabled=true", "security.keystore=/k", "transport.profile=discovery-server"}),
+                    Catch::Contains("security.enabled: cannot be used with transport.profile discovery-server"));
   CHECK_THROWS_WITH(config::load("", {"security.identity=../etc"}),
                     Catch::Contains("security.identity: must be empty or an enclave name"));
   const auto c = config::load("", {"security.enabled=true", "security.keystore=/k"});
