@@ -98,10 +98,10 @@ std::vector<P> build_table() {
       [](auto& c) -> auto& { return c.multicast_data; }));
   t.push_back(param<bool>(
       Type::Bool, "security.enabled", "", {},
-      "DDS Security: every participant authenticated (PKI-DH: certificates of the keystore's identity authority), access-controlled "
-      "(signed permissions per identity: only the supervisor commands) and its discovery and data encrypted "
-      "(AES-GCM); participants without valid keys are refused. A bad or missing key file stops the program "
-      "with exit 2 (docs/SECURITY.md)",
+      "DDS Security: every participant authenticated (PKI-DH: certificates of the keystore's identity "
+      "authority), access-controlled (signed permissions per identity: only the supervisor commands) and its "
+      "discovery and data encrypted (AES-GCM); participants without valid keys are refused. A bad or missing key "
+      "file stops the program with exit 2 (docs/SECURITY.md)",
       "", [](auto& c) -> auto& { return c.security.enabled; }));
   t.push_back(param<std::string>(
       Type::Text, "security.keystore", "", {},
