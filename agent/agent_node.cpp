@@ -276,8 +276,10 @@ void AgentNode::reject(const char* what, const std::string& log_line, const std:
 }
 
 void AgentNode::recover_from_stall() {
-  for (const dds::SourceId& refused : node_.take_refused())
-    if (opt_.json) emit({{"event", "refused"}, {"participant", dds::to_string(refused)}, {"by", dds::to_string(node_.source())}});
+  for (const dds::SourceId& refused : node_.take_refused()) {
+    if (opt_.json)
+      emit({{"event", "refused"}, {"participant", dds::to_string(refused)}, {"by", dds::to_string(node_.source())}});
+  }
   const auto stall_s = node_.recover_if_stalled(1.0 / cfg_.agent.rate_hz);
   if (!stall_s) return;
   identity_.rebuilt(node_.source());  // a new GUID prefix: our samples carry both

@@ -174,10 +174,15 @@ SourceId Node::source() const {
 
 std::vector<SourceId> Node::take_refused() {
   if (!entities_->refused) return {};
-  std::vector<SourceId> refused = entities_->refused->take();
-  for (const SourceId& s : take_permission_refusals())
-    if (std::find(refused.begin(), refused.end(), s) == refused.end()) refused.push_back(s);
-  for (const SourceId& s : refused) {
+  std::vector<SourceId> heard = entities_->refused->take();
+  for (const SourceId& s : take_permission_refusals()) heard.push_back(s);
+  std::vector<SourceId> refused;
+  auto& reported = entities_->refused_reported;
+  for (const SourceId& s : heard) {
+    if (reported.count(s) != 0) continue;
+    if (reported.size() >= kRefusedRemembered) reported.clear();
+    reported.insert(s);
+    refused.push_back(s);
     util::log_warn("security: participant " + to_string(s) +
                    " refused (no valid certificate of this swarm's authority, or permissions that do not verify)");
   }

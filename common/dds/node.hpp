@@ -15,6 +15,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -62,6 +63,9 @@ struct Received {
   SourceId source;
 };
 
+/// How many refused participants a Node remembers having reported (a flood of fake ones stays bounded).
+inline constexpr std::size_t kRefusedRemembered = 4096;
+
 /// Default bound of a Reader's mailbox; samples beyond it (nobody draining) are dropped and counted.
 inline constexpr std::size_t kDefaultMailboxCapacity = 16384;
 
@@ -107,6 +111,9 @@ struct Entities {
   /// Hears refused participants when security is enabled (set before the first participant, which
   /// it outlives: members go after ~Entities() deleted the participant).
   std::unique_ptr<RefusedWatch> refused;
+  /// The refused participants reported so far (each once: a refused peer retries its handshake for ever);
+  /// at most kRefusedRemembered, then forgotten and reported again.
+  std::set<SourceId> refused_reported;
   /// The live handles' endpoints, recreated by Node::rebuild() on the new participant.
   std::vector<std::weak_ptr<WriterSlot>> writers;
   std::vector<std::weak_ptr<ReaderSlot>> readers;
@@ -383,8 +390,8 @@ class Node {
   /// unknown while a rebuild has failed.
   SourceId source() const;
   /// With DDS Security: the participants refused (authentication failed: the participant listener;
-  /// permissions failed: Fast DDS's log, dds/library_log.hpp) since the last call; a warning is logged
-  /// for each. Always empty without security.
+  /// permissions failed: Fast DDS's log, dds/library_log.hpp) since the last call, each once (up to
+  /// kRefusedRemembered of them); a warning is logged for each. Always empty without security.
   std::vector<SourceId> take_refused();
 
   /// Replaces the participant, publisher, subscriber and topics with new ones from the same transport
