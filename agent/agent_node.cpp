@@ -126,9 +126,12 @@ class AgentNode {
     publish();
     report();
   }
-  /// After a stall longer than the peers' lease the participant is recreated (dds::Node).
+  /// After a stall longer than the peers' lease the participant is recreated (dds::Node); participants
+  /// DDS Security refused are reported ("refused" events).
   void recover_from_stall();
   void drain_commands();
+  /// Re-offers the command followed on command_relay_, if there is one.
+  void relay_command();
   void drain_targets();
   void drain_states();
   void step(std::int64_t now);
@@ -158,7 +161,8 @@ class AgentNode {
   dds::Reader<msg::AgentState> state_reader_;
   dds::Reader<msg::ShapeCommand> command_reader_;
   /// Re-offers the command this process follows (transient-local, KEEP_LAST 1): it outlives its
-  /// publisher, for a supervisor started later and for agents that join while nobody commands.
+  /// publisher, for a supervisor started later and for agents that join while nobody commands. None
+  /// with DDS Security: only the supervisor may publish commands there (docs/SECURITY.md).
   dds::Writer<msg::ShapeCommand> command_relay_;
   dds::CommandId relayed_;  ///< what command_relay_ offers now
   std::uint64_t last_refused_epoch_ = 0;  ///< the last epoch refused as an absurd jump
@@ -188,18 +192,25 @@ std::string node_name(const std::vector<std::int32_t>& ids) {
   return (ids.size() > 1 ? "shapeform_agent_group_" : "shapeform_agent_") + std::to_string(ids.front());
 }
 
+/// The participant's profile: the config's, with the identity agent_K (K the first hosted id) when the
+/// config names none.
+dds::TransportConfig agent_transport(const config::Config& cfg, const std::vector<std::int32_t>& ids) {
+  return dds::with_identity(cfg.transport, "agent_" + std::to_string(ids.front()));
+}
+
 AgentNode::AgentNode(const std::vector<std::int32_t>& ids, const std::vector<core::Vec2>& starts,
                      const config::Config& cfg, const AgentOptions& opt)
     : ids_(ids),
       cfg_(cfg),
       opt_(opt),
       group_(ids.size() > 1),
-      node_(cfg.transport, node_name(ids)),
+      node_(agent_transport(cfg, ids), node_name(ids)),
       state_writer_(node_.writer<msg::AgentState>(dds::TopicId::State)),
       status_writer_(node_.writer<msg::AgentStatus>(dds::TopicId::Status)),
       state_reader_(node_.reader<msg::AgentState>(dds::TopicId::State)),
       command_reader_(node_.reader<msg::ShapeCommand>(dds::TopicId::Command)),
-      command_relay_(node_.writer<msg::ShapeCommand>(dds::TopicId::Command)),
+      command_relay_(cfg.transport.security.enabled ? dds::Writer<msg::ShapeCommand>()
+                                                    : node_.writer<msg::ShapeCommand>(dds::TopicId::Command)),
       target_reader_(node_.reader<msg::TrackingTarget>(dds::TopicId::Target)),
       loop_(cfg.agent.rate_hz),
       log_every_(ticks_per(cfg.agent.rate_hz, 1.0)),
@@ -265,14 +276,15 @@ void AgentNode::reject(const char* what, const std::string& log_line, const std:
 }
 
 void AgentNode::recover_from_stall() {
+  for (const dds::SourceId& refused : node_.take_refused()) {
+    if (opt_.json)
+      emit({{"event", "refused"}, {"participant", dds::to_string(refused)}, {"by", dds::to_string(node_.source())}});
+  }
   const auto stall_s = node_.recover_if_stalled(1.0 / cfg_.agent.rate_hz);
   if (!stall_s) return;
   identity_.rebuilt(node_.source());  // a new GUID prefix: our samples carry both
   // The new re-offer writer starts empty: offer the command followed again.
-  if (!relayed_.none()) {
-    const dds::CommandSample& s = logics_.front()->command_sample();
-    if (!command_relay_.write(dds::to_msg(s.command, s.id, s.issuer_name))) util::log_warn("command re-offer failed");
-  }
+  if (!relayed_.none()) relay_command();
   if (opt_.json) emit({{"event", "recovered"}, {"stall_s", *stall_s}});
 }
 
@@ -314,6 +326,12 @@ void AgentNode::drain_commands() {
   if (opt_.json)
     emit({{"event", "command"}, {"epoch", s.id.epoch}, {"issuer", dds::to_string(s.id.issuer)},
           {"publisher", issuer}, {"shape", shape}, {"tracking", s.command.tracking.enabled}});
+  relay_command();
+}
+
+void AgentNode::relay_command() {
+  if (cfg_.transport.security.enabled) return;
+  const dds::CommandSample& s = logics_.front()->command_sample();
   if (!command_relay_.write(dds::to_msg(s.command, s.id, s.issuer_name))) util::log_warn("command re-offer failed");
 }
 
@@ -444,7 +462,7 @@ int run_agents(const std::vector<std::int32_t>& ids, const std::vector<core::Vec
     } else {
       s << "start (" << starts.front().x() << ", " << starts.front().y() << "), ";
     }
-    s << cfg.agent.rate_hz << " Hz, " << dds::describe(cfg.transport) << ", neighbour timeout "
+    s << cfg.agent.rate_hz << " Hz, " << dds::describe(agent_transport(cfg, ids)) << ", neighbour timeout "
       << cfg.agent.neighbour_timeout_periods << " periods";
     util::log_info(s.str());
   }
@@ -456,6 +474,9 @@ int run_agents(const std::vector<std::int32_t>& ids, const std::vector<core::Vec
   try {
     AgentNode node(ids, starts, cfg, opt);
     return node.run();
+  } catch (const dds::SecurityError& e) {
+    util::log_error(e.what());
+    return 2;  // a key file or keystore that cannot work: a bad configuration
   } catch (const std::exception& e) {
     util::log_error(e.what());
     return 1;

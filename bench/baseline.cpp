@@ -127,7 +127,8 @@ int run(std::int32_t id, const config::Config& cfg) {
 
   fdds::DomainParticipant* participant = nullptr;
   try {
-    participant = sdds::create_participant(cfg.transport, "shapeform_bench_baseline_" + std::to_string(id));
+    participant = sdds::create_participant(sdds::with_identity(cfg.transport, "agent_" + std::to_string(id)),
+                                              "shapeform_bench_baseline_" + std::to_string(id));
     register_type<msg::AgentStatePubSubType>(participant);
     register_type<msg::AgentStatusPubSubType>(participant);
     auto* state_topic = participant->create_topic(sdds::topic_name(sdds::TopicId::State),

@@ -47,8 +47,8 @@ PRESETS: dict[str, dict] = {
 }
 
 
-def add_preset(name: str, sets: list[str], about: str, ds: bool = False) -> None:
-    PRESETS[name] = {"sets": sets, "ds": ds, "about": about}
+def add_preset(name: str, sets: list[str], about: str, ds: bool = False, secure: bool = False) -> None:
+    PRESETS[name] = {"sets": sets, "ds": ds, "about": about, "secure": secure}
 
 
 BUF = "transport.socket_buffer_bytes=4194304"
@@ -63,6 +63,8 @@ add_preset("mcann", [MC] + ANN, "State on multicast on lo + lease 10 s / announc
 BUF1 = "transport.socket_buffer_bytes=1048576"
 add_preset("mcbuf1ann", [MC, BUF1] + ANN, "State on multicast on lo + 1 MiB socket buffers + lease 10 s / announce 3 s")
 add_preset("mcbufann", [MC, BUF] + ANN, "State on multicast on lo + 4 MiB socket buffers + lease 10 s / announce 3 s")
+add_preset("mcbufannsec", [MC, BUF] + ANN, "mcbufann + DDS Security (security.enabled: PKI-DH, permissions, "
+           "AES-GCM; one keystore for the benchmark by scripts/make_keystore.sh)", secure=True)
 add_preset("ds", [], "discovery server on 127.0.0.1 (transport.profile=discovery-server)", ds=True)
 add_preset("dsbuf", [BUF], "discovery server on 127.0.0.1 + 4 MiB socket buffers", ds=True)
 add_preset("dsmcbufann", [MC, BUF] + ANN, "discovery server on 127.0.0.1 + State on multicast on lo + 4 MiB socket "
@@ -197,6 +199,13 @@ LEVERS: list[dict] = [
      "rows": [_lv(A, 100, "mcbufann"), Row(A, 100, 20.0, "mcbufann", 0.0, 0, "lever", True)],
      "pairs": [(_lv(A, 100, "mcbufann"), Row(A, 100, 20.0, "mcbufann", 0.0, 0, "lever", True))],
      "view": True},
+    {"name": "9. DDS Security",
+     "question": "`security.enabled` (`scripts/launch_swarm.sh --secure`, docs/SECURITY.md): every participant "
+                 "authenticated (PKI-DH, ECDSA P-256 certificates), its endpoints checked against signed permissions, "
+                 "discovery, liveliness and data encrypted with AES-GCM and every RTPS message signed. The main "
+                 "table's agents at N = 10 and 25, plain and secured, measured one after the other in one "
+                 "invocation (`--only agents-n10-r20-mcbufann --only agents-n25-r20-mcbufann`).",
+     "pairs": [(_lv(A, 10, "mcbufann"), _lv(A, 10, "mcbufannsec")), (_lv(A, 25, "mcbufann"), _lv(A, 25, "mcbufannsec"))]},
 ]
 # The rows of a lever, unless listed: the members of its pairs, in order.
 for _lever in LEVERS:
@@ -438,6 +447,11 @@ def run_once(ctx: Ctx, row: Row, run_idx: int) -> dict:
     if preset["ds"]:
         port = 12000 + domain
         tsets += ["transport.profile=discovery-server", f"transport.discovery_server=127.0.0.1:{port}"]
+    if preset["secure"]:
+        # One keystore for the benchmark, extended to this row's agents (make_keystore.sh keeps what exists).
+        keystore = ctx.runs_dir / "keystore"
+        procs.run([ROOT / "scripts" / "make_keystore.sh", keystore, "--agents", str(row.n)], timeout=600)
+        tsets += ["security.enabled=true", f"security.keystore={keystore}"]
     common = ["--domain", str(domain)] + procs.sets_args(tsets)
     rate_sets = [f"agent.rate_hz={row.rate:g}", f"agent.status_rate_hz={ctx.status_rate_hz:g}",
                  f"swarm.agents={row.n}"]

@@ -53,7 +53,7 @@ int run(const config::Config& cfg, const std::filesystem::path& dir) {
   std::fprintf(metrics_csv, ",converged\n");
   int status = 0;
   try {
-    dds::Node node(cfg.transport, "shapeform_bench_probe");
+    dds::Node node(dds::with_identity(cfg.transport, "viewer"), "shapeform_bench_probe");
     auto status_reader = node.reader<msg::AgentStatus>(dds::TopicId::Status);
     auto metrics_reader = node.reader<msg::SwarmMetrics>(dds::TopicId::Metrics);
     std::cout << "ready " << util::steady_ns() << std::endl;

@@ -11,7 +11,7 @@ packages=(
   build-essential cmake pkg-config
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
   libeigen3-dev libyaml-cpp-dev catch2 libcli11-dev nlohmann-json3-dev libmuparser-dev libedit-dev
-  libcpp-httplib-dev
+  libcpp-httplib-dev libssl-dev openssl faketime
   python3 python3-matplotlib python3-numpy python3-pil python3-yaml
   iproute2 iptables tcpdump procps psmisc
   chromium chromium-driver python3-selenium

@@ -117,7 +117,8 @@ class Supervisor {
   /// Validates the whole --script before anything is sent; false (reported) on a bad line.
   bool load_script();
   void open_dds();
-  /// After a stall longer than the peers' lease the participant is recreated (dds::Node).
+  /// After a stall longer than the peers' lease the participant is recreated (dds::Node); participants
+  /// DDS Security refused are reported ("refused" events).
   void recover_from_stall();
   void drain(std::int64_t now);
   /// Takes in the command topic: another participant's command that wins the order is the one in
@@ -295,6 +296,8 @@ bool Supervisor::foreign_command_in_force(std::int64_t now) const {
 }
 
 void Supervisor::recover_from_stall() {
+  for (const dds::SourceId& refused : node_->take_refused())
+    out_.event("refused", {{"participant", dds::to_string(refused)}, {"by", dds::to_string(node_->source())}});
   const auto stall_s = node_->recover_if_stalled(1.0 / cfg_.supervisor.target_rate_hz);
   if (!stall_s) return;
   // The new command writer starts empty: offer this supervisor's command in force (same id) to later
@@ -723,7 +726,7 @@ bool Supervisor::load_script() {
 }
 
 void Supervisor::open_dds() {
-  node_ = std::make_unique<dds::Node>(cfg_.transport, "shapeform_supervisor");
+  node_ = std::make_unique<dds::Node>(dds::with_identity(cfg_.transport, "supervisor"), "shapeform_supervisor");
   command_writer_ = node_->writer<msg::ShapeCommand>(dds::TopicId::Command);
   target_writer_ = node_->writer<msg::TrackingTarget>(dds::TopicId::Target);
   metrics_writer_ = node_->writer<msg::SwarmMetrics>(dds::TopicId::Metrics);
@@ -793,6 +796,9 @@ int run_supervisor(const config::Config& cfg, const SupervisorOptions& opt) {
   try {
     Supervisor s(cfg, opt);
     return s.run();
+  } catch (const dds::SecurityError& e) {
+    util::log_error(e.what());
+    return kExitBadInput;  // a key file or keystore that cannot work
   } catch (const std::exception& e) {
     util::log_error(e.what());
     return kExitRuntime;

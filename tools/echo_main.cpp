@@ -16,7 +16,7 @@ namespace {
 /// or `timeout_s` seconds (0: none) without reaching count (exit status 1).
 template <class Msg>
 int echo(const config::Config& cfg, dds::TopicId id, long long count, double timeout_s) {
-  dds::Node node(cfg.transport, "shapeform_echo");
+  dds::Node node(dds::with_identity(cfg.transport, "viewer"), "shapeform_echo");
   dds::Reader<Msg> reader = node.reader<Msg>(id);
   std::vector<dds::Received<Msg>> got;
   long long printed = 0;

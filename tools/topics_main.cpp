@@ -24,7 +24,7 @@ int run(int argc, char** argv) {
   if (!cfg) return app::kExitUsage;
   util::install_stop_signals();
   return app.run([&] {
-    const auto topics = dds::discover_topics(cfg->transport, "shapeform_topics", wait_s, &util::stop_flag());
+    const auto topics = dds::discover_topics(dds::with_identity(cfg->transport, "viewer"), "shapeform_topics", wait_s, &util::stop_flag());
     if (json) {
       for (const auto& t : topics) std::cout << tools::topic_json(t).dump() << '\n';
     } else {

@@ -12,7 +12,7 @@ namespace shapeform::view {
 
 struct LiveFeed::Impl {
   explicit Impl(const config::Config& cfg)
-      : node(cfg.transport, "shapeform_view"),
+      : node(dds::with_identity(cfg.transport, "viewer"), "shapeform_view"),
         states(node.reader<msg::AgentState>(dds::TopicId::State)),
         statuses(node.reader<msg::AgentStatus>(dds::TopicId::Status)),
         commands(node.reader<msg::ShapeCommand>(dds::TopicId::Command)),

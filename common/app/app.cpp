@@ -98,6 +98,10 @@ std::optional<config::Config> App::load_config(const std::vector<std::string>& e
 int App::run(const std::function<int()>& body) const {
   try {
     return body();
+  } catch (const dds::SecurityError& e) {
+    // A key file, keystore or identity that cannot work: a bad configuration, never a silent unsecured run.
+    std::cerr << prog_ << ": " << util::bounded_line(e.what()) << std::endl;
+    return kExitUsage;
   } catch (const std::exception& e) {
     std::cerr << prog_ << ": " << util::bounded_line(e.what()) << std::endl;
     return 1;

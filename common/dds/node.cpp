@@ -10,6 +10,7 @@
 #include <fastdds/dds/topic/TypeSupport.hpp>
 #include <fastdds/dds/topic/qos/TopicQos.hpp>
 
+#include "dds/library_log.hpp"
 #include "dds/participant.hpp"
 #include "util/log.hpp"
 
@@ -46,6 +47,22 @@ SourceId source_of(const fdds::InstanceHandle_t& writer) {
   return s;
 }
 
+void RefusedWatch::onParticipantAuthentication(fdds::DomainParticipant* /*participant*/,
+                                               eprosima::fastrtps::rtps::ParticipantAuthenticationInfo&& info) {
+  if (info.status != eprosima::fastrtps::rtps::ParticipantAuthenticationInfo::UNAUTHORIZED_PARTICIPANT) return;
+  SourceId s;
+  std::copy(std::begin(info.guid.guidPrefix.value), std::end(info.guid.guidPrefix.value), s.prefix.begin());
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (std::find(pending_.begin(), pending_.end(), s) == pending_.end()) pending_.push_back(s);
+}
+
+std::vector<SourceId> RefusedWatch::take() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<SourceId> out;
+  out.swap(pending_);
+  return out;
+}
+
 }  // namespace detail
 
 namespace {
@@ -70,13 +87,14 @@ Node::Node(const TransportConfig& cfg, const std::string& name)
   // Any throw below destroys entities_, which deletes whatever was created so far.
   entities_->name = name;
   entities_->transport = cfg;
+  if (cfg.security.enabled) entities_->refused = std::make_unique<detail::RefusedWatch>();
   open();
 }
 
 void Node::open() {
   detail::Entities& e = *entities_;
   const std::string& name = e.name;
-  e.participant = create_participant(e.transport, name);
+  e.participant = create_participant(e.transport, name, e.refused.get());
 
   register_type<msg::AgentState>(e.participant, name);
   register_type<msg::ShapeCommand>(e.participant, name);
@@ -154,6 +172,23 @@ SourceId Node::source() const {
   return s;
 }
 
+std::vector<SourceId> Node::take_refused() {
+  if (!entities_->refused) return {};
+  std::vector<SourceId> heard = entities_->refused->take();
+  for (const SourceId& s : take_permission_refusals()) heard.push_back(s);
+  std::vector<SourceId> refused;
+  auto& reported = entities_->refused_reported;
+  for (const SourceId& s : heard) {
+    if (reported.count(s) != 0) continue;
+    if (reported.size() >= kRefusedRemembered) reported.clear();
+    reported.insert(s);
+    refused.push_back(s);
+    util::log_warn("security: participant " + to_string(s) +
+                   " refused (no valid certificate of this swarm's authority, or permissions that do not verify)");
+  }
+  return refused;
+}
+
 Node::~Node() = default;  // entities_ (the last owner) deletes everything; handles only hold weak_ptrs
 
 void Node::check_type(TopicId requested, TopicId of_type) {
@@ -179,12 +214,25 @@ fdds::Topic* Node::topic(TopicId id) {
   return slot;
 }
 
+namespace {
+
+/// The error of an endpoint Fast DDS refused: with security, its likely cause (the enclave's permissions).
+[[noreturn]] void endpoint_failed(const detail::Entities& e, const char* what, TopicId id) {
+  const std::string line = std::string(what) + " failed for topic " + topic_name(id) + " (node " + e.name + ")";
+  if (e.transport.security.enabled) {
+    throw SecurityError("security: " + line + ": the permissions of enclave " + e.transport.security.identity +
+                        " (" + enclave_dir(e.transport.security) + "/permissions.xml) do not allow " +
+                        (std::string(what) == "create_datawriter" ? "publishing" : "subscribing to") + " " +
+                        topic_name(id) + "; run this program with its own role's identity (security.identity)");
+  }
+  throw std::runtime_error(line);
+}
+
+}  // namespace
+
 fdds::DataWriter* Node::create_writer(TopicId id) {
   fdds::DataWriter* w = entities_->publisher->create_datawriter(topic(id), writer_qos(id));
-  if (w == nullptr) {
-    throw std::runtime_error(std::string("create_datawriter failed for topic ") + topic_name(id) +
-                             " (node " + entities_->name + ")");
-  }
+  if (w == nullptr) endpoint_failed(*entities_, "create_datawriter", id);
   return w;
 }
 
@@ -192,10 +240,7 @@ fdds::DataReader* Node::create_reader(TopicId id, fdds::DataReaderListener* list
   fdds::DataReader* r = entities_->subscriber->create_datareader(topic(id), reader_qos(id, entities_->transport), listener,
                                                                  fdds::StatusMask::data_available() <<
                                                                      fdds::StatusMask::subscription_matched());
-  if (r == nullptr) {
-    throw std::runtime_error(std::string("create_datareader failed for topic ") + topic_name(id) +
-                             " (node " + entities_->name + ")");
-  }
+  if (r == nullptr) endpoint_failed(*entities_, "create_datareader", id);
   return r;
 }
 

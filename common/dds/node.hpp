@@ -15,6 +15,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -23,6 +24,7 @@
 #include <fastdds/dds/core/status/PublicationMatchedStatus.hpp>
 #include <fastdds/dds/core/status/SubscriptionMatchedStatus.hpp>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/domain/DomainParticipantListener.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
@@ -61,6 +63,9 @@ struct Received {
   SourceId source;
 };
 
+/// How many refused participants a Node remembers having reported (a flood of fake ones stays bounded).
+inline constexpr std::size_t kRefusedRemembered = 4096;
+
 /// Default bound of a Reader's mailbox; samples beyond it (nobody draining) are dropped and counted.
 inline constexpr std::size_t kDefaultMailboxCapacity = 16384;
 
@@ -80,6 +85,20 @@ struct ReaderSlot {
   eprosima::fastdds::dds::DataReader* reader = nullptr;
 };
 
+/// The participants that DDS Security refused (failed authentication or join access control), as
+/// the participant's listener hears them on Fast DDS's thread; the loop takes them.
+class RefusedWatch final : public eprosima::fastdds::dds::DomainParticipantListener {
+ public:
+  void onParticipantAuthentication(eprosima::fastdds::dds::DomainParticipant* participant,
+                                   eprosima::fastrtps::rtps::ParticipantAuthenticationInfo&& info) override;
+  /// The participants refused since the last call, each once.
+  std::vector<SourceId> take();
+
+ private:
+  std::mutex mutex_;
+  std::vector<SourceId> pending_;
+};
+
 /// The DDS entities of a Node. Shared with handles through weak_ptr so they can tell whether the
 /// Node still exists.
 struct Entities {
@@ -89,6 +108,12 @@ struct Entities {
   std::array<eprosima::fastdds::dds::Topic*, kAllTopics.size()> topics{};
   std::string name;
   TransportConfig transport;  ///< the profile the participant was built from (reader locators)
+  /// Hears refused participants when security is enabled (set before the first participant, which
+  /// it outlives: members go after ~Entities() deleted the participant).
+  std::unique_ptr<RefusedWatch> refused;
+  /// The refused participants reported so far (each once: a refused peer retries its handshake for ever);
+  /// at most kRefusedRemembered, then forgotten and reported again.
+  std::set<SourceId> refused_reported;
   /// The live handles' endpoints, recreated by Node::rebuild() on the new participant.
   std::vector<std::weak_ptr<WriterSlot>> writers;
   std::vector<std::weak_ptr<ReaderSlot>> readers;
@@ -364,6 +389,10 @@ class Node {
   /// This participant's identity, as its samples carry it in Received::source. A rebuild changes it;
   /// unknown while a rebuild has failed.
   SourceId source() const;
+  /// With DDS Security: the participants refused (authentication failed: the participant listener;
+  /// permissions failed: Fast DDS's log, dds/library_log.hpp) since the last call, each once (up to
+  /// kRefusedRemembered of them); a warning is logged for each. Always empty without security.
+  std::vector<SourceId> take_refused();
 
   /// Replaces the participant, publisher, subscriber and topics with new ones from the same transport
   /// profile (dds::create_participant) and recreates the endpoint of every live handle: same topic,

@@ -17,6 +17,7 @@
 #include <unistd.h>
 
 #include "dds/discovery.hpp"
+#include "dds/library_log.hpp"
 #include "util/ipv4.hpp"
 
 namespace shapeform::dds {
@@ -183,6 +184,9 @@ fdds::DomainParticipantQos participant_qos(const TransportConfig& cfg, const std
   auto& props = pq.properties().properties();
   props.emplace_back(kHostProperty, std::string(host), true);
   props.emplace_back(kPidProperty, std::to_string(getpid()), true);
+  if (cfg.security.enabled) {
+    for (const auto& [key, value] : security_properties(cfg.security)) props.emplace_back(key, value);
+  }
   return pq;
 }
 
@@ -193,6 +197,14 @@ frtps::Locator_t data_multicast_locator(const TransportConfig& cfg) {
 
 fdds::DomainParticipant* create_participant(const TransportConfig& cfg, const std::string& name,
                                             fdds::DomainParticipantListener* listener) {
+  if (cfg.security.enabled) {
+    if (cfg.security.identity.empty()) {
+      throw SecurityError("security: " + quoted(name) + " has no security.identity (set it to an enclave of " +
+                          cfg.security.keystore + "/enclaves)");
+    }
+    check_enclave(cfg.security);  // the files named in the error, before Fast DDS says less
+  }
+  route_library_log();  // before the first participant: Fast DDS would print its errors on stdout
   const fdds::DomainParticipantQos pq = participant_qos(cfg, name);
   // Invariant of the project: never builtin transports (they open every interface and SHM).
   if (pq.transport().use_builtin_transports || pq.transport().user_transports.empty()) {
@@ -202,7 +214,17 @@ fdds::DomainParticipant* create_participant(const TransportConfig& cfg, const st
   if (factory == nullptr) fail("create_participant: DomainParticipantFactory unavailable");
   const auto ports_before = own_udp_ports();
   fdds::DomainParticipant* participant =
-      factory->create_participant(static_cast<fdds::DomainId_t>(cfg.domain), pq, listener);
+      // Mask none: the listener hears the participant-level callbacks (discovery, authentication), which
+      // no mask gates; with data_on_readers in its mask it would take every sample from the readers'
+      // own listeners (DataReaderImpl asks the subscriber's, then the participant's, listener first).
+      factory->create_participant(static_cast<fdds::DomainId_t>(cfg.domain), pq, listener, fdds::StatusMask::none());
+  if (participant == nullptr && cfg.security.enabled) {
+    // check_enclave() found the files sound: what is left is the permissions' content.
+    throw SecurityError("security: Fast DDS refused the enclave " + enclave_dir(cfg.security) + " for " +
+                        quoted(name) + " (see its log above): does permissions.xml grant the subject of cert.pem (" +
+                        "CN=" + cfg.security.identity + " from scripts/make_keystore.sh) on domain " + str(cfg.domain) +
+                        ", and is the grant's validity current?");
+  }
   if (participant == nullptr) {
     fail("create_participant failed for " + quoted(name) + " on " + describe(cfg) +
          " (see Fast DDS log above; ports in use or bad interface address?)");
@@ -253,6 +275,7 @@ std::string describe(const TransportConfig& cfg) {
      << " s";
   if (cfg.socket_buffer_bytes > 0) os << ", socket buffers " << cfg.socket_buffer_bytes << " B";
   if (cfg.multicast_data) os << ", state on multicast 239.255.0.1:" << user_multicast_port(cfg.domain);
+  if (cfg.security.enabled) os << ", " << describe(cfg.security);
   return os.str();
 }
 

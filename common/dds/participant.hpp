@@ -44,7 +44,8 @@ inline constexpr std::array<std::uint8_t, 4> kMulticastGroup = {239, 255, 0, 1};
 /// Every participant announces its host name and process id in discovery (the propagated
 /// properties kHostProperty and kPidProperty of dds/discovery.hpp), for shapeform_topics.
 /// multicast_data (loopback, lan without peers) changes no participant setting: see
-/// data_multicast_locator().
+/// data_multicast_locator(). security.enabled adds the DDS Security plugin properties of the enclave
+/// (dds/security.hpp: security_properties).
 /// Pure: creates nothing.
 /// Throws std::runtime_error naming the offending field (validate(): "transport.domain: must be in 0..232,
 /// got 300").
@@ -62,10 +63,13 @@ eprosima::fastdds::dds::DomainParticipantQos participant_qos(const TransportConf
 eprosima::fastrtps::rtps::Locator_t data_multicast_locator(const TransportConfig& cfg);
 
 /// Creates a participant on cfg.domain from participant_qos(cfg, name). Never returns null:
-/// throws std::runtime_error naming the problem, including a participant that got no unicast port
+/// throws SecurityError (dds/security.hpp) when security is enabled and the enclave fails check_enclave()
+/// or Fast DDS refuses it, never creating an unsecured participant instead; otherwise
+/// std::runtime_error naming the problem, including a participant that got no unicast port
 /// (every participant slot it may take, max_participants of them, is in use on this host: Fast DDS
 /// itself would create it deaf). Free it with delete_participant().
-/// `listener` (optional, outliving the participant) hears discovery from the first announcement on.
+/// `listener` (optional, outliving the participant) hears discovery and authentication from the first
+/// announcement on; it is installed with an empty status mask, so it never hears endpoint statuses.
 eprosima::fastdds::dds::DomainParticipant* create_participant(
     const TransportConfig& cfg, const std::string& name,
     eprosima::fastdds::dds::DomainParticipantListener* listener = nullptr);

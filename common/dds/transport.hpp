@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/params.hpp"
+#include "dds/security.hpp"
 
 namespace shapeform::dds {
 
@@ -20,7 +21,8 @@ inline constexpr const char* kLan = "lan";
 inline constexpr const char* kDiscoveryServer = "discovery-server";
 inline constexpr const char* kProfiles[] = {kLoopback, kLan, kDiscoveryServer};
 
-/// DDS transport profile; every participant is built from this by the one participant factory.
+/// What the one participant factory builds every participant from: the DDS transport profile and the
+/// participant's security.
 struct TransportConfig {
   std::string profile = kLoopback;      ///< one of kProfiles
   int domain = 0;                       ///< DDS domain id, 0..kMaxDomainId
@@ -40,6 +42,9 @@ struct TransportConfig {
   /// Loopback profile or discovery-server with a server on 127.x / localhost (whitelist 127.0.0.1, so
   /// the group stays on lo), or lan without peers (the group on `interfaces` only). Off by default.
   bool multicast_data = false;
+  /// DDS Security (keys security.*): off, or every participant of the process authenticated,
+  /// access-controlled and encrypted with one enclave of a keystore.
+  SecurityConfig security;
 
   /// Whether every participant's traffic stays on lo: the loopback profile, or a discovery server on
   /// 127.x / localhost. multicast_data needs it, or lan without peers (the validator checks).
@@ -50,7 +55,14 @@ struct TransportConfig {
   }
 };
 
-/// The transport's keys ("transport.profile", ...): type, unit, range and description of each field,
+/// `cfg` with security.identity filled in when empty: the process's role and id ("supervisor",
+/// "agent_3", "viewer"), the enclave it uses when security is enabled.
+inline TransportConfig with_identity(TransportConfig cfg, const std::string& default_identity) {
+  cfg.security = with_identity(cfg.security, default_identity);
+  return cfg;
+}
+
+/// The transport's keys ("transport.profile", ..., "security.enabled", ...): type, unit, range and description of each field,
 /// its default read from TransportConfig{}. The config loader reads, emits and documents them from it.
 const std::vector<core::params::Param<TransportConfig>>& transport_table();
 
@@ -65,7 +77,8 @@ struct TransportProblem {
 /// Every problem of cfg, in the table's key order: each number within its declared range, the profile
 /// known, interfaces and peers IPv4 addresses, discovery_server "host:port" (host an IPv4 address or
 /// localhost, port 1..65535), announce_s < lease_s, multicast_data only on loopback (or a discovery
-/// server on it) or lan without peers. Empty when valid.
+/// server on it) or lan without peers, security.keystore given when security.enabled and the profile not
+/// discovery-server, security.identity empty or a valid enclave name. Empty when valid.
 std::vector<TransportProblem> transport_problems(const TransportConfig& cfg);
 
 /// "host:port" with host an IPv4 literal or "localhost" (read as 127.0.0.1) and port 1..65535

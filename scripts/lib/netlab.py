@@ -72,8 +72,9 @@ def read_pcap(path):
 
 
 class Capture:
-    """tcpdump on one interface of a namespace, writing every datagram that `bpf` selects to a pcap file
-    (packet-buffered, so that it can be read while tcpdump runs). Made by NetLab.capture()."""
+    """tcpdump on one interface of a namespace (None: the machine's own, e.g. its `lo`), writing every
+    datagram that `bpf` selects to a pcap file (packet-buffered, so that it can be read while tcpdump runs).
+    Made by NetLab.capture(), or directly."""
 
     def __init__(self, namespace, iface, path, bpf):
         self.namespace, self.iface, self.path, self.bpf = namespace, iface, path, bpf
@@ -84,8 +85,9 @@ class Capture:
         """Starts tcpdump; returns once it reports that it listens (raises if it does not)."""
         if os.path.exists(self.path):
             os.remove(self.path)
+        where = ["ip", "netns", "exec", self.namespace] if self.namespace else []  # None: this namespace
         self.proc = subprocess.Popen(
-            ["ip", "netns", "exec", self.namespace, "tcpdump", "-i", self.iface, "-n", "-U", "--immediate-mode",
+            where + ["tcpdump", "-i", self.iface, "-n", "-U", "--immediate-mode", "-B", "32768",
              "-Z", "root", "-w", self.path, self.bpf],
             stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
         listening = threading.Event()

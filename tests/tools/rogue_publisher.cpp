@@ -7,7 +7,9 @@
 // command, epoch 1; target: centre 0, epoch 1) and the --field values are applied in order.
 // Prints one JSON line per event on stdout: {"event":"matched","readers":N},
 // {"event":"sent","count":N,"source":"<its GUID prefix>"}. With --stay it then keeps its writer until
-// SIGINT/SIGTERM (a transient-local command lives as long as its writer). A command leaves its issuer
+// SIGINT/SIGTERM (a transient-local command lives as long as its writer). With DDS Security (the
+// security.* keys, an identity always given) it reports each participant it refused, as the swarm's
+// processes do: {"event":"refused","participant":"<GUID prefix>","by":"<its own>"}. A command leaves its issuer
 // field empty, so receivers take the writer's GUID prefix ("source") as the issuer.
 #include <chrono>
 #include <cstdint>
@@ -82,6 +84,13 @@ struct Options {
   bool stay = false;
 };
 
+/// Prints the participants DDS Security refused since the last call.
+void report_refused(dds::Node& node) {
+  for (const dds::SourceId& r : node.take_refused())
+    std::cout << R"({"event":"refused","participant":")" << dds::to_string(r) << R"(","by":")"
+              << dds::to_string(node.source()) << "\"}" << std::endl;
+}
+
 template <class Msg>
 int publish(dds::Node& node, dds::TopicId topic, Msg m, const Setters<Msg>& setters, const Options& opt) {
   for (const std::string& f : opt.fields) {
@@ -99,6 +108,7 @@ int publish(dds::Node& node, dds::TopicId topic, Msg m, const Setters<Msg>& sett
   while (writer.matched() < opt.wait_readers && !util::stop_flag()) {
     if (std::chrono::steady_clock::now() > deadline)
       throw std::runtime_error("fewer than " + std::to_string(opt.wait_readers) + " readers matched");
+    report_refused(node);
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   std::cout << R"({"event":"matched","readers":)" << writer.matched() << "}" << std::endl;
@@ -106,12 +116,16 @@ int publish(dds::Node& node, dds::TopicId topic, Msg m, const Setters<Msg>& sett
   int sent = 0;
   for (auto next = std::chrono::steady_clock::now(); sent < opt.count && !util::stop_flag(); ++sent) {
     if (!writer.write(m)) throw std::runtime_error("write failed");
+    report_refused(node);
     next += std::chrono::duration_cast<std::chrono::steady_clock::duration>(period);
     std::this_thread::sleep_until(next);
   }
   std::cout << R"({"event":"sent","count":)" << sent << R"(,"source":")" << dds::to_string(node.source()) << "\"}"
             << std::endl;
-  while (opt.stay && !util::stop_flag()) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  while (opt.stay && !util::stop_flag()) {
+    report_refused(node);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
   return 0;
 }
 

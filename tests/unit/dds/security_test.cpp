@@ -1,0 +1,242 @@
+// Unit tests of DDS Security's edges (common/dds/security, the participant factory, library_log): the
+// enclave check names the bad file for each way a keystore goes wrong, the factory never creates an
+// unsecured participant instead, the keys validate, and secured nodes exchange samples only within
+// their permissions. Keystores come from scripts/make_keystore.sh (openssl), made in a temporary folder.
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "config/config.hpp"
+#include "dds/library_log.hpp"
+#include "dds/node.hpp"
+#include "dds/participant.hpp"
+#include "dds/security.hpp"
+#include "dds/transport.hpp"
+
+namespace shapeform {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// A temporary folder, removed with its contents at scope exit.
+struct TempDir {
+  fs::path path;
+  TempDir() {
+    std::string tmpl = (fs::temp_directory_path() / "shapeform_security_XXXXXX").string();
+    REQUIRE(::mkdtemp(tmpl.data()) != nullptr);
+    path = tmpl;
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+};
+
+/// Runs a shell command; REQUIREs exit 0.
+void run(const std::string& command) {
+  INFO(command);
+  REQUIRE(std::system((command + " >/dev/null 2>&1").c_str()) == 0);
+}
+
+std::string make_keystore(const fs::path& dir, const std::string& args) {
+  run(std::string(SHAPEFORM_SOURCE_DIR) + "/scripts/make_keystore.sh " + dir.string() + " " + args);
+  return dir.string();
+}
+
+dds::SecurityConfig secured(const std::string& keystore, const std::string& identity) {
+  dds::SecurityConfig s;
+  s.enabled = true;
+  s.keystore = keystore;
+  s.identity = identity;
+  return s;
+}
+
+/// The SecurityError check_enclave throws, or "" when it passes.
+std::string problem(const dds::SecurityConfig& s) {
+  try {
+    dds::check_enclave(s);
+  } catch (const dds::SecurityError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+void copy_over(const fs::path& from, const fs::path& to) {
+  fs::copy_file(from, to, fs::copy_options::overwrite_existing);
+}
+
+}  // namespace
+
+TEST_CASE("a keystore's enclaves pass the check; each broken file is named", "[dds][security]") {
+  TempDir tmp;
+  const std::string ks = make_keystore(tmp.path / "ks", "--agents 2");
+  const fs::path enclaves = tmp.path / "ks" / "enclaves";
+  for (const char* name : {"supervisor", "viewer", "agent_0", "agent_1"}) {
+    INFO(name);
+    CHECK(problem(secured(ks, name)).empty());
+  }
+
+  SECTION("no keystore, no enclave") {
+    CHECK_THAT(problem(secured((tmp.path / "nowhere").string(), "agent_0")),
+               Catch::Contains("security.keystore: no keystore folder") && Catch::Contains("make_keystore.sh"));
+    CHECK_THAT(problem(secured(ks, "agent_7")),
+               Catch::Contains("no enclave agent_7") && Catch::Contains("--enclave agent_7"));
+    CHECK_THAT(problem(secured(ks, "../agent_0")), Catch::Contains("cannot name an enclave"));
+  }
+  SECTION("a missing file") {
+    fs::remove(enclaves / "agent_1" / "permissions.p7s");
+    CHECK_THAT(problem(secured(ks, "agent_1")),
+               Catch::Contains((enclaves / "agent_1" / "permissions.p7s").string() + " does not exist"));
+  }
+  SECTION("a key of another identity") {
+    copy_over(enclaves / "agent_0" / "key.pem", enclaves / "agent_1" / "key.pem");
+    CHECK_THAT(problem(secured(ks, "agent_1")),
+               Catch::Contains((enclaves / "agent_1" / "key.pem").string() + " does not belong to"));
+  }
+  SECTION("not a certificate") {
+    std::ofstream(enclaves / "agent_1" / "cert.pem") << "hello\n";
+    CHECK_THAT(problem(secured(ks, "agent_1")), Catch::Contains("cert.pem is not a PEM certificate"));
+  }
+  SECTION("a certificate and key of another authority") {
+    make_keystore(tmp.path / "other", "--agents 2");
+    for (const char* f : {"cert.pem", "key.pem"})
+      copy_over(tmp.path / "other" / "enclaves" / "agent_1" / f, enclaves / "agent_1" / f);
+    CHECK_THAT(problem(secured(ks, "agent_1")),
+               Catch::Contains("cert.pem was not issued by " + (enclaves / "agent_1" / "identity_ca.cert.pem").string()));
+  }
+  SECTION("permissions changed after signing, or signed by someone else") {
+    const fs::path p7s = enclaves / "agent_1" / "permissions.p7s";
+    std::ifstream in(p7s);
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const auto at = text.find("shapeform/state");
+    REQUIRE(at != std::string::npos);
+    text.replace(at, 15, "shapeform/comma");  // same length: only the signature can tell
+    std::ofstream(p7s) << text;
+    CHECK_THAT(problem(secured(ks, "agent_1")),
+               Catch::Contains("permissions.p7s: its signature does not verify against"));
+
+    // Signed by the agent's own key (which chains to the identity authority, not the permissions one).
+    const fs::path e = enclaves / "agent_0";
+    run("openssl smime -sign -in " + (e / "permissions.xml").string() + " -text -out " + (e / "permissions.p7s").string() +
+        " -signer " + (e / "cert.pem").string() + " -inkey " + (e / "key.pem").string());
+    CHECK_THAT(problem(secured(ks, "agent_0")), Catch::Contains("permissions.p7s: its signature does not verify"));
+  }
+  SECTION("an expired certificate") {
+    // Made 10 days ago, valid for 5: expired 5 days ago (faketime moves only this script's clock).
+    run("faketime -f -10d " + std::string(SHAPEFORM_SOURCE_DIR) + "/scripts/make_keystore.sh " +
+        (tmp.path / "old").string() + " --enclave agent_0 --days 5");
+    CHECK_THAT(problem(secured((tmp.path / "old").string(), "agent_0")),
+               Catch::Contains((tmp.path / "old" / "enclaves" / "agent_0" / "cert.pem").string() + " expired on"));
+  }
+}
+
+TEST_CASE("security properties name the enclave's six files and the three builtin plugins", "[dds][security]") {
+  const auto props = dds::security_properties(secured("/ks", "agent_3"));
+  const auto value = [&](const std::string& key) {
+    for (const auto& [k, v] : props)
+      if (k == key) return v;
+    return std::string("(missing)");
+  };
+  CHECK(value("dds.sec.auth.plugin") == "builtin.PKI-DH");
+  CHECK(value("dds.sec.access.plugin") == "builtin.Access-Permissions");
+  CHECK(value("dds.sec.crypto.plugin") == "builtin.AES-GCM-GMAC");
+  CHECK(value("dds.sec.auth.builtin.PKI-DH.identity_ca") == "file:///ks/enclaves/agent_3/identity_ca.cert.pem");
+  CHECK(value("dds.sec.auth.builtin.PKI-DH.identity_certificate") == "file:///ks/enclaves/agent_3/cert.pem");
+  CHECK(value("dds.sec.auth.builtin.PKI-DH.private_key") == "file:///ks/enclaves/agent_3/key.pem");
+  CHECK(value("dds.sec.access.builtin.Access-Permissions.permissions_ca") ==
+        "file:///ks/enclaves/agent_3/permissions_ca.cert.pem");
+  CHECK(value("dds.sec.access.builtin.Access-Permissions.governance") == "file:///ks/enclaves/agent_3/governance.p7s");
+  CHECK(value("dds.sec.access.builtin.Access-Permissions.permissions") ==
+        "file:///ks/enclaves/agent_3/permissions.p7s");
+  CHECK(props.size() == 9);
+
+  // The participant QoS carries them only when enabled.
+  dds::TransportConfig cfg;
+  const auto count = [](const eprosima::fastdds::dds::DomainParticipantQos& q) {
+    int n = 0;
+    for (const auto& p : q.properties().properties()) n += p.name().rfind("dds.sec.", 0) == 0;
+    return n;
+  };
+  CHECK(count(dds::participant_qos(cfg, "x")) == 0);
+  cfg.security = secured("/ks", "agent_3");
+  CHECK(count(dds::participant_qos(cfg, "x")) == 9);
+}
+
+TEST_CASE("security keys: validated, identity derived from the role", "[dds][security][config]") {
+  CHECK_THROWS_WITH(config::load("", {"security.enabled=true"}),
+                    Catch::Contains("security.keystore: must name a keystore folder"));
+  CHECK_THROWS_WITH(config::load("", {"security.enabled=true", "security.keystore=/k", "transport.profile=discovery-server"}),
+                    Catch::Contains("security.enabled: cannot be used with transport.profile discovery-server"));
+  CHECK_THROWS_WITH(config::load("", {"security.identity=../etc"}),
+                    Catch::Contains("security.identity: must be empty or an enclave name"));
+  const auto c = config::load("", {"security.enabled=true", "security.keystore=/k"});
+  CHECK(c.transport.security.enabled);
+  CHECK(dds::with_identity(c.transport, "supervisor").security.identity == "supervisor");
+  const auto named = config::load("", {"security.identity=viewer"});
+  CHECK(dds::with_identity(named.transport, "supervisor").security.identity == "viewer");
+  CHECK(dds::describe(dds::with_identity(c.transport, "agent_2")).find("secured as agent_2 (keystore /k)") !=
+        std::string::npos);
+}
+
+TEST_CASE("Fast DDS's permission refusals are read from its log lines", "[dds][security]") {
+  const auto r = dds::permission_refusal(
+      "Error validating remote permissions for a6.95.89.78.4f.da.0d.b8.24.bb.4a.4d|0.0.1.c1 (Remote participant "
+      "PermissionsCA differs from local)");
+  REQUIRE(r);
+  CHECK(dds::to_string(*r) == "a6.95.89.78.4f.da.0d.b8.24.bb.4a.4d");
+  const auto c = dds::permission_refusal("Error checking remote participant  01.0f.00.00.00.00.00.00.00.00.00.09 (x)");
+  REQUIRE(c);
+  CHECK(dds::to_string(*c) == "01.0f.00.00.00.00.00.00.00.00.00.09");
+  CHECK_FALSE(dds::permission_refusal("Remote participant PermissionsCA differs from local"));
+  CHECK_FALSE(dds::permission_refusal("Error validating remote permissions for zz.95"));
+}
+
+TEST_CASE("secured nodes: a bad enclave is refused, never run unsecured; permissions bound endpoints",
+          "[dds][security][node]") {
+  TempDir tmp;
+  const std::string ks = make_keystore(tmp.path / "ks", "--agents 1");
+  dds::TransportConfig cfg;
+  cfg.domain = 150 + 5 * static_cast<int>(::getpid() % 16) + 1;
+  cfg.security = secured(ks, "agent_0");
+
+  // No participant from a broken enclave: SecurityError naming the file.
+  fs::remove(tmp.path / "ks" / "enclaves" / "viewer" / "key.pem");
+  dds::TransportConfig broken = cfg;
+  broken.security.identity = "viewer";
+  CHECK_THROWS_WITH(dds::create_participant(broken, "x"), Catch::Contains("viewer/key.pem does not exist"));
+  CHECK_THROWS_AS(dds::create_participant(broken, "x"), dds::SecurityError);
+
+  // An agent's permissions: it publishes state, never a command.
+  dds::Node agent(cfg, "agent");
+  auto state = agent.writer<msg::AgentState>(dds::TopicId::State);
+  CHECK(state.valid());
+  CHECK_THROWS_WITH(agent.writer<msg::ShapeCommand>(dds::TopicId::Command),
+                    Catch::Contains("do not allow publishing shapeform/command"));
+
+  // The supervisor hears the agent's state through the encrypted topic.
+  dds::TransportConfig sup_cfg = cfg;
+  sup_cfg.security.identity = "supervisor";
+  dds::Node supervisor(sup_cfg, "supervisor");
+  auto reader = supervisor.reader<msg::AgentState>(dds::TopicId::State);
+  std::vector<dds::Received<msg::AgentState>> got;
+  msg::AgentState m;
+  m.id(0);
+  m.x(1.25);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (got.empty() && std::chrono::steady_clock::now() < deadline) {
+    state.write(m);
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    reader.drain(got);
+  }
+  REQUIRE_FALSE(got.empty());
+  CHECK(got.front().msg.x() == 1.25);
+}
+
+}  // namespace shapeform
