@@ -36,11 +36,11 @@ SIM_ROWS = [(100, "fast", "best", 1, 5000, None), (100, "reference", None, 1, 10
 SIM_SIZES = (100, 1000, 10000)
 SIM_TARGETS = {1000: 1000.0, 10000: 20.0}  # Euler steps/s (issue 17): N = 1000 on one core
 # Multiply-adds and multiplies per pair in the AVX-512 pair pass (common/core/batch_avx512.cpp), counted
-# in its compiled inner loop (objdump of batch_avx512.cpp.o, 2026-12-02: 38 vfmadd/vfnmadd and 14 vmulpd
-# per 16 pairs): the power 18 (its reductions, two degree-6 polynomials, the table factor), the squared
-# distance 2, the four sums 4, plus 2 in the power's products. The least time a pair can take on this
-# core is that many over the peak multiply-add rate.
-SIM_FMA_PER_PAIR = 26
+# in its compiled inner loop (objdump of batch_avx512.cpp.o, 2026-12-02: 50 vfmadd/vfnmadd/vmulpd among 119
+# vector instructions per 16 pairs): the power 19 (the logarithm's reduction and degree-6 polynomial with
+# its powers of r, the exponential's degree-5 polynomial, the table factor), the squared distance 2, the
+# four sums 4. The least time a pair can take on this core is that many over the peak multiply-add rate.
+SIM_FMA_PER_PAIR = 25
 
 
 def _host_cpu() -> tuple[int, int]:
@@ -214,11 +214,11 @@ def sim_section(sim: dict) -> str:
 
 SIM_LIMITS = (
     "What separates the two: each pair's weight (sigma^2 + d^2)^-beta, computed as 2^(-beta log2(sigma^2 + d^2)) "
-    "with 16-entry tables read by one permute and two degree-6 polynomials, is a chain of some 20 dependent "
+    "with 16-entry tables read by one permute and polynomials of degree 6 and 5, is a chain of some 20 dependent "
     "operations (about 70 cycles), and the core's out-of-order window holds only a few pairs' chains at once "
     "(evaluating the polynomials in Horner's order, a longer chain with fewer operations, was slower); the other "
     "vector operations (permutes, compares, blends, the nearest-neighbour bookkeeping, loads and stores) share the "
-    "pipes, about 110 vector instructions per 16 pairs in all. More rows per pass (one row shares j's loads and "
+    "pipes, 119 vector instructions per 16 pairs in all. More rows per pass (one row shares j's loads and "
     "stores with the next) spilled registers: two rows measured fastest. The paper's beta = 1.2 has no cheaper form; "
     "beta = 1/2, 1, 3/2 or 2 take a square root and a division instead (within 2 ulp of std::pow), the row with "
     "beta = 1 shows the gain. The other instruction sets use the same scheme without the tables (AVX2, generic) "

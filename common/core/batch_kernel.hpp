@@ -114,11 +114,10 @@ struct PairKernel {
   };
 
   /// The pairs (rows' agent, j + lane) of one vector for R rows at once (consecutive agents i,
-  /// i + 1, ... all below j): j's outputs read and written once for all R, each row's kept in
-  /// registers. With `tail`, lanes at or past `end` take no part.
+  /// i + 1, ... all below j; jv: the lanes' j as doubles): j's outputs read and written once for all
+  /// R, each row's kept in registers. With `tail`, lanes at or past `end` take no part.
   template <int R, bool tail, class Weight>
-  static void block(const PairPass& p, const Weight& weight, std::int64_t j, double end, Rows<R>& rs) {
-    const V jv = lane() + static_cast<double>(j);
+  static void block(const PairPass& p, const Weight& weight, std::int64_t j, V jv, double end, Rows<R>& rs) {
     const V xj = Isa::load(p.x + j), yj = Isa::load(p.y + j);
     V sx = Isa::load(p.sx + j), sy = Isa::load(p.sy + j), jd = Isa::load(p.nd2 + j), jid = Isa::load(p.nid + j);
 #pragma GCC unroll 4
@@ -159,8 +158,9 @@ struct PairKernel {
   template <int R, class Weight>
   static void rows(const PairPass& p, const Weight& weight, Rows<R>& rs, std::int64_t from) {
     std::int64_t j = from;
-    for (; j + kW <= p.n; j += kW) block<R, false>(p, weight, j, 0.0, rs);
-    if (j < p.n) block<R, true>(p, weight, j, static_cast<double>(p.n), rs);
+    V jv = lane() + static_cast<double>(from);
+    for (; j + kW <= p.n; j += kW, jv += static_cast<double>(kW)) block<R, false>(p, weight, j, jv, 0.0, rs);
+    if (j < p.n) block<R, true>(p, weight, j, jv, static_cast<double>(p.n), rs);
   }
 
   /// Adds row i's lanes to agent i's outputs. i's candidates so far have lower ids than any lane's,
@@ -219,7 +219,7 @@ struct PairKernel {
       for (int r = 0; r + 1 < kRows; ++r) {
         Rows<1> one;
         start(p, one, i + r);
-        block<1, true>(p, weight, i + r + 1, static_cast<double>(i + kRows), one);
+        block<1, true>(p, weight, i + r + 1, lane() + static_cast<double>(i + r + 1), static_cast<double>(i + kRows), one);
         group.ax[r] = one.ax[0], group.ay[r] = one.ay[0], group.best[r] = one.best[0], group.best_j[r] = one.best_j[0];
       }
       rows(p, weight, group, i + kRows);
