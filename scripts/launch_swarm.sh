@@ -317,6 +317,11 @@ if [ $secure -eq 1 ]; then
       die "--keystore: no enclave $e in $keystore (add the missing ones: scripts/make_keystore.sh $keystore --agents $n)"
   done
   setargs+=(--set security.enabled=true --set "security.keystore=$keystore")
+  # Measured (docs/SECURITY.md, Cost): past about 15 secured processes on one 2-core host, Fast DDS 2.9.1
+  # left pairs unmatched for minutes.
+  [ "$n" -le 15 ] || say "warning: $n secured agent processes: with DDS Security, Fast DDS 2.9.1 on a 2-core host" \
+    "matched every pair of 15 processes in 7.5 s but left pairs of 20-25 unmatched for minutes (docs/SECURITY.md);" \
+    "host several agents per process (shapeform_agent_group) or spread them over hosts (--fleet)"
 fi
 
 agents_timeout=$((30 + n / 2))
