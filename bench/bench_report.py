@@ -171,7 +171,7 @@ def sim_section(sim: dict) -> str:
     o.append("Paper law, Euler dt = 1, the paper's circle, uniform start (`shapeform_bench_sim`; run alone: "
              "`scripts/bench.sh --only sim`). `fast`: the batched kernel the simulator uses from 64 agents on "
              "(`core::paper_velocities_batch`: each pair once, in vectors of the instruction set picked at run time, "
-             "O(N) memory; equal to the per-agent law within 3e-15 of the sum of the terms' magnitudes on the unit tests' swarms, asserted to 1e-13, with the same nearest neighbours); `reference`: "
+             "O(N) memory; equal to the per-agent law within 6e-15 of the sum of the terms' magnitudes on the unit tests' swarms, asserted to 1e-13, with the same nearest neighbours); `reference`: "
              "every agent through `core::agent_step` as an agent process computes it (each pair twice). One thread runs "
              "on core 0 alone (`taskset -c 0`); two threads split the pairs over both cores. ns per pair: time per step "
              "over N (N - 1) / 2 pairs, the per-agent work (attraction, repulsion, integration) included. Each figure is "

@@ -1,8 +1,8 @@
 #include "batch.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cfloat>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <thread>
@@ -15,12 +15,7 @@
 namespace shapeform::core {
 
 std::string_view to_string(Simd s) {
-  switch (s) {
-    case Simd::Avx512: return "avx512";
-    case Simd::Avx2: return "avx2";
-    case Simd::Generic: break;
-  }
-  return "generic";
+  return s == Simd::Avx512 ? "avx512" : s == Simd::Avx2 ? "avx2" : "generic";
 }
 
 std::vector<Simd> simd_available() {
@@ -97,8 +92,8 @@ std::vector<std::int64_t> row_split(std::int64_t n, int parts) {
 
 }  // namespace
 
-void paper_velocities_batch(const CompiledCommand& cmd, const std::vector<Vec2>& x, double t, std::vector<Vec2>& v,
-                            const BatchOptions& opt) {
+void paper_velocities_batch(const CompiledCommand& cmd, const std::vector<Vec2>& x, double t,
+                            std::vector<Vec2>& v, const BatchOptions& opt) {
   const auto n = static_cast<std::int64_t>(x.size());
   const Gains& g = cmd.gains;
   const double s2 = g.sigma * g.sigma;
@@ -111,7 +106,8 @@ void paper_velocities_batch(const CompiledCommand& cmd, const std::vector<Vec2>&
       nbrs.clear();
       for (std::int64_t j = 0; j < n; ++j)
         if (j != i) nbrs.push_back({static_cast<std::int32_t>(j), x[static_cast<std::size_t>(j)]});
-      v[static_cast<std::size_t>(i)] = agent_velocity(cmd, static_cast<std::int32_t>(i), x[static_cast<std::size_t>(i)], nbrs, t);
+      v[static_cast<std::size_t>(i)] =
+          agent_velocity(cmd, static_cast<std::int32_t>(i), x[static_cast<std::size_t>(i)], nbrs, t);
     }
     return;
   }
@@ -125,7 +121,8 @@ void paper_velocities_batch(const CompiledCommand& cmd, const std::vector<Vec2>&
   X.assign(size, 0.0);
   Y.assign(size, 0.0);
   for (std::size_t i = 0; i < static_cast<std::size_t>(n); ++i) X[i] = x[i].x(), Y[i] = x[i].y();
-  const int parts = static_cast<int>(std::clamp<std::int64_t>(opt.threads, 1, std::max<std::int64_t>(1, n / 256)));
+  const int parts =
+      static_cast<int>(std::clamp<std::int64_t>(opt.threads, 1, std::max<std::int64_t>(1, n / 256)));
   sums.resize(static_cast<std::size_t>(parts));
   const PairFn pairs = pair_fn(opt.simd);
   const std::vector<std::int64_t> rows = row_split(n, parts);

@@ -42,8 +42,9 @@ struct Lanes {
   struct Pow {
     V mbeta, q[8];
     explicit Pow(double mb) : mbeta(splat(mb)) {
-      constexpr double c[8] = {2.8853900817779268, 0.9617966939261012, 0.5770780162897531, 0.4121985962411068,
-                               0.32059761439629403, 0.2623761241235996, 0.2199728043635776, 0.22198752919751308};
+      constexpr double c[8] = {2.8853900817779268, 0.9617966939261012,  0.5770780162897531,
+                               0.4121985962411068, 0.32059761439629403, 0.2623761241235996,
+                               0.2199728043635776, 0.22198752919751308};
       for (int k = 0; k < 8; ++k) q[k] = splat(c[k] * mb);
     }
   };
@@ -56,7 +57,7 @@ struct Lanes {
     // u = m 2^e with m in [0.75, 1.5), from the bits.
     const U b = (U)u;
     V e = (V)((b >> 52) | 0x4330000000000000ull) - 4503599627371519.0;  // unbiased exponent: - (2^52 + 1023)
-    V m = (V)((b & 0x000fffffffffffffull) | 0x3ff0000000000000ull);   // in [1, 2)
+    V m = (V)((b & 0x000fffffffffffffull) | 0x3ff0000000000000ull);     // in [1, 2)
     const M big = m >= 1.5;
     m = big ? m * 0.5 : m;
     e = big ? e + 1.0 : e;
@@ -119,7 +120,8 @@ struct PairKernel {
   template <int R, bool tail, class Weight>
   static void block(const PairPass& p, const Weight& weight, std::int64_t j, V jv, double end, Rows<R>& rs) {
     const V xj = Isa::load(p.x + j), yj = Isa::load(p.y + j);
-    V sx = Isa::load(p.sx + j), sy = Isa::load(p.sy + j), jd = Isa::load(p.nd2 + j), jid = Isa::load(p.nid + j);
+    V sx = Isa::load(p.sx + j), sy = Isa::load(p.sy + j), jd = Isa::load(p.nd2 + j),
+      jid = Isa::load(p.nid + j);
 #pragma GCC unroll 4
     for (int r = 0; r < R; ++r) {
       const V dx = xj - rs.x[r], dy = yj - rs.y[r];
@@ -168,8 +170,10 @@ struct PairKernel {
   template <int R>
   static void finish(const PairPass& p, const Rows<R>& rs, int r, std::int64_t i) {
     double sx = 0.0, sy = 0.0, bd = p.nd2[i], bj = p.nid[i];
-    double lx[kW] = {}, ly[kW] = {}, ld[kW] = {}, lj[kW] = {};  // lanes (a dependent vector type takes no subscript)
-    Isa::store(lx, rs.ax[r]), Isa::store(ly, rs.ay[r]), Isa::store(ld, rs.best[r]), Isa::store(lj, rs.best_j[r]);
+    double lx[kW] = {}, ly[kW] = {}, ld[kW] = {},
+           lj[kW] = {};  // lanes (a dependent vector type takes no subscript)
+    Isa::store(lx, rs.ax[r]), Isa::store(ly, rs.ay[r]), Isa::store(ld, rs.best[r]),
+        Isa::store(lj, rs.best_j[r]);
     for (int l = 0; l < kW; ++l) {
       sx += lx[l];
       sy += ly[l];
@@ -219,8 +223,10 @@ struct PairKernel {
       for (int r = 0; r + 1 < kRows; ++r) {
         Rows<1> one;
         start(p, one, i + r);
-        block<1, true>(p, weight, i + r + 1, lane() + static_cast<double>(i + r + 1), static_cast<double>(i + kRows), one);
-        group.ax[r] = one.ax[0], group.ay[r] = one.ay[0], group.best[r] = one.best[0], group.best_j[r] = one.best_j[0];
+        block<1, true>(p, weight, i + r + 1, lane() + static_cast<double>(i + r + 1),
+                       static_cast<double>(i + kRows), one);
+        group.ax[r] = one.ax[0], group.ay[r] = one.ay[0], group.best[r] = one.best[0],
+        group.best_j[r] = one.best_j[0];
       }
       rows(p, weight, group, i + kRows);
       for (int r = 0; r < kRows; ++r) finish(p, group, r, i + r);
@@ -241,9 +247,9 @@ template <class Isa>
 double fma_chains(std::int64_t iterations) {
   using V = typename Isa::V;
   const V x = Isa::splat(0.9999999), y = Isa::splat(1e-7);
-  V a0 = Isa::splat(0.0), a1 = Isa::splat(0.1), a2 = Isa::splat(0.2), a3 = Isa::splat(0.3), a4 = Isa::splat(0.4),
-    a5 = Isa::splat(0.5), a6 = Isa::splat(0.6), a7 = Isa::splat(0.7), a8 = Isa::splat(0.8), a9 = Isa::splat(0.9),
-    a10 = Isa::splat(1.0), a11 = Isa::splat(1.1);
+  V a0 = Isa::splat(0.0), a1 = Isa::splat(0.1), a2 = Isa::splat(0.2), a3 = Isa::splat(0.3),
+    a4 = Isa::splat(0.4), a5 = Isa::splat(0.5), a6 = Isa::splat(0.6), a7 = Isa::splat(0.7),
+    a8 = Isa::splat(0.8), a9 = Isa::splat(0.9), a10 = Isa::splat(1.0), a11 = Isa::splat(1.1);
   for (std::int64_t k = 0; k < iterations; ++k) {
     a0 = Isa::fma(a0, x, y), a1 = Isa::fma(a1, x, y), a2 = Isa::fma(a2, x, y), a3 = Isa::fma(a3, x, y);
     a4 = Isa::fma(a4, x, y), a5 = Isa::fma(a5, x, y), a6 = Isa::fma(a6, x, y), a7 = Isa::fma(a7, x, y);

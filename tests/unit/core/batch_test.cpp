@@ -1,12 +1,13 @@
 // The batched kernel (core::paper_velocities_batch) against the per-agent law (core::agent_velocity), on
 // every instruction set this CPU runs: the same nearest neighbours, and velocities equal to rounding.
+#include "core/batch.hpp"
+
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <random>
 #include <sstream>
 
-#include "core/batch.hpp"
 #include "core/law.hpp"
 #include "core/law_paper.hpp"
 #include "core/shape.hpp"
@@ -32,7 +33,8 @@ std::vector<Vec2> reference(const CompiledCommand& cmd, const std::vector<Vec2>&
 /// rounding error is not).
 double magnitude(const CompiledCommand& cmd, const std::vector<Vec2>& x, std::size_t i, double t) {
   const Gains& g = cmd.gains;
-  double m = std::abs(g.r) + attraction_term(x[i], target_point(shape_at(cmd, t), cmd.curve(), x[i]), g).norm() +
+  double m = std::abs(g.r) +
+             attraction_term(x[i], target_point(shape_at(cmd, t), cmd.curve(), x[i]), g).norm() +
              (cmd.tracking.enabled ? centre_velocity(cmd.tracking.path, t).norm() : 0.0);
   for (std::size_t j = 0; j < x.size(); ++j)
     if (j != i) {
@@ -49,9 +51,12 @@ std::vector<Vec2> swarm(int n, std::uint64_t seed, double w) {
   std::uniform_real_distribution<double> u(-w, w);
   std::vector<Vec2> x;
   for (int i = 0; i < n; ++i) {
-    if (i % 5 == 3) x.emplace_back(std::round(u(rng)), std::round(u(rng)));  // grid points
-    else if (i % 11 == 7) x.push_back(x[static_cast<std::size_t>(i) / 2]);    // coincident with another
-    else x.emplace_back(u(rng), u(rng));
+    if (i % 5 == 3)
+      x.emplace_back(std::round(u(rng)), std::round(u(rng)));  // grid points
+    else if (i % 11 == 7)
+      x.push_back(x[static_cast<std::size_t>(i) / 2]);  // coincident with another
+    else
+      x.emplace_back(u(rng), u(rng));
   }
   return x;
 }
@@ -73,7 +78,8 @@ TEST_CASE("the batched kernel equals the per-agent law on every instruction set"
       cmd.tracking.feedforward = true;
       cmd.tracking.path.kind = CentrePath::Kind::Circle;
       cmd.max_speed = n == 17 ? 0.3 : 0.0;
-      const auto x = swarm(n, static_cast<std::uint64_t>(n) * 31 + static_cast<std::uint64_t>(beta * 10), 6.0);
+      const auto x =
+          swarm(n, static_cast<std::uint64_t>(n) * 31 + static_cast<std::uint64_t>(beta * 10), 6.0);
       const auto ref = reference(cmd, x, 7.0);
       for (Simd isa : isas) {
         std::vector<Vec2> v;
@@ -92,7 +98,8 @@ TEST_CASE("the batched kernel equals the per-agent law on every instruction set"
   WARN("largest difference, relative to the sum of the terms' magnitudes: " << worst);
 }
 
-TEST_CASE("the batched kernel picks the per-agent law's nearest neighbours, ties to the lowest id", "[batch]") {
+TEST_CASE("the batched kernel picks the per-agent law's nearest neighbours, ties to the lowest id",
+          "[batch]") {
   // Only the repulsion (k1 = k2 = 0): one nearest neighbour per agent, so the velocities are equal
   // bit for bit, or some agent took another neighbour.
   CompiledCommand cmd;
@@ -143,7 +150,8 @@ TEST_CASE("the batched kernel across the workspace and at the ends of the power'
   // Agents spread over the largest workspace (u up to 8e10); weights far below 2^-1022 (flushed or
   // subnormal, against std::pow's); a sigma so small that sigma^2 is subnormal and a weight so large
   // that the vectorised power cannot hold it (both take the per-agent law).
-  for (const Case c : {Case{3.5, 1.2, 1e5}, Case{3.5, 300.0, 50.0}, Case{1e-160, 1.2, 5.0}, Case{1e-3, 200.0, 5.0}}) {
+  for (const Case c :
+       {Case{3.5, 1.2, 1e5}, Case{3.5, 300.0, 50.0}, Case{1e-160, 1.2, 5.0}, Case{1e-3, 200.0, 5.0}}) {
     CompiledCommand cmd;
     cmd.gains.sigma = c.sigma;
     cmd.gains.beta = c.beta;
