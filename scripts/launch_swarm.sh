@@ -35,6 +35,7 @@
 #   --secure        DDS Security for every process (security.enabled: authenticated, access-controlled,
 #                   encrypted; docs/SECURITY.md), with a new keystore made in RUN/keystore
 #                   (scripts/make_keystore.sh RUN/keystore --agents N) unless --keystore is given
+#                   (a fleet with ssh hosts needs --keystore: the keystore must be on every host)
 #   --keystore DIR  use this keystore (implies --secure); it must hold the enclaves supervisor,
 #                   agent_0..agent_{N-1} (and viewer with --view); with ssh hosts, at the same path on each
 #
@@ -118,6 +119,9 @@ for s in "${sets[@]+"${sets[@]}"}"; do
   [[ $s == ?*=* ]] || die "--set: expected key=value, got '$s'"
 done
 if [ -n "$init" ]; then [ -r "$init" ] && [ -f "$init" ] || die "--init: cannot read '$init'"; fi
+if [ $secure -eq 1 ] && [ -z "$keystore" ] && [ -n "$fleet" ] && grep -qE 'run: *ssh' "$fleet"; then
+  die "--secure: the fleet has ssh hosts: make a keystore (scripts/make_keystore.sh DIR --agents N), copy it to the same path on every host and give --keystore DIR"
+fi
 if [ -n "$keystore" ]; then
   [ -d "$keystore/enclaves" ] || die "--keystore: '${keystore:0:200}' is no keystore (no enclaves/ folder): make one with scripts/make_keystore.sh DIR --agents N"
   keystore=$(cd "$keystore" && pwd)

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """scripts/launch_swarm.sh --fleet: the example fleet (config/fleets/lab4.yaml: 12 agents on three test
 hosts, the supervisor on a fourth, hosts the launcher makes and removes) runs to convergence; Ctrl-C
-mid-run on a secured fleet (--secure) with an ssh host leaves nothing behind; bad fleet files are
+mid-run on a secured fleet (--keystore) with an ssh host leaves nothing behind; bad fleet files are
 refused naming the key.
 
 There is no ssh server here: an ssh host is played by a stand-in `ssh` on PATH that runs the remote
@@ -131,7 +131,7 @@ class FleetTest(harness.SwarmTestCase):
 
     def test_ctrl_c_with_an_ssh_host(self):
         # Two test hosts, unicast discovery: h1 a namespace running agents 0..2; h2 an ssh host (the
-        # stand-in) running agents 3..5 and the supervisor. DDS Security (--secure): the command reaches
+        # stand-in) running agents 3..5 and the supervisor. DDS Security (--keystore): the command reaches
         # every agent across the hosts encrypted. Ctrl-C to the launcher alone, mid-run.
         lab = "d%d" % self.domain
         self.use_lab(lab)
@@ -150,7 +150,10 @@ class FleetTest(harness.SwarmTestCase):
             "supervisor: h2",
             "transport: {discovery: unicast}", ""]))
         env = dict(os.environ, PATH=bindir + os.pathsep + os.environ.get("PATH", ""))
-        p = self.launch(fleet, ["--scenario", "circle", "--timeout", "300", "--secure",
+        # A keystore at one path for both hosts (an ssh host needs it there: the launcher refuses --secure alone).
+        keystore = os.path.join(self.run_dir, "keystore")
+        harness.procs.run([source("scripts", "make_keystore.sh"), keystore, "--agents", "6"], timeout=60)
+        p = self.launch(fleet, ["--scenario", "circle", "--timeout", "300", "--keystore", keystore,
                                 "--set", "supervisor.converge.hold=100000"], env=env)
         run = harness.poll(lambda: glob.glob(os.path.join(self.run_dir, "runs_" + p.name, "*", "")), 30,
                            "the launcher's run folder")[0]
@@ -167,7 +170,7 @@ class FleetTest(harness.SwarmTestCase):
                                                                      [subnet + ".1", subnet + ".2"]),
                              "agent %d's transport" % i)
             self.assertEqual((config["security"]["enabled"], config["security"]["keystore"]),
-                             (True, os.path.join(run.rstrip("/"), "keystore")), "agent %d's security" % i)
+                             (True, keystore), "agent %d's security" % i)
             self.assertEqual(len(self.agent_events(run, i, "stop")), 1, "agent %d stopped cleanly" % i)
         self.assertIn("summary:", harness.read_text(os.path.join(run, "supervisor.out")),
                       "the supervisor on the ssh host printed its summary, streamed back")
