@@ -330,7 +330,7 @@ void AgentNode::drain_commands() {
 }
 
 void AgentNode::relay_command() {
-  if (cfg_.transport.security.enabled) return;
+  if (!command_relay_.valid()) return;  // secured: no relay writer
   const dds::CommandSample& s = logics_.front()->command_sample();
   if (!command_relay_.write(dds::to_msg(s.command, s.id, s.issuer_name))) util::log_warn("command re-offer failed");
 }

@@ -11,36 +11,11 @@
 
 #include "config/config.hpp"
 #include "core/metric_table.hpp"
+#include "record/recorder.hpp"
 
 namespace shapeform::view {
 
 namespace fs = std::filesystem;
-
-std::vector<std::string> split_csv_line(const std::string& line) {
-  std::vector<std::string> out(1);
-  bool quoted = false;
-  for (std::size_t i = 0; i < line.size(); ++i) {
-    const char ch = line[i];
-    if (quoted) {
-      if (ch == '"' && i + 1 < line.size() && line[i + 1] == '"') {
-        out.back() += '"';
-        ++i;
-      } else if (ch == '"') {
-        quoted = false;
-      } else {
-        out.back() += ch;
-      }
-    } else if (ch == '"') {
-      quoted = true;
-    } else if (ch == ',') {
-      out.emplace_back();
-    } else if (ch != '\r') {
-      out.back() += ch;
-    }
-  }
-  if (quoted) throw RecordingError("unterminated quoted field");
-  return out;
-}
 
 namespace {
 
@@ -56,15 +31,11 @@ class Table {
     present_ = true;
     std::string line;
     if (!std::getline(in, line)) throw RecordingError(path.string() + ": empty file (no header line)");
-    const auto header = split_csv_line(line);
+    const auto header = fields(line, 1);
     for (std::size_t i = 0; i < header.size(); ++i) columns_[header[i]] = i;
     for (int n = 2; std::getline(in, line); ++n) {
       if (line.empty()) continue;
-      try {
-        rows_.push_back(split_csv_line(line));
-      } catch (const RecordingError& e) {
-        throw RecordingError(where(n) + ": " + e.what());
-      }
+      rows_.push_back(fields(line, n));
       lines_.push_back(n);
     }
   }
@@ -99,6 +70,14 @@ class Table {
     return *v;
   }
   std::string where(int line) const { return path_.string() + ":" + std::to_string(line); }
+  /// Line n's fields (record::csv_fields), or RecordingError naming the file and line.
+  std::vector<std::string> fields(const std::string& line, int n) const {
+    try {
+      return record::csv_fields(line);
+    } catch (const std::invalid_argument& e) {
+      throw RecordingError(where(n) + ": " + e.what());
+    }
+  }
   int line(std::size_t row) const { return lines_[row]; }
 
  private:

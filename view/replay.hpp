@@ -20,10 +20,6 @@ class RecordingError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// One CSV line split into fields (RFC 4180: a quoted field may hold commas and doubled quotes).
-/// Throws RecordingError on an unterminated quote.
-std::vector<std::string> split_csv_line(const std::string& line);
-
 /// The recording's rows, each table in file order (wall_s ascending).
 struct Recording {
   struct MetricsRow {

@@ -53,7 +53,7 @@ void RefusedWatch::onParticipantAuthentication(fdds::DomainParticipant* /*partic
   SourceId s;
   std::copy(std::begin(info.guid.guidPrefix.value), std::end(info.guid.guidPrefix.value), s.prefix.begin());
   std::lock_guard<std::mutex> lock(mutex_);
-  if (std::find(pending_.begin(), pending_.end(), s) == pending_.end()) pending_.push_back(s);
+  if (pending_.size() < kRefusedRemembered) pending_.push_back(s);  // Node::take_refused reports each once
 }
 
 std::vector<SourceId> RefusedWatch::take() {

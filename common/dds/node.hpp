@@ -91,7 +91,7 @@ class RefusedWatch final : public eprosima::fastdds::dds::DomainParticipantListe
  public:
   void onParticipantAuthentication(eprosima::fastdds::dds::DomainParticipant* participant,
                                    eprosima::fastrtps::rtps::ParticipantAuthenticationInfo&& info) override;
-  /// The participants refused since the last call, each once.
+  /// The participants refused since the last call (at most kRefusedRemembered; repeats possible).
   std::vector<SourceId> take();
 
  private:

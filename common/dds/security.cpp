@@ -126,11 +126,6 @@ bool valid_identity(const std::string& name) {
   return true;
 }
 
-SecurityConfig with_identity(SecurityConfig s, const std::string& default_identity) {
-  if (s.identity.empty()) s.identity = default_identity;
-  return s;
-}
-
 std::string enclave_dir(const SecurityConfig& s) {
   std::error_code ec;
   const fs::path keystore = fs::absolute(s.keystore, ec);

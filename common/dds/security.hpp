@@ -34,9 +34,6 @@ class SecurityError : public std::runtime_error {
 /// (a folder directly under enclaves/, never a path out of it).
 bool valid_identity(const std::string& name);
 
-/// `s` with its identity filled in when empty: `default_identity` (the process's role and id).
-SecurityConfig with_identity(SecurityConfig s, const std::string& default_identity);
-
 /// The enclave folder: keystore/enclaves/identity, absolute.
 std::string enclave_dir(const SecurityConfig& s);
 

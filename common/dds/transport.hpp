@@ -58,7 +58,7 @@ struct TransportConfig {
 /// `cfg` with security.identity filled in when empty: the process's role and id ("supervisor",
 /// "agent_3", "viewer"), the enclave it uses when security is enabled.
 inline TransportConfig with_identity(TransportConfig cfg, const std::string& default_identity) {
-  cfg.security = with_identity(cfg.security, default_identity);
+  if (cfg.security.identity.empty()) cfg.security.identity = default_identity;
   return cfg;
 }
 

@@ -83,6 +83,32 @@ std::string csv_field(std::string_view s) {
   return out + '"';
 }
 
+std::vector<std::string> csv_fields(std::string_view line) {
+  std::vector<std::string> out(1);
+  bool quoted = false;
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    const char ch = line[i];
+    if (quoted) {
+      if (ch == '"' && i + 1 < line.size() && line[i + 1] == '"') {
+        out.back() += '"';
+        ++i;
+      } else if (ch == '"') {
+        quoted = false;
+      } else {
+        out.back() += ch;
+      }
+    } else if (ch == '"') {
+      quoted = true;
+    } else if (ch == ',') {
+      out.emplace_back();
+    } else if (ch != '\r') {
+      out.back() += ch;
+    }
+  }
+  if (quoted) throw std::invalid_argument("unterminated quoted field");
+  return out;
+}
+
 Recorder::Recorder(double flush_s) {
   if (!std::isfinite(flush_s) || !(flush_s > 0.0)) {
     throw std::invalid_argument("Recorder: flush_s must be > 0, got " + std::to_string(flush_s));

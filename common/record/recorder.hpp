@@ -15,6 +15,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "core/command.hpp"
 #include "core/metrics.hpp"
@@ -47,6 +48,10 @@ std::string command_json(const core::Command& c);
 /// `s` as one CSV field (RFC 4180): as it is, or double-quoted with inner quotes doubled when it holds
 /// a comma, a double quote or a line break.
 std::string csv_field(std::string_view s);
+/// One CSV line split into its fields, the inverse of csv_field (RFC 4180: a quoted field may hold
+/// commas and doubled quotes; a trailing '\r' is dropped). Throws std::invalid_argument on an
+/// unterminated quote.
+std::vector<std::string> csv_fields(std::string_view line);
 
 /// Writes the four CSV files. Not thread-safe: use from one thread (the writing program's loop).
 /// Numbers are written locale-independently in their shortest round-trip form.

@@ -1,3 +1,4 @@
+#!/usr/bin/python3
 """A swarm on test hosts: agents spread over namespace hosts, a supervisor on another (standard library only).
 
     with netlab.NetLab("rel", hosts=4, subnet="10.201.10") as lab:
@@ -103,3 +104,8 @@ class LanSwarm:
         running = ([self.sup] if self.sup else []) + list(self.agents.values())
         procs.stop_all([p for p in running if p.running()], grace=10.0, spacing=0.02)
         return {p.name: p.returncode for p in self.procs}
+
+
+if __name__ == "__main__":
+    import shapeform_procs
+    shapeform_procs.module_main(__file__, "a swarm on test hosts, for the LAN tests and scripts/reliability.py")

@@ -1,3 +1,4 @@
+#!/usr/bin/python3
 """Test hosts from Python: a thin wrapper of scripts/netlab.sh (standard library only).
 
     with NetLab("d3", hosts=4, subnet="10.200.6") as lab:
@@ -266,3 +267,8 @@ class NetLab:
         if os.path.exists(os.path.join(STATE_ROOT, self.name)):
             out.append("state file %s/%s" % (STATE_ROOT, self.name))
         return out
+
+
+if __name__ == "__main__":
+    import shapeform_procs
+    shapeform_procs.module_main(__file__, "test hosts from Python, a thin wrapper of scripts/netlab.sh")

@@ -326,8 +326,14 @@ def shm_files():
         return set()
 
 
-if __name__ == "__main__":
-    # A module, not a program: it only says so (scripts/ holds nothing that cannot answer --help).
+def module_main(path, what):
+    """The `__main__` of a module of scripts/lib: it runs nothing, it says what it is (scripts/ holds
+    nothing that cannot answer --help). Exits 0 for no argument or --help, 2 otherwise."""
     import sys as _sys
-    print("usage: import shapeform_procs -- shapeform_procs.py is a module: the process library of the tests, the benchmarks and the reproduction; it runs nothing itself")
+    name = os.path.basename(path)
+    print("usage: import %s -- %s is a module: %s; it runs nothing itself" % (os.path.splitext(name)[0], name, what))
     _sys.exit(0 if _sys.argv[1:] in ([], ["--help"], ["-h"]) else 2)
+
+
+if __name__ == "__main__":
+    module_main(__file__, "the process library of the tests, the benchmarks and the reproduction")

@@ -299,28 +299,12 @@ TEST_CASE("flush period must be positive", "[record]") {
   CHECK_NOTHROW(Recorder(0.001));
 }
 
-namespace {
-/// The fields of one CSV line (RFC 4180: quoted fields, doubled quotes inside).
-std::vector<std::string> csv_fields(const std::string& line) {
-  std::vector<std::string> out(1);
-  bool quoted = false;
-  for (std::size_t i = 0; i < line.size(); ++i) {
-    const char ch = line[i];
-    if (quoted) {
-      if (ch == '"' && i + 1 < line.size() && line[i + 1] == '"') out.back() += '"', ++i;
-      else if (ch == '"') quoted = false;
-      else out.back() += ch;
-    } else if (ch == '"') {
-      quoted = true;
-    } else if (ch == ',') {
-      out.emplace_back();
-    } else {
-      out.back() += ch;
-    }
-  }
-  return out;
+TEST_CASE("csv_fields: RFC 4180 quotes keep commas and doubled quotes", "[record]") {
+  CHECK(csv_fields("a,,\"b,c\",\"say \"\"hi\"\"\"") == std::vector<std::string>{"a", "", "b,c", "say \"hi\""});
+  CHECK(csv_fields("1,2\r") == std::vector<std::string>{"1", "2"});
+  CHECK_THROWS_AS(csv_fields("\"open"), std::invalid_argument);
+  for (const std::string s : {"", "abc", "a,b", "say \"hi\"", "two\nlines"}) CHECK(csv_fields(csv_field(s)) == std::vector<std::string>{s});
 }
-}  // namespace
 
 TEST_CASE("csv_field quotes only what needs it", "[record]") {
   CHECK(csv_field("") == "");

@@ -36,12 +36,6 @@ fs::path write_recording(const std::string& name, bool with_commands = true) {
 
 }  // namespace
 
-TEST_CASE("split_csv_line: RFC 4180 quotes keep commas and doubled quotes") {
-  CHECK(view::split_csv_line("a,,\"b,c\",\"say \"\"hi\"\"\"") == std::vector<std::string>{"a", "", "b,c", "say \"hi\""});
-  CHECK(view::split_csv_line("1,2\r") == std::vector<std::string>{"1", "2"});
-  CHECK_THROWS_AS(view::split_csv_line("\"open"), view::RecordingError);
-}
-
 TEST_CASE("command_from_json: config keys to values, through the config loader") {
   const auto c = view::command_from_json(R"({"shape.kind":"ellipse","shape.a":"5","shape.b":2})");
   CHECK(c.shape.kind == core::ShapeKind::Ellipse);
