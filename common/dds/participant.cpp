@@ -18,6 +18,7 @@
 
 #include "dds/discovery.hpp"
 #include "dds/library_log.hpp"
+#include "dds/topics.hpp"
 #include "util/ipv4.hpp"
 
 namespace shapeform::dds {
@@ -178,6 +179,13 @@ fdds::DomainParticipantQos participant_qos(const TransportConfig& cfg, const std
 
   pq.transport().user_transports.push_back(udp);
 
+  if (cfg.static_edp) {
+    // validate() refused it with a discovery server (whose clients keep simple EDP) and with security.
+    builtin.discovery_config.use_SIMPLE_EndpointDiscoveryProtocol = false;
+    builtin.discovery_config.use_STATIC_EndpointDiscoveryProtocol = true;
+    builtin.discovery_config.static_edp_xml_config(("data://" + static_edp_description(cfg)).c_str());
+  }
+
   // Where this participant runs, announced in discovery so that a tool can tell the operator.
   char host[256] = {};
   if (gethostname(host, sizeof host - 1) != 0) host[0] = '\0';
@@ -193,6 +201,52 @@ fdds::DomainParticipantQos participant_qos(const TransportConfig& cfg, const std
 frtps::Locator_t data_multicast_locator(const TransportConfig& cfg) {
   validate(cfg);
   return udp_locator(kMulticastGroup, user_multicast_port(cfg.domain));
+}
+
+std::string static_edp_description(const TransportConfig& cfg) {
+  validate(cfg);
+  const auto reliability = [](fdds::ReliabilityQosPolicyKind k) {
+    return k == fdds::RELIABLE_RELIABILITY_QOS ? "RELIABLE_RELIABILITY_QOS" : "BEST_EFFORT_RELIABILITY_QOS";
+  };
+  const auto durability = [](fdds::DurabilityQosPolicyKind k) {
+    switch (k) {
+      case fdds::TRANSIENT_LOCAL_DURABILITY_QOS: return "TRANSIENT_LOCAL_DURABILITY_QOS";
+      case fdds::TRANSIENT_DURABILITY_QOS: return "TRANSIENT_DURABILITY_QOS";
+      case fdds::PERSISTENT_DURABILITY_QOS: return "PERSISTENT_DURABILITY_QOS";
+      default: return "VOLATILE_DURABILITY_QOS";
+    }
+  };
+  const auto locators = [](std::ostream& os, const char* tag, const frtps::LocatorList_t& list) {
+    for (const frtps::Locator_t& loc : list) {
+      os << "<" << tag << " address=\"" << frtps::IPLocator::ip_to_string(loc) << "\" port=\"" << loc.port
+         << "\"/>";
+    }
+  };
+  // The name is only a label: Fast DDS 2.9 matches a peer's endpoints by user id, whatever its name.
+  std::ostringstream os;
+  os << "<staticdiscovery><participant><name>shapeform</name>";
+  for (const TopicId id : kAllTopics) {
+    const fdds::DataWriterQos w = writer_qos(id);
+    const fdds::DataReaderQos r = reader_qos(id, cfg);
+    const auto common = [&](std::int16_t user_id, fdds::ReliabilityQosPolicyKind rel,
+                            fdds::DurabilityQosPolicyKind dur) {
+      os << "<userId>" << user_id << "</userId><topicName>" << topic_name(id) << "</topicName><topicDataType>"
+         << type_name(id) << "</topicDataType><topicKind>" << (is_keyed(id) ? "WITH_KEY" : "NO_KEY")
+         << "</topicKind><reliabilityQos>" << reliability(rel) << "</reliabilityQos><durabilityQos>"
+         << durability(dur) << "</durabilityQos>";
+    };
+    os << "<writer>";
+    common(w.endpoint().user_defined_id, w.reliability().kind, w.durability().kind);
+    locators(os, "unicastLocator", w.endpoint().unicast_locator_list);
+    locators(os, "multicastLocator", w.endpoint().multicast_locator_list);
+    os << "</writer><reader>";
+    common(r.endpoint().user_defined_id, r.reliability().kind, r.durability().kind);
+    locators(os, "unicastLocator", r.endpoint().unicast_locator_list);
+    locators(os, "multicastLocator", r.endpoint().multicast_locator_list);
+    os << "</reader>";
+  }
+  os << "</participant></staticdiscovery>";
+  return os.str();
 }
 
 fdds::DomainParticipant* create_participant(const TransportConfig& cfg, const std::string& name,
@@ -275,6 +329,7 @@ std::string describe(const TransportConfig& cfg) {
      << " s";
   if (cfg.socket_buffer_bytes > 0) os << ", socket buffers " << cfg.socket_buffer_bytes << " B";
   if (cfg.multicast_data) os << ", state on multicast 239.255.0.1:" << user_multicast_port(cfg.domain);
+  if (cfg.static_edp) os << ", static endpoint discovery";
   if (cfg.security.enabled) os << ", " << describe(cfg.security);
   return os.str();
 }

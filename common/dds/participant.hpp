@@ -44,7 +44,8 @@ inline constexpr std::array<std::uint8_t, 4> kMulticastGroup = {239, 255, 0, 1};
 /// Every participant announces its host name and process id in discovery (the propagated
 /// properties kHostProperty and kPidProperty of dds/discovery.hpp), for shapeform_topics.
 /// multicast_data (loopback, lan without peers) changes no participant setting: see
-/// data_multicast_locator(). security.enabled adds the DDS Security plugin properties of the enclave
+/// data_multicast_locator(). static_edp replaces simple endpoint discovery by STATIC EDP with
+/// static_edp_description(cfg), given inline ("data://"). security.enabled adds the DDS Security plugin properties of the enclave
 /// (dds/security.hpp: security_properties).
 /// Pure: creates nothing.
 /// Throws std::runtime_error naming the offending field (validate(): "transport.domain: must be in 0..232,
@@ -61,6 +62,18 @@ eprosima::fastdds::dds::DomainParticipantQos participant_qos(const TransportConf
 /// reader would send to a locator Fast DDS 2.9 never registered and abort on an assert
 /// (statistics/rtps/messages/OutputTrafficManager.hpp:87). Throws like participant_qos().
 eprosima::fastrtps::rtps::Locator_t data_multicast_locator(const TransportConfig& cfg);
+
+/// The STATIC EDP description (Fast DDS's <staticdiscovery> XML) every participant of a static_edp swarm
+/// is given: one <participant> with a writer and a reader of every topic of the topic table, each with
+/// its static_edp_user_id, topic and type name, key kind, reliability and durability (from writer_qos /
+/// reader_qos) and the reader's own locators (reader_qos(id, cfg): the State multicast group when
+/// multicast_data is set; none otherwise, so a peer sends to the reader's participant's default unicast
+/// locators). Fast DDS 2.9 (EDPStatic, XMLEndpointParser::lookforReader) finds a peer's endpoint by its
+/// user id alone, whatever the peer's participant name, so this one description covers every process
+/// (agents, groups, supervisor, tools, bench) without knowing the swarm's members: a peer announces the
+/// user id and entity id of each endpoint it has in its participant announcement. Pure; throws like
+/// participant_qos().
+std::string static_edp_description(const TransportConfig& cfg);
 
 /// Creates a participant on cfg.domain from participant_qos(cfg, name). Never returns null:
 /// throws SecurityError (dds/security.hpp) when security is enabled and the enclave fails check_enclave()

@@ -54,6 +54,11 @@ void set_history(const TopicRow& r, fdds::HistoryQosPolicy& history,
 
 }  // namespace
 
+std::int16_t static_edp_user_id(TopicId id, bool writer) {
+  const auto k = static_cast<std::size_t>(&row(id) - kTable);  // the row's index in the table
+  return static_cast<std::int16_t>(2 * k + (writer ? 1 : 2));
+}
+
 const char* topic_name(TopicId id) { return row(id).name; }
 const char* type_name(TopicId id) { return row(id).type; }
 
@@ -74,6 +79,7 @@ fdds::DataWriterQos writer_qos(TopicId id) {
     q.reliable_writer_qos().times.heartbeatPeriod = eprosima::fastrtps::Duration_t(kHeartbeatPeriod_s);
   }
   q.data_sharing().off();  // AUTO by default in 2.9: would use shared memory for bounded unkeyed types
+  q.endpoint().user_defined_id = static_edp_user_id(id, true);
   return q;
 }
 
@@ -84,6 +90,7 @@ fdds::DataReaderQos reader_qos(TopicId id) {
   q.durability().kind = r.durability;
   set_history(r, q.history(), q.resource_limits());
   q.data_sharing().off();
+  q.endpoint().user_defined_id = static_edp_user_id(id, false);
   return q;
 }
 

@@ -2,6 +2,7 @@
 /// The ONE topic table of the project: topic names, their types and their QoS. Writers and readers are
 /// only ever created with writer_qos() / reader_qos() so both sides always match.
 #include <array>
+#include <cstdint>
 #include <optional>
 #include <string_view>
 
@@ -30,7 +31,13 @@ const char* type_name(TopicId id);
 /// True for topics with one instance per agent (@key id): State and Status.
 bool is_keyed(TopicId id);
 
-/// Writer QoS of a topic (data sharing always off; KEEP_LAST 1 everywhere):
+/// The endpoint's user id of static endpoint discovery (transport.static_edp), from the topic's row in
+/// the table: writer 2 k + 1, reader 2 k + 2 for row k. Unique over topics and directions, as Fast DDS
+/// 2.9 wants them in one description (it looks a peer's endpoint up by this id alone).
+std::int16_t static_edp_user_id(TopicId id, bool writer);
+
+/// Writer QoS of a topic (data sharing always off; KEEP_LAST 1 everywhere; endpoint user id
+/// static_edp_user_id(id, true), which only static endpoint discovery reads):
 ///  - State:   BEST_EFFORT, VOLATILE        (every agent tick)
 ///  - Command: RELIABLE, TRANSIENT_LOCAL    (late joiners get the newest command)
 ///  - Target:  BEST_EFFORT, VOLATILE
@@ -40,7 +47,8 @@ bool is_keyed(TopicId id);
 /// Reliable writers send a heartbeat every kHeartbeatPeriod_s so a lost sample is repaired quickly.
 eprosima::fastdds::dds::DataWriterQos writer_qos(TopicId id);
 
-/// Reader QoS of a topic: the same reliability, durability and history as the writer. Keyed readers
+/// Reader QoS of a topic: the same reliability, durability and history as the writer, user id
+/// static_edp_user_id(id, false). Keyed readers
 /// lift max_instances (Fast DDS default 10 would silently hide agents 11 and up).
 eprosima::fastdds::dds::DataReaderQos reader_qos(TopicId id);
 

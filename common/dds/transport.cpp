@@ -30,6 +30,9 @@ const std::string kMulticastDataRule =
     "needs `profile: loopback`, `lan` without `peers`, or `discovery-server` with a server on "
     "`127.x`/`localhost`";
 
+/// Where transport.static_edp works, as the docs and the errors say it.
+const std::string kStaticEdpRule = "not with `profile: discovery-server` nor `security.enabled`";
+
 std::vector<P> build_table() {
   using params::Type;
   const std::string ipv4_list = "list of IPv4 addresses (dotted quads)";
@@ -96,6 +99,14 @@ std::vector<P> build_table() {
       "stays unicast",
       "; " + kMulticastDataRule,
       [](auto& c) -> auto& { return c.multicast_data; }));
+  t.push_back(param<bool>(
+      Type::Bool, "transport.static_edp", "", {},
+      "static endpoint discovery (Fast DDS STATIC EDP): no endpoint-discovery traffic (SEDP, reliable, one "
+      "exchange per pair of participants); every participant knows every writer and reader a peer can have from "
+      "one description generated from the topic table, and learns which ones the peer has from its participant "
+      "announcements. Every process of the swarm must set it alike (a participant without it never matches one "
+      "with it)",
+      "; " + kStaticEdpRule, [](auto& c) -> auto& { return c.static_edp; }));
   t.push_back(param<bool>(
       Type::Bool, "security.enabled", "", {},
       "DDS Security: every participant authenticated (PKI-DH: certificates of the keystore's identity "
@@ -211,6 +222,22 @@ std::vector<TransportProblem> transport_problems(const TransportConfig& cfg) {
                    "needs transport.profile loopback, lan without peers, or discovery-server with a server on "
                    "127.x (profile is " + cfg.profile + ")",
                    "true", "transport.profile"});
+  }
+  if (cfg.static_edp && cfg.profile == kDiscoveryServer) {
+    // Fast DDS 2.9 builds a discovery-server client with simple endpoint discovery whatever the setting
+    // (PDPClient), so its endpoints would never match those of static peers.
+    out.push_back({"transport.static_edp",
+                   "cannot be used with transport.profile discovery-server (its clients always use the "
+                   "server's endpoint discovery; use loopback or lan)",
+                   "true", "transport.profile"});
+  } else if (cfg.static_edp && cfg.security.enabled) {
+    // Fast DDS 2.9 matches static endpoints on every announcement of a participant
+    // (PDPListener -> EDPStatic::assignRemoteEndpoints), not only once it is authenticated, and the
+    // combination is untested upstream: refused rather than a secured swarm that might match too early.
+    out.push_back({"transport.static_edp",
+                   "cannot be used with security.enabled (Fast DDS 2.9 matches static endpoints outside "
+                   "the authentication step; use simple endpoint discovery with security)",
+                   "true", "security.enabled"});
   }
   if (cfg.security.enabled && cfg.security.keystore.empty()) {
     out.push_back({"security.keystore",

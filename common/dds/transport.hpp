@@ -42,6 +42,11 @@ struct TransportConfig {
   /// Loopback profile or discovery-server with a server on 127.x / localhost (whitelist 127.0.0.1, so
   /// the group stays on lo), or lan without peers (the group on `interfaces` only). Off by default.
   bool multicast_data = false;
+  /// Fast DDS STATIC endpoint discovery: no SEDP; every participant knows every endpoint of the swarm
+  /// from one description generated from the topic table (dds::static_edp_description) and learns which
+  /// ones a peer has from its participant announcement. Every process of the swarm must set it alike.
+  /// Not with the discovery-server profile or security (the validator refuses). Off by default.
+  bool static_edp = false;
   /// DDS Security (keys security.*): off, or every participant of the process authenticated,
   /// access-controlled and encrypted with one enclave of a keystore.
   SecurityConfig security;
@@ -77,8 +82,9 @@ struct TransportProblem {
 /// Every problem of cfg, in the table's key order: each number within its declared range, the profile
 /// known, interfaces and peers IPv4 addresses, discovery_server "host:port" (host an IPv4 address or
 /// localhost, port 1..65535), announce_s < lease_s, multicast_data only on loopback (or a discovery
-/// server on it) or lan without peers, security.keystore given when security.enabled and the profile not
-/// discovery-server, security.identity empty or a valid enclave name. Empty when valid.
+/// server on it) or lan without peers, static_edp neither with the discovery-server profile nor with
+/// security, security.keystore given when security.enabled and the profile not discovery-server,
+/// security.identity empty or a valid enclave name. Empty when valid.
 std::vector<TransportProblem> transport_problems(const TransportConfig& cfg);
 
 /// "host:port" with host an IPv4 literal or "localhost" (read as 127.0.0.1) and port 1..65535

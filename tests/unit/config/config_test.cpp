@@ -692,6 +692,25 @@ TEST_CASE("multicast_data is off by default, read as a bool, and needs loopback 
             .transport.multicast_data);  // default server 127.0.0.1:11811
 }
 
+TEST_CASE("static_edp is off by default, read as a bool, and refused with a discovery server or security") {
+  CHECK_FALSE(load_string("schema_version: 1\n").transport.static_edp);
+  const Config c = load_string("schema_version: 1\ntransport:\n  static_edp: true\n");
+  CHECK(c.transport.static_edp);
+  CHECK(load("", {"transport.static_edp=true"}).transport.static_edp);
+  CHECK(to_yaml(c).find("static_edp: true") != std::string::npos);
+  CHECK(load_string(to_yaml(c)).transport.static_edp);
+  CHECK(problem_of("schema_version: 1\ntransport:\n  static_edp: yes please\n").find("transport.static_edp:") == 0);
+  CHECK(load_string("schema_version: 1\ntransport:\n  profile: lan\n  peers: [10.0.0.2]\n  static_edp: true\n")
+            .transport.static_edp);
+  CHECK(load_string("schema_version: 1\ntransport:\n  multicast_data: true\n  static_edp: true\n").transport.static_edp);
+  CHECK(problem_of("schema_version: 1\ntransport:\n  profile: discovery-server\n  static_edp: true\n") ==
+        "transport.static_edp: cannot be used with transport.profile discovery-server (its clients always use the "
+        "server's endpoint discovery; use loopback or lan), got true (line 4)");
+  CHECK(problem_of("schema_version: 1\ntransport:\n  static_edp: true\nsecurity:\n  enabled: true\n"
+                   "  keystore: /tmp/ks\n")
+            .find("transport.static_edp: cannot be used with security.enabled") == 0);
+}
+
 TEST_CASE("transport interfaces and peers are IPv4 addresses") {
   CHECK(problem_of("schema_version: 1\ntransport:\n  interfaces: [192.168.1.2, foo]\n") ==
         "transport.interfaces: must be a list of IPv4 addresses (\"foo\" is not one), got a list (line 3)");

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -25,6 +26,7 @@
 #include "dds/stall.hpp"
 #include "dds/topics.hpp"
 #include "dds/transport.hpp"
+#include "shapeform/msg/AgentStatePubSubTypes.h"
 #include "shapeform/msg/ShapeCommandPubSubTypes.h"
 #include "shapes/shapes.hpp"
 #include "util/clock.hpp"
@@ -880,6 +882,81 @@ TEST_CASE("multicast_data: State readers listen on one group on lo, nothing else
   }
 }
 
+TEST_CASE("static_edp: STATIC endpoint discovery from a description of the topic table", "[dds][qos]") {
+  dds::TransportConfig cfg;
+  cfg.domain = 7;
+  const fdds::DomainParticipantQos plain = dds::participant_qos(cfg, "agent-1");
+  CHECK(plain.wire_protocol().builtin.discovery_config.use_SIMPLE_EndpointDiscoveryProtocol);
+  CHECK_FALSE(plain.wire_protocol().builtin.discovery_config.use_STATIC_EndpointDiscoveryProtocol);
+  CHECK_FALSE(dds::TransportConfig{}.static_edp);  // off by default
+
+  // One user id per topic and direction, all distinct and positive (Fast DDS refuses a description that
+  // repeats one), carried by the QoS every endpoint is created with.
+  std::set<int> ids;
+  for (dds::TopicId id : dds::kAllTopics) {
+    INFO(dds::topic_name(id));
+    CHECK(dds::writer_qos(id).endpoint().user_defined_id == dds::static_edp_user_id(id, true));
+    CHECK(dds::reader_qos(id, cfg).endpoint().user_defined_id == dds::static_edp_user_id(id, false));
+    ids.insert(dds::static_edp_user_id(id, true));
+    ids.insert(dds::static_edp_user_id(id, false));
+  }
+  CHECK(ids.size() == 2 * dds::kAllTopics.size());
+  CHECK(*ids.begin() > 0);
+
+  cfg.static_edp = true;
+  const fdds::DomainParticipantQos q = dds::participant_qos(cfg, "agent-1");
+  const auto& disc = q.wire_protocol().builtin.discovery_config;
+  CHECK_FALSE(disc.use_SIMPLE_EndpointDiscoveryProtocol);
+  CHECK(disc.use_STATIC_EndpointDiscoveryProtocol);
+  const std::string xml = dds::static_edp_description(cfg);
+  CHECK(std::string(disc.static_edp_xml_config()) == "data://" + xml);
+  CHECK(dds::describe(cfg).find("static endpoint discovery") != std::string::npos);
+  // The State endpoints as the table says; readers have no locator of their own (the peer's defaults).
+  const std::string state_writer = "<writer><userId>" + std::to_string(dds::static_edp_user_id(dds::TopicId::State, true)) +
+                                   "</userId><topicName>shapeform/state</topicName><topicDataType>shapeform::msg::"
+                                   "AgentState</topicDataType><topicKind>WITH_KEY</topicKind><reliabilityQos>"
+                                   "BEST_EFFORT_RELIABILITY_QOS</reliabilityQos><durabilityQos>VOLATILE_DURABILITY_QOS"
+                                   "</durabilityQos></writer>";
+  CHECK(xml.find(state_writer) != std::string::npos);
+  CHECK(xml.find("<topicName>shapeform/command</topicName><topicDataType>shapeform::msg::ShapeCommand"
+                 "</topicDataType><topicKind>NO_KEY</topicKind><reliabilityQos>RELIABLE_RELIABILITY_QOS"
+                 "</reliabilityQos><durabilityQos>TRANSIENT_LOCAL_DURABILITY_QOS</durabilityQos>") != std::string::npos);
+  CHECK(xml.find("Locator") == std::string::npos);
+  for (dds::TopicId id : dds::kAllTopics) {
+    for (bool writer : {true, false}) {
+      INFO(dds::topic_name(id) << (writer ? " writer" : " reader"));
+      CHECK(xml.find("<userId>" + std::to_string(dds::static_edp_user_id(id, writer)) + "</userId><topicName>" +
+                     dds::topic_name(id) + "<") != std::string::npos);
+    }
+  }
+  // With multicast_data, peers learn the State readers' group from the description (they have no
+  // endpoint discovery to learn it from).
+  cfg.multicast_data = true;
+  const std::string mc = dds::static_edp_description(cfg);
+  const auto reader_at = mc.find("<reader><userId>" + std::to_string(dds::static_edp_user_id(dds::TopicId::State, false)));
+  REQUIRE(reader_at != std::string::npos);
+  const std::string group = "<multicastLocator address=\"239.255.0.1\" port=\"9151\"/>";
+  CHECK(mc.find(group + "</reader>", reader_at) == mc.find("</reader>", reader_at) - group.size());
+  CHECK(mc.find("multicastLocator") == mc.rfind("multicastLocator"));  // that reader's only
+  CHECK(mc.find("unicastLocator") == std::string::npos);
+
+  // Refused where Fast DDS would not use it, by key.
+  auto refusal = [](const dds::TransportConfig& c) {
+    for (const auto& p : dds::transport_problems(c)) return p.key + ": " + p.what;
+    return std::string();
+  };
+  cfg.multicast_data = false;
+  cfg.profile = "discovery-server";
+  CHECK(refusal(cfg).find("transport.static_edp: cannot be used with transport.profile discovery-server") == 0);
+  CHECK_THROWS_AS(dds::participant_qos(cfg, "x"), std::runtime_error);
+  cfg.profile = "lan";
+  CHECK(refusal(cfg).empty());
+  cfg.profile = "loopback";
+  cfg.security.enabled = true;
+  cfg.security.keystore = "/tmp/keystore";
+  CHECK(refusal(cfg).find("transport.static_edp: cannot be used with security.enabled") == 0);
+}
+
 /// The one locator of `list` as "a.b.c.d:port"; "" when the list does not hold exactly one.
 std::string only_locator(const frtps::LocatorList_t& list) {
   if (list.size() != 1) return "";
@@ -1259,6 +1336,85 @@ TEST_CASE("multicast_data pub-sub: keyed state and a reliable topic between thre
     for (const auto& r : batch) seen_c.insert(r.msg.id());
     return seen_c.count(4) == 1;
   }));
+}
+
+/// Counts the participants a participant discovered (DISCOVERED_PARTICIPANT), on Fast DDS's thread.
+struct DiscoveryCount final : fdds::DomainParticipantListener {
+  std::atomic<int> discovered{0};
+  void on_participant_discovery(fdds::DomainParticipant*, frtps::ParticipantDiscoveryInfo&& info) override {
+    if (info.status == frtps::ParticipantDiscoveryInfo::DISCOVERED_PARTICIPANT) ++discovered;
+  }
+};
+
+TEST_CASE("static_edp pub-sub: State and Command match without endpoint discovery; a simple-EDP peer never does",
+          "[dds][node][pubsub]") {
+  auto cfg = loopback(test_domain(2));
+  cfg.static_edp = true;
+  // Neither name is in the description (it names only "shapeform"): Fast DDS matches by user id.
+  dds::Node agent(cfg, "test-sedp-agent");
+  dds::Node sup(cfg, "test-sedp-supervisor");
+  auto command_writer = sup.writer<msg::ShapeCommand>(dds::TopicId::Command);
+  REQUIRE(command_writer.write(dds::to_msg(sample_command(), 3)));  // before the reader: transient local
+
+  // A participant of the same domain with simple endpoint discovery, writing State and reading Command
+  // (not the same topic twice: its own endpoints would match each other).
+  auto simple_cfg = cfg;
+  simple_cfg.static_edp = false;
+  DiscoveryCount heard;
+  fdds::DomainParticipant* simple = dds::create_participant(simple_cfg, "test-simple-edp", &heard);
+  const auto topic = [&](dds::TopicId id, fdds::TopicDataType* type) {
+    REQUIRE(fdds::TypeSupport(type).register_type(simple) == eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK);
+    return simple->create_topic(dds::topic_name(id), dds::type_name(id), fdds::TopicQos());
+  };
+  fdds::DataWriter* simple_writer = simple->create_publisher(fdds::PublisherQos())->create_datawriter(
+      topic(dds::TopicId::State, new msg::AgentStatePubSubType()), dds::writer_qos(dds::TopicId::State));
+  fdds::DataReader* simple_reader = simple->create_subscriber(fdds::SubscriberQos())->create_datareader(
+      topic(dds::TopicId::Command, new msg::ShapeCommandPubSubType()), dds::reader_qos(dds::TopicId::Command));
+  REQUIRE(simple_writer != nullptr);
+  REQUIRE(simple_reader != nullptr);
+
+  auto state_writer = agent.writer<msg::AgentState>(dds::TopicId::State);
+  auto state_reader = sup.reader<msg::AgentState>(dds::TopicId::State);
+  auto command_reader = agent.reader<msg::ShapeCommand>(dds::TopicId::Command);
+  std::vector<dds::Received<msg::AgentState>> states;
+  std::vector<dds::Received<msg::ShapeCommand>> commands;
+  msg::ShapeCommand command;
+  bool state_seen = false, command_seen = false;
+  std::uint64_t seq = 0;
+  REQUIRE(wait_for([&] {
+    msg::AgentState s = good_state();
+    s.id(7);
+    s.seq(++seq);
+    s.stamp_ns(util::steady_ns());
+    state_writer.write(s);
+    simple_writer->write(&s);
+    state_reader.drain(states);
+    for (const auto& r : states) {
+      CHECK(r.source == agent.source());  // never the simple-EDP participant's writer
+      state_seen = state_seen || (r.valid_data && r.msg.id() == 7);
+    }
+    command_reader.drain(commands);
+    for (const auto& r : commands) {
+      if (r.valid_data && r.msg.epoch() == 3u) command = r.msg;
+    }
+    command_seen = command.epoch() == 3u;
+    return state_seen && command_seen && heard.discovered >= 2;
+  }));
+  core::CompiledCommand out;
+  std::string error;
+  REQUIRE(dds::from_msg(command, out, error));
+  require_same(sample_command(), out);
+  // The simple-EDP participant discovered both (participant discovery is the same), but its endpoints and
+  // theirs never match: a swarm must set transport.static_edp alike in every process.
+  CHECK(state_writer.matched() == 1);
+  CHECK(state_reader.matched() == 1);
+  fdds::PublicationMatchedStatus pub_status;
+  fdds::SubscriptionMatchedStatus sub_status;
+  simple_writer->get_publication_matched_status(pub_status);
+  simple_reader->get_subscription_matched_status(sub_status);
+  CHECK(pub_status.total_count == 0);
+  CHECK(sub_status.total_count == 0);
+  dds::delete_participant(simple);
 }
 
 TEST_CASE("command is reliable and transient local so a late reader gets the newest", "[dds][node][pubsub]") {
