@@ -65,6 +65,8 @@ add_preset("mcbuf1ann", [MC, BUF1] + ANN, "State on multicast on lo + 1 MiB sock
 add_preset("mcbufann", [MC, BUF] + ANN, "State on multicast on lo + 4 MiB socket buffers + lease 10 s / announce 3 s")
 add_preset("mcbufannsec", [MC, BUF] + ANN, "mcbufann + DDS Security (security.enabled: PKI-DH, permissions, "
            "AES-GCM; one keystore for the benchmark by scripts/make_keystore.sh)", secure=True)
+SEDP = "transport.static_edp=true"
+add_preset("mcbufannsedp", [MC, BUF, SEDP] + ANN, "mcbufann + static endpoint discovery (transport.static_edp)")
 add_preset("ds", [], "discovery server on 127.0.0.1 (transport.profile=discovery-server)", ds=True)
 add_preset("dsbuf", [BUF], "discovery server on 127.0.0.1 + 4 MiB socket buffers", ds=True)
 add_preset("dsmcbufann", [MC, BUF] + ANN, "discovery server on 127.0.0.1 + State on multicast on lo + 4 MiB socket "
@@ -215,6 +217,18 @@ LEVERS: list[dict] = [
              "locks) behind each AES-GCM operation, not the cipher itself. Hand trials (25 agents, the project's "
              "lease 2 s / 0.5 s, 150 s each): 15 processes all matched in 7.5 s; 20 never (1 trial), 25 never (4 "
              "trials, with or without RTPS message signing or submessage encryption, with a 0.3 s stagger)."},
+    {"name": "10. Static endpoint discovery",
+     "question": "`transport.static_edp`: Fast DDS STATIC EDP instead of simple endpoint discovery. Simple EDP "
+                 "(SEDP) has every pair of participants exchange their writers and readers over reliable built-in "
+                 "endpoints: N x (N-1) exchanges of about ten endpoints each, with heartbeats and acknowledgements, "
+                 "all while the swarm starts. With static EDP each participant is given one description, generated "
+                 "from the topic table (a writer and a reader of every topic, each with a user id), and announces "
+                 "the user and entity ids of the endpoints it has in its participant announcement (SPDP), which it "
+                 "sends anyway: a peer matches them as soon as it hears that announcement, with no further "
+                 "message. Every process (agents, supervisor, probe, baseline) goes through the same factory.",
+     "pairs": [(_lv(B, 100, "mcbufann"), _lv(B, 100, "mcbufannsedp")),
+               (_lv(A, 100, "mcbufann"), _lv(A, 100, "mcbufannsedp"))],
+     "extra": True},
 ]
 # The rows of a lever, unless listed: the members of its pairs, in order.
 for _lever in LEVERS:
