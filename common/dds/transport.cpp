@@ -101,11 +101,9 @@ std::vector<P> build_table() {
       [](auto& c) -> auto& { return c.multicast_data; }));
   t.push_back(param<bool>(
       Type::Bool, "transport.static_edp", "", {},
-      "static endpoint discovery (Fast DDS STATIC EDP): no endpoint-discovery traffic (SEDP, reliable, one "
-      "exchange per pair of participants); every participant knows every writer and reader a peer can have from "
-      "one description generated from the topic table, and learns which ones the peer has from its participant "
-      "announcements. Every process of the swarm must set it alike (a participant without it never matches one "
-      "with it)",
+      "static endpoint discovery (Fast DDS STATIC EDP): no endpoint-discovery traffic (SEDP: reliable, per pair of "
+      "participants); each knows every endpoint a peer can have from one description made from the topic table, "
+      "and which ones it has from its announcements. Every process of the swarm must set it alike",
       "; " + kStaticEdpRule, [](auto& c) -> auto& { return c.static_edp; }));
   t.push_back(param<bool>(
       Type::Bool, "security.enabled", "", {},
