@@ -7,8 +7,14 @@
 namespace shapeform::agent {
 
 AgentLogic::AgentLogic(std::int32_t id, core::Vec2 start, std::int64_t timeout_ns, bool lockstep,
-                       int max_wait_ticks)
-    : id_(id), x_(start), x_prev_(start), timeout_ns_(timeout_ns), lockstep_(lockstep), max_wait_ticks_(max_wait_ticks) {}
+                       int max_wait_ticks, std::int64_t idle_timeout_ns)
+    : id_(id),
+      x_(start),
+      x_prev_(start),
+      timeout_ns_(timeout_ns),
+      idle_timeout_ns_(idle_timeout_ns > 0 ? idle_timeout_ns : timeout_ns),
+      lockstep_(lockstep),
+      max_wait_ticks_(max_wait_ticks) {}
 
 dds::CommandArbiter::Verdict AgentLogic::on_command(const dds::CommandSample& c) {
   const auto v = arbiter_.offer(c, peer_floor());
@@ -84,8 +90,9 @@ void AgentLogic::on_gone(std::int32_t id) {
 }
 
 void AgentLogic::drop_stale(std::int64_t now_ns) {
+  const std::int64_t timeout = has_command() ? timeout_ns_ : idle_timeout_ns_;
   for (auto it = table_.begin(); it != table_.end();) {
-    if (now_ns - it->second.last_seen_ns > timeout_ns_) {
+    if (now_ns - it->second.last_seen_ns > timeout) {
       it = table_.erase(it);
       ++counters_.stale_dropped;
     } else {

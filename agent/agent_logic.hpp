@@ -31,11 +31,13 @@ struct AgentCounters {
 
 class AgentLogic {
  public:
-  /// timeout_ns: a neighbour unheard for longer is dropped (neighbour_timeout periods).
+  /// timeout_ns: a neighbour unheard for longer is dropped (neighbour_timeout periods); before this
+  /// agent's first command idle_timeout_ns instead (the same periods of agent.idle_rate_hz: its
+  /// neighbours publish slowly until they are commanded too; 0: timeout_ns).
   /// lockstep: see step(); max_wait_ticks bounds how long a lockstep agent waits for a neighbour that
   /// is alive but does not advance (e.g. it refused the command), after which it steps without it.
   AgentLogic(std::int32_t id, core::Vec2 start, std::int64_t timeout_ns, bool lockstep = false,
-             int max_wait_ticks = 50);
+             int max_wait_ticks = 50, std::int64_t idle_timeout_ns = 0);
 
   /// A received command, judged by dds::CommandArbiter (commands ordered by epoch then issuer; an
   /// absurd epoch jump refused and counted); before its first command this agent judges jumps from the
@@ -116,6 +118,7 @@ class AgentLogic {
   core::Vec2 x_prev_;
   std::optional<double> arc_prev_;
   std::int64_t timeout_ns_;
+  std::int64_t idle_timeout_ns_;
   bool lockstep_;
   int max_wait_ticks_;
   int waited_ = 0;

@@ -33,6 +33,11 @@ namespace {
 /// Data ages kept per status period (the rest of a period's samples are not booked).
 constexpr std::size_t kAgeCapacity = 4096;
 
+/// The state rate before the first command (agent.idle_rate_hz; 0: the loop rate), at most the loop rate.
+double idle_rate(const config::AgentConfig& a) {
+  return a.idle_rate_hz > 0 ? std::min(a.idle_rate_hz, a.rate_hz) : a.rate_hz;
+}
+
 std::uint64_t ticks_per(double rate_hz, double every_hz) {
   return std::max<std::uint64_t>(1, static_cast<std::uint64_t>(std::llround(rate_hz / every_hz)));
 }
@@ -123,8 +128,8 @@ class AgentNode {
     if (identity_.yielding()) return farewell(now);
     if (!identity_.may_publish(now)) return;  // the grace period: listening whether an id is in use
     step(now);
-    // Quiet until commanded: discovery settles first (agent.quiet_until_command).
-    if (!cfg_.agent.quiet_until_command || logics_.front()->has_command()) publish();
+    // Slow until commanded (agent.idle_rate_hz): a large swarm's discovery runs on a nearly idle host.
+    if (logics_.front()->has_command() || ticks_ % idle_every_ == 0) publish();
     report();
   }
   /// After a stall longer than the peers' lease the participant is recreated (dds::Node); participants
@@ -180,6 +185,7 @@ class AgentNode {
   std::vector<double> ages_us_;  ///< data ages of this status period
   const std::uint64_t log_every_;     ///< ticks between "hearing" lines (~1 s)
   const std::uint64_t status_every_;  ///< ticks per status period
+  const std::uint64_t idle_every_;    ///< ticks per state publication before the first command
   std::uint64_t seq_ = 0, ticks_ = 0;
   std::int64_t stamp_ns_ = 0;  ///< this tick's AgentState stamp
   int heard_logged_ = -1;
@@ -216,12 +222,16 @@ AgentNode::AgentNode(const std::vector<std::int32_t>& ids, const std::vector<cor
       loop_(cfg.agent.rate_hz),
       log_every_(ticks_per(cfg.agent.rate_hz, 1.0)),
       status_every_(ticks_per(cfg.agent.rate_hz, cfg.agent.status_rate_hz)),
+      idle_every_(ticks_per(cfg.agent.rate_hz, idle_rate(cfg.agent))),
       identity_(node_.source(), util::steady_ns() + static_cast<std::int64_t>(cfg.agent.identity_grace_s * 1e9)) {
   const double period_s = 1.0 / cfg.agent.rate_hz;
   const auto timeout_ns = static_cast<std::int64_t>(cfg.agent.neighbour_timeout_periods * period_s * 1e9);
+  const auto idle_timeout_ns =
+      static_cast<std::int64_t>(cfg.agent.neighbour_timeout_periods / idle_rate(cfg.agent) * 1e9);
   const int max_wait_ticks = static_cast<int>(std::lround(5.0 * cfg.agent.rate_hz));
   for (std::size_t k = 0; k < ids.size(); ++k)
-    logics_.push_back(std::make_unique<AgentLogic>(ids[k], starts[k], timeout_ns, cfg.agent.lockstep, max_wait_ticks));
+    logics_.push_back(std::make_unique<AgentLogic>(ids[k], starts[k], timeout_ns, cfg.agent.lockstep, max_wait_ticks,
+                                                   idle_timeout_ns));
   ages_us_.reserve(kAgeCapacity);
 }
 

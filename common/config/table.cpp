@@ -96,13 +96,14 @@ std::vector<P> build() {
         sync, kSyncNames, [](auto& c) -> auto& { return c.agent.lockstep; });
     t.push_back(std::move(sync));
   }
-  t.push_back(param<bool>(
-      Type::Bool, "agent.quiet_until_command", "", {},
-      "publish no state before the first command (statuses still flow, so the supervisor sees the agent): "
-      "the discovery of a large swarm then runs on an idle host instead of beside N x (N - 1) x rate state "
-      "deliveries. The launcher sets it from `config/large_swarm.sets`' size on. Until the command, "
-      "neighbours do not hear the agent and a second process with its id is noticed only then",
-      [](auto& c) -> auto& { return c.agent.quiet_until_command; }));
+  t.push_back(real(
+      "agent.idle_rate_hz", "Hz", params::Range{0, false, kMaxRateHz, false, false},
+      "state publication rate before the agent's first command (0: `agent.rate_hz`); until then a neighbour "
+      "is dropped after `agent.neighbour_timeout_periods` periods of this rate. A large swarm's discovery then "
+      "runs on a nearly idle host instead of beside N x (N - 1) x `agent.rate_hz` state deliveries, and the "
+      "supervisor still sees every agent hear the others before it commands (`wait agents`). The launcher "
+      "sets it from `config/large_swarm.sets`' size on",
+      [](auto& c) -> auto& { return c.agent.idle_rate_hz; }));
   t.push_back(param<bool>(
       Type::Bool, "agent.leave_by_lease", "", {},
       "on a clean stop, dispose the agents' states and delete the endpoints (peers hear both at once) but "

@@ -91,6 +91,21 @@ TEST_CASE("neighbour table: latest per agent, losses counted, stale and departed
   CHECK(a.counters().departed == 1);
 }
 
+TEST_CASE("before its first command a neighbour is dropped after the idle timeout, then the loop's", "[agent]") {
+  // agent.idle_rate_hz: until commanded, neighbours publish slowly, so silence is judged on that scale.
+  AgentLogic a(0, Vec2(0, 0), 60 * kMs, false, 50, 1500 * kMs);
+  a.on_state(1, Vec2(1, 0), 1, 0);
+  a.drop_stale(1000 * kMs);  // 1 s without a sample: within 1.5 s while uncommanded
+  CHECK(a.neighbours() == 1);
+  a.drop_stale(1501 * kMs);
+  CHECK(a.neighbours() == 0);
+  a.on_state(1, Vec2(1, 0), 2, 2000 * kMs);
+  REQUIRE(adopt(a, circle(), 1));
+  a.drop_stale(2061 * kMs);  // commanded: 61 ms is past the loop's 60 ms
+  CHECK(a.neighbours() == 0);
+  CHECK(a.counters().stale_dropped == 2);
+}
+
 TEST_CASE("tracking follows the latest target, extrapolated over model time", "[agent][tracking]") {
   core::CompiledCommand c = circle();
   c.shape.r0 = 2;

@@ -145,7 +145,8 @@ TEST_CASE("config/large_swarm.sets loads as --set overrides") {
   CHECK(min_agents >= 2);
   REQUIRE(sets.size() >= 5);
   const Config large = load("", sets);  // an unknown key or a bad value throws, naming it
-  CHECK(large.agent.quiet_until_command);
+  CHECK(large.agent.idle_rate_hz > 0);
+  CHECK(large.agent.idle_rate_hz < large.agent.rate_hz);
   CHECK(large.agent.leave_by_lease);
   CHECK(large.transport.multicast_data);
   CHECK(large.transport.lease_s > Config{}.transport.lease_s);
