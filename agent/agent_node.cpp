@@ -33,10 +33,8 @@ namespace {
 /// Data ages kept per status period (the rest of a period's samples are not booked).
 constexpr std::size_t kAgeCapacity = 4096;
 
-/// The state rate before the first command (agent.idle_rate_hz; 0: the loop rate), at most the loop rate.
-double idle_rate(const config::AgentConfig& a) {
-  return a.idle_rate_hz > 0 ? std::min(a.idle_rate_hz, a.rate_hz) : a.rate_hz;
-}
+/// The state rate before the first command (agent.idle_rate_hz), at most the loop rate.
+double idle_rate(const config::AgentConfig& a) { return std::min(a.idle_rate_hz, a.rate_hz); }
 
 std::uint64_t ticks_per(double rate_hz, double every_hz) {
   return std::max<std::uint64_t>(1, static_cast<std::uint64_t>(std::llround(rate_hz / every_hz)));

@@ -45,9 +45,10 @@ struct AgentConfig {
   /// How agents step: false = free running (each on its own clock, using the newest neighbour states);
   /// true = lockstep (step k+1 waits for every neighbour's step k: the simulator's synchronous update).
   bool lockstep = false;
-  /// AgentState rate before the first command, Hz (0: rate_hz): a large swarm's discovery then runs on a
-  /// nearly idle host instead of beside all-to-all state at the full rate (docs/BENCHMARKS.md, lever 10).
-  double idle_rate_hz = 0.0;
+  /// AgentState rate before the first command, Hz, at most rate_hz (the default: the loop rate): a large
+  /// swarm's discovery then runs on a nearly idle host instead of beside all-to-all state at the full rate
+  /// (docs/BENCHMARKS.md, lever 10).
+  double idle_rate_hz = 1000.0;
   /// On a clean stop, leave without the participant's goodbye (dds::Node::exit_without_goodbye): peers
   /// drop it after transport.lease_s instead of racing Fast DDS 2.9's lease timer.
   bool leave_by_lease = false;

@@ -97,8 +97,9 @@ std::vector<P> build() {
     t.push_back(std::move(sync));
   }
   t.push_back(real(
-      "agent.idle_rate_hz", "Hz", params::Range{0, false, kMaxRateHz, false, false},
-      "state publication rate before the agent's first command (0: `agent.rate_hz`); until then a neighbour "
+      "agent.idle_rate_hz", "Hz", params::above_up_to(0, kMaxRateHz),
+      "state publication rate before the agent's first command, at most `agent.rate_hz` (the default: the "
+      "loop rate); until then a neighbour "
       "is dropped after `agent.neighbour_timeout_periods` periods of this rate. A large swarm's discovery then "
       "runs on a nearly idle host instead of beside N x (N - 1) x `agent.rate_hz` state deliveries, and the "
       "supervisor still sees every agent hear the others before it commands (`wait agents`). The launcher "
