@@ -45,6 +45,9 @@ struct AgentConfig {
   /// How agents step: false = free running (each on its own clock, using the newest neighbour states);
   /// true = lockstep (step k+1 waits for every neighbour's step k: the simulator's synchronous update).
   bool lockstep = false;
+  /// A process hosting several agents publishes their states as one AgentStateBatch per tick
+  /// (shapeform/state_batch) instead of one AgentState per agent (shapeform/state).
+  bool batch_state = true;
 };
 
 /// Supervisor settings.
