@@ -124,7 +124,8 @@ class AgentNode {
     if (identity_.yielding()) return farewell(now);
     if (!identity_.may_publish(now)) return;  // the grace period: listening whether an id is in use
     step(now);
-    publish();
+    // Quiet until commanded: discovery settles first (agent.quiet_until_command).
+    if (!cfg_.agent.quiet_until_command || logics_.front()->has_command()) publish();
     report();
   }
   /// After a stall longer than the peers' lease the participant is recreated (dds::Node); participants
@@ -257,6 +258,7 @@ int AgentNode::run() {
   }
   util::log_info("stopping after " + std::to_string(ticks_) + " ticks (signal " + std::to_string(util::stop_signal()) + ")");
   if (opt_.json) emit({{"event", "stop"}, {"ticks", ticks_}, {"signal", util::stop_signal()}});
+  if (cfg_.agent.leave_by_lease) node_.exit_without_goodbye(0);
   return 0;
 }
 

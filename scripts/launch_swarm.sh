@@ -8,7 +8,8 @@
 #   scripts/launch_swarm.sh --fleet FILE --scenario NAME [the same options but -n]
 #
 #   -n N            number of agent processes, ids 0..N-1 (default: the rows of --init, else the
-#                   scenario's swarm.agents)
+#                   scenario's swarm.agents); from the min_agents of config/large_swarm.sets on
+#                   (50), its large-swarm settings are added before any --set (which win)
 #   --scenario NAME config/scenarios/NAME.yaml, or a path to a YAML file
 #   --fleet FILE    run on the hosts of a fleet file (config/fleets/*.yaml, format in
 #                   config/fleets/README.md): each process on its host with the lan profile bound to the
@@ -253,6 +254,13 @@ if [ -n "$max_participants" ] && [ -n "$fleet" ]; then
   done
 elif [ -n "$max_participants" ] && [ $((n + 1)) -gt "$max_participants" ]; then
   die "-n $n: $n agents and the supervisor need $((n + 1)) participants on this host, transport.max_participants is $max_participants (--set transport.max_participants=$((n + 1)) or more)"
+fi
+# A large swarm on this host: the settings of config/large_swarm.sets first, so the user's --set win.
+large_min=$(sed -n 's/^min_agents=//p' "$root/config/large_swarm.sets")
+if [ -z "$fleet" ] && [ "$n" -ge "$large_min" ]; then
+  mapfile -t large < <(grep -E '^[a-z_]+\.[a-z_.]+=' "$root/config/large_swarm.sets")
+  sets=("${large[@]}" "${sets[@]+"${sets[@]}"}")
+  say "$n agents: the large-swarm settings of config/large_swarm.sets (${large[*]})"
 fi
 # Every process sees the swarm size, so seeded starts match shapeform_sim --agents N --seed S.
 sets+=("swarm.agents=$n")

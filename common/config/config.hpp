@@ -48,6 +48,12 @@ struct AgentConfig {
   /// A process hosting several agents publishes their states as one AgentStateBatch per tick
   /// (shapeform/state_batch) instead of one AgentState per agent (shapeform/state).
   bool batch_state = true;
+  /// No AgentState before the first command (statuses still flow): a large swarm's discovery then runs on
+  /// an idle host instead of competing with all-to-all state (docs/BENCHMARKS.md, lever 10).
+  bool quiet_until_command = false;
+  /// On a clean stop, leave without the participant's goodbye (dds::Node::exit_without_goodbye): peers
+  /// drop it after transport.lease_s instead of racing Fast DDS 2.9's lease timer.
+  bool leave_by_lease = false;
 };
 
 /// Supervisor settings.

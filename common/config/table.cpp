@@ -101,10 +101,25 @@ std::vector<P> build() {
       "a process hosting several agents (`shapeform_agent_group`) publishes their states as one sample per "
       "tick on `shapeform/state_batch` (one AgentStateBatch carrying every hosted agent) instead of one "
       "AgentState per agent on `shapeform/state`: P processes put P samples per tick on the wire instead of N. "
-      "A batch of 100 agents is about 12 KB; one over a 64 KB datagram (over about 500 agents) is fragmented, "
+      "A batch of 100 agents is about 13 KB; one over a 64 KB datagram (over about 500 agents) is fragmented, "
       "and best effort then loses the whole batch with any fragment. One-agent processes always publish "
       "`shapeform/state`; every reader reads both",
       [](auto& c) -> auto& { return c.agent.batch_state; }));
+  t.push_back(param<bool>(
+      Type::Bool, "agent.quiet_until_command", "", {},
+      "publish no state before the first command (statuses still flow, so the supervisor sees the agent): "
+      "the discovery of a large swarm then runs on an idle host instead of beside N x (N - 1) x rate state "
+      "deliveries. The launcher sets it from `config/large_swarm.sets`' size on. Until the command, "
+      "neighbours do not hear the agent and a second process with its id is noticed only then",
+      [](auto& c) -> auto& { return c.agent.quiet_until_command; }));
+  t.push_back(param<bool>(
+      Type::Bool, "agent.leave_by_lease", "", {},
+      "on a clean stop, dispose the agents' states and delete the endpoints (peers hear both at once) but "
+      "send no participant goodbye: peers forget the participant when `transport.lease_s` ends. Fast DDS "
+      "2.9 aborts a peer now and then when it processes a goodbye while that participant's lease timer "
+      "fires (an assert in PDP.cpp), which a large swarm stopping at once makes likely (docs/BENCHMARKS.md, "
+      "lever 11). The launcher sets it from `config/large_swarm.sets`' size on",
+      [](auto& c) -> auto& { return c.agent.leave_by_lease; }));
   t.push_back(real(
       "supervisor.metrics_rate_hz", "Hz", params::above_up_to(0, kMaxRateHz),
       "metrics computation / publication / recording rate (computed every round(target_rate_hz / "

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/publisher/qos/PublisherQos.hpp>
@@ -190,7 +191,13 @@ std::vector<SourceId> Node::take_refused() {
   return refused;
 }
 
-Node::~Node() = default;  // entities_ (the last owner) deletes everything; handles only hold weak_ptrs
+Node::~Node() = default;
+
+void Node::exit_without_goodbye(int status) {
+  if (entities_->participant != nullptr) entities_->participant->delete_contained_entities();
+  std::fflush(nullptr);
+  std::_Exit(status);
+}  // entities_ (the last owner) deletes everything; handles only hold weak_ptrs
 
 void Node::check_type(TopicId requested, TopicId of_type) {
   if (requested != of_type) {

@@ -410,6 +410,14 @@ class Node {
   /// A rebuild that throws is logged and retried on the next call.
   std::optional<double> recover_if_stalled(double period_s);
 
+  /// Ends the process with `status` after deleting this participant's endpoints (peers unmatch them at
+  /// once) but not the participant itself: no participant goodbye is sent, and each peer forgets the
+  /// participant when its lease ends, on the peer's own event thread. Fast DDS 2.9 aborts a peer (assert in
+  /// PDP.cpp check_remote_participant_liveliness) when it processes a goodbye while the lease timer of the
+  /// same participant fires: its timer callback then finds the proxy already released. A large swarm
+  /// stopping at once makes N x (N - 1) such removals (docs/BENCHMARKS.md, lever 11). Flushes stdio first.
+  [[noreturn]] void exit_without_goodbye(int status);
+
  private:
   void open();  ///< creates participant, types, publisher and subscriber into entities_
   static void check_type(TopicId requested, TopicId of_type);

@@ -131,6 +131,26 @@ TEST_CASE("config/default.yaml loads to exactly the defaults") {
   require_equal(load(kSourceDir + "/config/default.yaml"), Config{});
 }
 
+TEST_CASE("config/large_swarm.sets loads as --set overrides") {
+  // The launcher and the benchmark pass these lines as --set overrides; a renamed key would stop both.
+  std::ifstream in(kSourceDir + "/config/large_swarm.sets");
+  REQUIRE(in.good());
+  std::vector<std::string> sets;
+  int min_agents = 0;
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    if (line.rfind("min_agents=", 0) == 0) min_agents = std::stoi(line.substr(11));
+    else sets.push_back(line);
+  }
+  CHECK(min_agents >= 2);
+  REQUIRE(sets.size() >= 5);
+  const Config large = load("", sets);  // an unknown key or a bad value throws, naming it
+  CHECK(large.agent.quiet_until_command);
+  CHECK(large.agent.leave_by_lease);
+  CHECK(large.transport.multicast_data);
+  CHECK(large.transport.lease_s > Config{}.transport.lease_s);
+}
+
 TEST_CASE("scenario line.yaml") {
   const Config c = load(scenario("line"));
   CHECK(c.name == "line");
