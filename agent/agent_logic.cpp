@@ -1,24 +1,112 @@
 #include "agent_logic.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 
+#include "core/law.hpp"
 #include "core/swarm.hpp"
 
 namespace shapeform::agent {
 
-AgentLogic::AgentLogic(std::int32_t id, core::Vec2 start, std::int64_t timeout_ns, bool lockstep,
-                       int max_wait_ticks, std::int64_t idle_timeout_ns)
-    : id_(id),
-      x_(start),
-      x_prev_(start),
+NeighbourTable::NeighbourTable(std::vector<std::int32_t> hosted, std::int64_t timeout_ns,
+                               std::int64_t idle_timeout_ns)
+    : hosted_(std::move(hosted)),
       timeout_ns_(timeout_ns),
       idle_timeout_ns_(idle_timeout_ns > 0 ? idle_timeout_ns : timeout_ns),
-      lockstep_(lockstep),
-      max_wait_ticks_(max_wait_ticks) {}
+      own_(hosted_.size()) {}
+
+int NeighbourTable::hosted_index(std::int32_t id) const {
+  const auto it = std::find(hosted_.begin(), hosted_.end(), id);
+  return it == hosted_.end() ? -1 : static_cast<int>(it - hosted_.begin());
+}
+
+void NeighbourTable::on_state(std::int32_t id, const core::Vec2& x, std::uint64_t seq, std::int64_t now_ns,
+                              dds::CommandId command, std::optional<double> arc, double model_time,
+                              std::optional<core::Vec2> prev_x, std::optional<double> prev_arc, double dt) {
+  const Snapshot snap{x, command, model_time, arc};
+  // The sender's previous step comes with the sample: a lost sample never leaves a hole in lockstep.
+  const std::optional<Snapshot> before =
+      prev_x ? std::optional<Snapshot>(Snapshot{*prev_x, command, model_time - dt, prev_arc}) : std::nullopt;
+  auto it = std::lower_bound(entries_.begin(), entries_.end(), id, [](const Entry& e, std::int32_t i) { return e.id < i; });
+  std::uint64_t lost = 0;
+  if (it == entries_.end() || it->id != id) {
+    it = entries_.insert(it, Entry{id, hosted_index(id), now_ns, seq, snap, before.value_or(snap)});
+  } else {
+    Entry& e = *it;
+    if (seq <= e.seq) return;  // duplicate or reordered: keep the newest
+    lost = seq - e.seq - 1;
+    if (before) e.prev = *before;
+    else if (snap.command != e.cur.command || snap.model_time != e.cur.model_time) e.prev = e.cur;
+    e.cur = snap;
+    e.seq = seq;
+    e.last_seen_ns = now_ns;
+  }
+  ++total_.received;
+  total_.lost += lost;
+  if (it->hosted >= 0) {
+    ++own_[static_cast<std::size_t>(it->hosted)].received;
+    own_[static_cast<std::size_t>(it->hosted)].lost += lost;
+  }
+}
+
+void NeighbourTable::on_gone(std::int32_t id) {
+  const auto it = std::lower_bound(entries_.begin(), entries_.end(), id, [](const Entry& e, std::int32_t i) { return e.id < i; });
+  if (it == entries_.end() || it->id != id) return;
+  ++total_.departed;
+  if (it->hosted >= 0) ++own_[static_cast<std::size_t>(it->hosted)].departed;
+  entries_.erase(it);
+}
+
+void NeighbourTable::drop_stale(std::int64_t now_ns, bool commanded) {
+  if (now_ns == dropped_at_ns_) return;
+  dropped_at_ns_ = now_ns;
+  const std::int64_t timeout = commanded ? timeout_ns_ : idle_timeout_ns_;
+  const auto stale = [&](const Entry& e) {
+    if (now_ns - e.last_seen_ns <= timeout) return false;
+    ++total_.stale;
+    if (e.hosted >= 0) ++own_[static_cast<std::size_t>(e.hosted)].stale;
+    return true;
+  };
+  entries_.erase(std::remove_if(entries_.begin(), entries_.end(), stale), entries_.end());
+}
+
+int NeighbourTable::heard_by(std::int32_t id) const {
+  const auto it = std::lower_bound(entries_.begin(), entries_.end(), id, [](const Entry& e, std::int32_t i) { return e.id < i; });
+  return static_cast<int>(entries_.size()) - (it != entries_.end() && it->id == id ? 1 : 0);
+}
+
+AgentCounters NeighbourTable::counters_for(std::int32_t id) const {
+  const int k = hosted_index(id);
+  const Counts own = k >= 0 ? own_[static_cast<std::size_t>(k)] : Counts{};
+  AgentCounters c;
+  c.samples_received = total_.received - own.received;
+  c.samples_lost = total_.lost - own.lost;
+  c.stale_dropped = total_.stale - own.stale;
+  c.departed = total_.departed - own.departed;
+  return c;
+}
+
+AgentLogic::AgentLogic(std::int32_t id, core::Vec2 start, std::int64_t timeout_ns, bool lockstep,
+                       int max_wait_ticks, std::int64_t idle_timeout_ns)
+    : AgentLogic(id, start,
+                 std::make_shared<NeighbourTable>(std::vector<std::int32_t>{id}, timeout_ns, idle_timeout_ns), lockstep,
+                 max_wait_ticks) {}
+
+AgentLogic::AgentLogic(std::int32_t id, core::Vec2 start, std::shared_ptr<NeighbourTable> table, bool lockstep,
+                       int max_wait_ticks)
+    : id_(id), x_(start), x_prev_(start), lockstep_(lockstep), max_wait_ticks_(max_wait_ticks), table_(std::move(table)) {}
+
+AgentCounters AgentLogic::counters() const {
+  AgentCounters c = table_->counters_for(id_);
+  c.samples_rejected = rejected_;
+  c.steps_clamped = clamped_;
+  return c;
+}
 
 dds::CommandArbiter::Verdict AgentLogic::on_command(const dds::CommandSample& c) {
   const auto v = arbiter_.offer(c, peer_floor());
-  if (v == dds::CommandArbiter::Verdict::Refused) ++counters_.samples_rejected;
+  if (v == dds::CommandArbiter::Verdict::Refused) ++rejected_;
   if (v == dds::CommandArbiter::Verdict::Adopted) adopt();
   return v;
 }
@@ -31,8 +119,8 @@ bool AgentLogic::recheck_commands() {
 
 std::uint64_t AgentLogic::peer_floor() const {
   std::uint64_t floor = 0;
-  for (const auto& [id, e] : table_)
-    if (!e.cur.command.none() && (floor == 0 || e.cur.command.epoch < floor)) floor = e.cur.command.epoch;
+  for (const auto& e : table_->entries())
+    if (e.id != id_ && !e.cur.command.none() && (floor == 0 || e.cur.command.epoch < floor)) floor = e.cur.command.epoch;
   return floor;
 }
 
@@ -46,8 +134,8 @@ void AgentLogic::adopt() {
   if (lockstep_) {
     // A late joiner starts at the step the swarm is at, so nobody waits for its past.
     long k0 = 0;
-    for (const auto& [id, e] : table_)
-      if (e.cur.command == command) k0 = std::max(k0, step_of(e.cur.model_time));
+    for (const auto& e : table_->entries())
+      if (e.id != id_ && e.cur.command == command) k0 = std::max(k0, step_of(e.cur.model_time));
     t_ = static_cast<double>(k0) * cmd_.dt;
   }
   if (target_ && target_->command != command) target_.reset();
@@ -64,41 +152,11 @@ void AgentLogic::on_target(const TargetSample& t, std::int64_t now_ns) {
 void AgentLogic::on_state(std::int32_t id, const core::Vec2& x, std::uint64_t seq, std::int64_t now_ns,
                           dds::CommandId command, std::optional<double> arc, double model_time,
                           std::optional<core::Vec2> prev_x, std::optional<double> prev_arc) {
-  if (id == id_) return;
-  const Snapshot snap{x, command, model_time, arc};
-  // The sender's previous step comes with the sample: a lost sample never leaves a hole in lockstep.
-  const std::optional<Snapshot> before =
-      prev_x ? std::optional<Snapshot>(Snapshot{*prev_x, command, model_time - cmd_.dt, prev_arc}) : std::nullopt;
-  auto it = table_.find(id);
-  if (it == table_.end()) {
-    table_.emplace(id, Entry{now_ns, seq, snap, before.value_or(snap)});
-  } else {
-    Entry& e = it->second;
-    if (seq <= e.seq) return;  // duplicate or reordered: keep the newest
-    counters_.samples_lost += seq - e.seq - 1;
-    if (before) e.prev = *before;
-    else if (snap.command != e.cur.command || snap.model_time != e.cur.model_time) e.prev = e.cur;
-    e.cur = snap;
-    e.seq = seq;
-    e.last_seen_ns = now_ns;
-  }
-  ++counters_.samples_received;
-}
-
-void AgentLogic::on_gone(std::int32_t id) {
-  if (table_.erase(id) > 0) ++counters_.departed;
+  table_->on_state(id, x, seq, now_ns, command, arc, model_time, prev_x, prev_arc, cmd_.dt);
 }
 
 void AgentLogic::drop_stale(std::int64_t now_ns) {
-  const std::int64_t timeout = has_command() ? timeout_ns_ : idle_timeout_ns_;
-  for (auto it = table_.begin(); it != table_.end();) {
-    if (now_ns - it->second.last_seen_ns > timeout) {
-      it = table_.erase(it);
-      ++counters_.stale_dropped;
-    } else {
-      ++it;
-    }
-  }
+  table_->drop_stale(now_ns, has_command());
   if (target_ && now_ns - target_seen_ns_ > kTargetTimeout_ns) target_.reset();
 }
 
@@ -141,7 +199,8 @@ bool AgentLogic::step() {
   const long k = step_of(t_);
   nbrs_.clear();
   bool ready = true;
-  for (const auto& [id, e] : table_) {
+  for (const auto& e : table_->entries()) {
+    if (e.id == id_) continue;  // never itself
     // Lockstep: the neighbour's state of step k (the newest, or the one before if it is already
     // ahead); free running: the newest.
     const Snapshot* use = &e.cur;
@@ -150,7 +209,7 @@ bool AgentLogic::step() {
       if (e.cur.command != followed || cur < k) ready = false;
       else if (cur > k && e.prev.command == followed && step_of(e.prev.model_time) == k) use = &e.prev;
     }
-    core::Neighbour n{id, use->x};
+    core::Neighbour n{e.id, use->x};
     if (arc_law && use->command == followed && use->arc) n.s = *use->arc;
     nbrs_.push_back(n);
   }
@@ -164,20 +223,53 @@ bool AgentLogic::step() {
   } else {
     waited_ = 0;
   }
-  // Deterministic neighbour order (ids ascending) so results never depend on hash order.
-  std::sort(nbrs_.begin(), nbrs_.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
-
+  // The table keeps ids ascending: a deterministic neighbour order, whatever the arrival order.
   const bool follow_target = following_target();
-  const core::StepResult r =
-      core::agent_step(follow_target ? effective_command() : cmd_, id_, x_, nbrs_, follow_target ? 0.0 : t_);
-  if (r.clamped) ++counters_.steps_clamped;
-  arc_prev_ = arc_law ? arc() : std::nullopt;
+  take_step(core::agent_step(follow_target ? effective_command() : cmd_, id_, x_, nbrs_, follow_target ? 0.0 : t_));
+  return true;
+}
+
+void AgentLogic::take_step(const core::StepResult& r) {
+  if (r.clamped) ++clamped_;
+  arc_prev_ = cmd_.law == core::Law::Arc ? arc() : std::nullopt;
   x_prev_ = x_;
   x_ = r.x;
   v_ = r.v;
   t_ += cmd_.dt;
   target_age_ += cmd_.dt;
-  return true;
+}
+
+bool AgentLogic::shares_step_with(const AgentLogic& first) const {
+  if (!has_command() || lockstep_ || first.lockstep_ || !core::shares_steps(cmd_) || table_ != first.table_)
+    return false;
+  if (command_id() != first.command_id() || t_ != first.t_ || following_target() != first.following_target())
+    return false;
+  if (!following_target()) return true;
+  const TargetSample& a = *target_;
+  const TargetSample& b = *first.target_;
+  return a.command == b.command && a.model_time == b.model_time && a.centre == b.centre && a.velocity == b.velocity &&
+         target_age_ == first.target_age_;
+}
+
+void AgentLogic::step_shared(const std::vector<AgentLogic*>& agents) {
+  const AgentLogic& first = *agents.front();
+  const dds::CommandId followed = first.command_id();
+  thread_local std::vector<core::Neighbour> hosted, others;
+  thread_local std::vector<core::StepResult> steps;
+  hosted.clear();
+  others.clear();
+  for (const AgentLogic* a : agents) hosted.push_back({a->id_, a->x_});
+  // The agents hosted here are taken as they are now (hosted), the others as last heard.
+  for (const auto& e : first.table_->entries()) {
+    if (e.hosted >= 0) continue;
+    core::Neighbour n{e.id, e.cur.x};
+    if (e.cur.command == followed && e.cur.arc) n.s = *e.cur.arc;
+    others.push_back(n);
+  }
+  const bool follow_target = first.following_target();
+  core::agent_steps(follow_target ? first.effective_command() : first.cmd_, hosted, others,
+                    follow_target ? 0.0 : first.t_, steps);
+  for (std::size_t k = 0; k < agents.size(); ++k) agents[k]->take_step(steps[k]);
 }
 
 core::Vec2 seeded_start(std::int32_t id, int n, std::uint64_t seed, double half_width) {

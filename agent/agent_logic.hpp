@@ -1,14 +1,17 @@
 #pragma once
-/// The agent's behaviour without DDS or clocks: a latest-per-agent neighbour table, the command and
-/// tracking target in force, and one core::agent_step per tick. agent_node.cpp only wires DDS to it.
+/// The agent's behaviour without DDS or clocks: a latest-per-agent neighbour table (shared by the
+/// agents one process hosts), the command and tracking target in force, and one core::agent_step per
+/// tick (one core::agent_steps for the hosted agents together when they can share it).
+/// agent_node.cpp only wires DDS to it.
 #include <algorithm>
 #include <cstdint>
+#include <memory>
 #include <optional>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
 #include "core/compiled_command.hpp"
+#include "core/law.hpp"
 #include "dds/command_arbiter.hpp"
 #include "dds/samples.hpp"
 
@@ -20,13 +23,73 @@ inline constexpr int kMaxAgentId = dds::kMaxAgentId;
 /// The latest tracking target heard: the centre C and its velocity at the supervisor's model time.
 using TargetSample = dds::TargetSample;
 
+/// One agent's counters. The first four are counted once per received sample by the process's
+/// NeighbourTable; an agent's figure is the process's count less what concerns the agent itself,
+/// which is what a table of its own (every sample but its own) would have counted.
 struct AgentCounters {
   std::uint64_t samples_received = 0;  ///< neighbour states accepted
-  std::uint64_t samples_rejected = 0;  ///< states, commands or targets refused by validation
   std::uint64_t samples_lost = 0;      ///< gaps in neighbours' sequence numbers
   std::uint64_t stale_dropped = 0;     ///< neighbours dropped for silence
   std::uint64_t departed = 0;          ///< neighbours dropped because they left (disposed)
+  std::uint64_t samples_rejected = 0;  ///< states, commands or targets refused by validation
   std::uint64_t steps_clamped = 0;     ///< steps the law would have taken out of the workspace (or not finite)
+};
+
+/// The latest states heard by one process, shared by the agents it hosts: one entry per agent id
+/// (hosted agents included: their own samples come back to the process, and co-hosted agents hear
+/// each other there), each updated once per received sample. Each hosted agent reads it without its
+/// own entry. Entries are kept in ascending id order, so a step needs no sort.
+class NeighbourTable {
+ public:
+  struct Snapshot {
+    core::Vec2 x;
+    dds::CommandId command;
+    double model_time;  ///< the sender's model time after its step (step tag = model_time / dt)
+    std::optional<double> arc;
+  };
+  struct Entry {
+    std::int32_t id;
+    int hosted;  ///< index of the hosted agent with this id, -1 for an agent hosted elsewhere
+    std::int64_t last_seen_ns;
+    std::uint64_t seq;
+    Snapshot cur, prev;  ///< the newest state and the one before (lockstep needs step k after k+1)
+  };
+
+  /// hosted: the ids of the process's agents; timeout_ns: an agent unheard for longer is dropped;
+  /// idle_timeout_ns: the same before the hosted agents' first command (0: timeout_ns).
+  NeighbourTable(std::vector<std::int32_t> hosted, std::int64_t timeout_ns, std::int64_t idle_timeout_ns = 0);
+
+  /// A valid state received at now_ns (see AgentLogic::on_state); dt: the step of the command the
+  /// receivers follow (the sender's previous state is tagged model_time - dt).
+  void on_state(std::int32_t id, const core::Vec2& x, std::uint64_t seq, std::int64_t now_ns, dds::CommandId command,
+                std::optional<double> arc, double model_time, std::optional<core::Vec2> prev_x,
+                std::optional<double> prev_arc, double dt);
+  /// Agent id left (its instance was disposed or lost its writer): dropped now.
+  void on_gone(std::int32_t id);
+  /// Drops the agents unheard since now_ns - timeout (the idle timeout while not `commanded`; once per
+  /// now_ns: the hosted agents each call it).
+  void drop_stale(std::int64_t now_ns, bool commanded = true);
+
+  /// Every agent heard, ascending ids.
+  const std::vector<Entry>& entries() const { return entries_; }
+  /// Agents heard by hosted agent `id` (every entry but its own).
+  int heard_by(std::int32_t id) const;
+  /// The table's counters as hosted agent `id` counts them (samples_rejected, steps_clamped: 0).
+  AgentCounters counters_for(std::int32_t id) const;
+  /// The index of hosted agent id, -1 if it is not hosted here.
+  int hosted_index(std::int32_t id) const;
+
+ private:
+  struct Counts {
+    std::uint64_t received = 0, lost = 0, stale = 0, departed = 0;
+  };
+  std::vector<std::int32_t> hosted_;
+  std::int64_t timeout_ns_;
+  std::int64_t idle_timeout_ns_;
+  std::int64_t dropped_at_ns_ = -1;  ///< the last drop_stale's now_ns
+  std::vector<Entry> entries_;
+  Counts total_;            ///< the process's counts, every agent's samples
+  std::vector<Counts> own_; ///< per hosted agent: the part that is its own samples
 };
 
 class AgentLogic {
@@ -36,8 +99,12 @@ class AgentLogic {
   /// neighbours publish slowly until they are commanded too; 0: timeout_ns).
   /// lockstep: see step(); max_wait_ticks bounds how long a lockstep agent waits for a neighbour that
   /// is alive but does not advance (e.g. it refused the command), after which it steps without it.
+  /// The agent has a table of its own.
   AgentLogic(std::int32_t id, core::Vec2 start, std::int64_t timeout_ns, bool lockstep = false,
              int max_wait_ticks = 50, std::int64_t idle_timeout_ns = 0);
+  /// An agent of a process that shares `table` (which hosts `id`) between its agents.
+  AgentLogic(std::int32_t id, core::Vec2 start, std::shared_ptr<NeighbourTable> table, bool lockstep = false,
+             int max_wait_ticks = 50);
 
   /// A received command, judged by dds::CommandArbiter (commands ordered by epoch then issuer; an
   /// absurd epoch jump refused and counted); before its first command this agent judges jumps from the
@@ -48,7 +115,9 @@ class AgentLogic {
   bool recheck_commands();
   /// Keeps the newest target of the followed command, received at now_ns.
   void on_target(const TargetSample& t, std::int64_t now_ns);
-  /// A valid neighbour state received at now_ns. Own samples are ignored. command and arc: the command
+  /// A valid neighbour state received at now_ns, into the table (a shared table takes each sample
+  /// once: call it on one of its agents, or on the table). Own samples are kept apart: this agent
+  /// never hears itself. command and arc: the command
   /// the neighbour follows and its arc length along that command's shape (used by the arc law only
   /// when the command is the one this agent follows).
   /// model_time: the neighbour's model time after its last step (its step tag, for lockstep).
@@ -58,8 +127,8 @@ class AgentLogic {
                 dds::CommandId command = {}, std::optional<double> arc = std::nullopt, double model_time = 0.0,
                 std::optional<core::Vec2> prev_x = std::nullopt, std::optional<double> prev_arc = std::nullopt);
   /// The neighbour left (its instance was disposed or lost its writer): drop it now.
-  void on_gone(std::int32_t id);
-  void count_rejected() { ++counters_.samples_rejected; }
+  void on_gone(std::int32_t id) { table_->on_gone(id); }
+  void count_rejected() { ++rejected_; }
 
   /// Drops neighbours unheard since now_ns - timeout, and a tracking target unheard for
   /// kTargetTimeout_ns (the supervisor is gone): the centre then follows the command's own path on the
@@ -77,6 +146,15 @@ class AgentLogic {
   /// update, so processes and simulator compute the same numbers. Returns whether it stepped.
   bool step();
 
+  /// Whether this agent's step may be taken together with `first`'s in one core::agent_steps: both
+  /// free running, on the same command (core::shares_steps) at the same model time with the same
+  /// tracking target, so both see one shape.
+  bool shares_step_with(const AgentLogic& first) const;
+  /// Steps agents that all share_step_with(*agents.front()) together: one sorted arc list and offset
+  /// for all (the heard agents not hosted here plus the hosted ones at their positions now), then each
+  /// agent's own step, as step() would book it. agents: the process's hosted agents, one table.
+  static void step_shared(const std::vector<AgentLogic*>& agents);
+
   std::int32_t id() const { return id_; }
   const core::Vec2& position() const { return x_; }
   const core::Vec2& velocity() const { return v_; }
@@ -86,8 +164,9 @@ class AgentLogic {
   double model_time() const { return t_; }
   bool has_command() const { return arbiter_.has_command(); }
   const core::CompiledCommand& command() const { return cmd_; }
-  int neighbours() const { return static_cast<int>(table_.size()); }
-  const AgentCounters& counters() const { return counters_; }
+  int neighbours() const { return table_->heard_by(id_); }
+  AgentCounters counters() const;
+  std::uint64_t steps_clamped() const { return clamped_; }
   /// The tracked centre this agent uses now (extrapolated from the last target), if tracking.
   std::optional<core::Vec2> tracked_centre() const;
   /// This agent's arc length along the shape in force (published so the others need not project it);
@@ -98,27 +177,17 @@ class AgentLogic {
   const std::optional<double>& previous_arc() const { return arc_prev_; }
 
  private:
-  struct Snapshot {
-    core::Vec2 x;
-    dds::CommandId command;
-    double model_time;  ///< the sender's model time after its step (step tag = model_time / dt)
-    std::optional<double> arc;
-  };
-  struct Entry {
-    std::int64_t last_seen_ns;
-    std::uint64_t seq;
-    Snapshot cur, prev;  ///< the newest state and the one before (lockstep needs step k after k+1)
-  };
+  using Snapshot = NeighbourTable::Snapshot;
   long step_of(double model_time) const { return std::lround(model_time / cmd_.dt); }
   /// The command actually integrated now: tracking follows the latest target from its last position.
   core::CompiledCommand effective_command() const;
+  /// Books a step's result r (position, velocity, model time, counters).
+  void take_step(const core::StepResult& r);
   std::int32_t id_;
   core::Vec2 x_;
   core::Vec2 v_ = core::Vec2::Zero();
   core::Vec2 x_prev_;
   std::optional<double> arc_prev_;
-  std::int64_t timeout_ns_;
-  std::int64_t idle_timeout_ns_;
   bool lockstep_;
   int max_wait_ticks_;
   int waited_ = 0;
@@ -132,9 +201,10 @@ class AgentLogic {
   std::optional<TargetSample> target_;
   double target_age_ = 0.0;  ///< model time since the target was received
   std::int64_t target_seen_ns_ = 0;
-  std::unordered_map<std::int32_t, Entry> table_;
+  std::shared_ptr<NeighbourTable> table_;
   std::vector<core::Neighbour> nbrs_;  ///< reused every step
-  AgentCounters counters_;
+  std::uint64_t rejected_ = 0;         ///< AgentCounters::samples_rejected
+  std::uint64_t clamped_ = 0;          ///< AgentCounters::steps_clamped
 };
 
 /// Whether this process may publish its agent ids when another participant publishes one of them (two

@@ -19,6 +19,7 @@
 #include "core/params.hpp"
 #include "dds/convert.hpp"
 #include "dds/node.hpp"
+#include "dds/state_input.hpp"
 #include "dds/participant.hpp"
 #include "util/log.hpp"
 #include "util/proc_stats.hpp"
@@ -149,7 +150,7 @@ class AgentNode {
   /// then stop. No state is published and nothing is disposed: the id stays the incumbent's.
   void farewell(std::int64_t now);
   /// A refused sample: counted by every hosted agent, logged (throttled per first refused field, e.g.
-  /// "state.id", unless `always`).
+  /// "state.id" or "state_batch.states[3].x", unless `always`).
   void reject(const char* what, const std::string& log_line, const std::string& why, bool always = false);
   bool hosted(std::int32_t id) const { return std::find(ids_.begin(), ids_.end(), id) != ids_.end(); }
 
@@ -157,12 +158,20 @@ class AgentNode {
   const config::Config& cfg_;
   const AgentOptions opt_;
   const bool group_;
+  /// One AgentStateBatch per tick for all hosted agents (a group with agent.batch_state), else one
+  /// AgentState per hosted agent.
+  const bool batch_;
+  /// The states heard, shared by the hosted agents (each sample taken in once).
+  std::shared_ptr<NeighbourTable> table_;
   std::vector<std::unique_ptr<AgentLogic>> logics_;
+  std::vector<AgentLogic*> sharing_;  ///< reused by step(): the agents stepped together
 
   dds::Node node_;
-  dds::Writer<msg::AgentState> state_writer_;
+  dds::Writer<msg::AgentState> state_writer_;         ///< unless batch_
+  dds::Writer<msg::AgentStateBatch> batch_writer_;    ///< when batch_
+  std::vector<dds::StateSample> batch_states_;        ///< reused by publish()
   dds::Writer<msg::AgentStatus> status_writer_;
-  dds::Reader<msg::AgentState> state_reader_;
+  dds::StateInput state_input_;
   dds::Reader<msg::ShapeCommand> command_reader_;
   /// Re-offers the command this process follows (transient-local, KEEP_LAST 1): it outlives its
   /// publisher, for a supervisor started later and for agents that join while nobody commands. None
@@ -171,7 +180,7 @@ class AgentNode {
   dds::CommandId relayed_;  ///< what command_relay_ offers now
   std::uint64_t last_refused_epoch_ = 0;  ///< the last epoch refused as an absurd jump
   dds::Reader<msg::TrackingTarget> target_reader_;
-  std::vector<dds::Received<msg::AgentState>> states_;
+  std::vector<dds::StateItem> states_;
   std::vector<dds::Received<msg::ShapeCommand>> commands_;
   CommandCompiler compiler_;
   std::vector<CommandCompiler::Result> compiled_;
@@ -181,6 +190,7 @@ class AgentNode {
   util::ThrottledLog throttled_{5.0};
   util::CpuMeter cpu_;
   std::vector<double> ages_us_;  ///< data ages of this status period
+  std::vector<std::uint64_t> clamped_before_;  ///< reused by step()
   const std::uint64_t log_every_;     ///< ticks between "hearing" lines (~1 s)
   const std::uint64_t status_every_;  ///< ticks per status period
   const std::uint64_t idle_every_;    ///< ticks per state publication before the first command
@@ -209,10 +219,16 @@ AgentNode::AgentNode(const std::vector<std::int32_t>& ids, const std::vector<cor
       cfg_(cfg),
       opt_(opt),
       group_(ids.size() > 1),
+      batch_(group_ && cfg.agent.batch_state),
+      table_(std::make_shared<NeighbourTable>(
+          ids, static_cast<std::int64_t>(cfg.agent.neighbour_timeout_periods / cfg.agent.rate_hz * 1e9),
+          static_cast<std::int64_t>(cfg.agent.neighbour_timeout_periods / idle_rate(cfg.agent) * 1e9))),
       node_(agent_transport(cfg, ids), node_name(ids)),
-      state_writer_(node_.writer<msg::AgentState>(dds::TopicId::State)),
+      state_writer_(batch_ ? dds::Writer<msg::AgentState>() : node_.writer<msg::AgentState>(dds::TopicId::State)),
+      batch_writer_(batch_ ? node_.writer<msg::AgentStateBatch>(dds::TopicId::StateBatch)
+                           : dds::Writer<msg::AgentStateBatch>()),
       status_writer_(node_.writer<msg::AgentStatus>(dds::TopicId::Status)),
-      state_reader_(node_.reader<msg::AgentState>(dds::TopicId::State)),
+      state_input_(node_),
       command_reader_(node_.reader<msg::ShapeCommand>(dds::TopicId::Command)),
       command_relay_(cfg.transport.security.enabled ? dds::Writer<msg::ShapeCommand>()
                                                     : node_.writer<msg::ShapeCommand>(dds::TopicId::Command)),
@@ -222,14 +238,9 @@ AgentNode::AgentNode(const std::vector<std::int32_t>& ids, const std::vector<cor
       status_every_(ticks_per(cfg.agent.rate_hz, cfg.agent.status_rate_hz)),
       idle_every_(ticks_per(cfg.agent.rate_hz, idle_rate(cfg.agent))),
       identity_(node_.source(), util::steady_ns() + static_cast<std::int64_t>(cfg.agent.identity_grace_s * 1e9)) {
-  const double period_s = 1.0 / cfg.agent.rate_hz;
-  const auto timeout_ns = static_cast<std::int64_t>(cfg.agent.neighbour_timeout_periods * period_s * 1e9);
-  const auto idle_timeout_ns =
-      static_cast<std::int64_t>(cfg.agent.neighbour_timeout_periods / idle_rate(cfg.agent) * 1e9);
   const int max_wait_ticks = static_cast<int>(std::lround(5.0 * cfg.agent.rate_hz));
   for (std::size_t k = 0; k < ids.size(); ++k)
-    logics_.push_back(std::make_unique<AgentLogic>(ids[k], starts[k], timeout_ns, cfg.agent.lockstep, max_wait_ticks,
-                                                   idle_timeout_ns));
+    logics_.push_back(std::make_unique<AgentLogic>(ids[k], starts[k], table_, cfg.agent.lockstep, max_wait_ticks));
   ages_us_.reserve(kAgeCapacity);
 }
 
@@ -240,10 +251,16 @@ int AgentNode::run() {
     return 2;  // a bad command line: the id is in use
   }
   // Leave cleanly: dispose our instances so the others drop us at once (the entities go with node_).
-  for (const auto id : ids_) {
-    msg::AgentState gone;
-    gone.id(id);
-    state_writer_.dispose(gone);
+  if (batch_) {
+    msg::AgentStateBatch gone;  // its one instance: every id it carried
+    gone.first_id(ids_.front());
+    batch_writer_.dispose(gone);
+  } else {
+    for (const auto id : ids_) {
+      msg::AgentState gone;
+      gone.id(id);
+      state_writer_.dispose(gone);
+    }
   }
   util::log_info("stopping after " + std::to_string(ticks_) + " ticks (signal " + std::to_string(util::stop_signal()) + ")");
   if (opt_.json) emit({{"event", "stop"}, {"ticks", ticks_}, {"signal", util::stop_signal()}});
@@ -360,25 +377,24 @@ void AgentNode::drain_targets() {
 }
 
 void AgentNode::drain_states() {
-  state_reader_.drain(states_);
+  state_input_.drain(states_);
+  const double dt = logics_.front()->command().dt;  // the hosted agents follow one command
   for (const auto& r : states_) {
-    if (!r.valid_data) {
-      if (r.instance != dds::InstanceState::Alive && r.key_id >= 0)
-        for (auto& l : logics_) l->on_gone(r.key_id);
+    if (r.kind == dds::StateItem::Kind::Gone) {
+      table_->on_gone(r.id);
       continue;
     }
-    dds::StateSample s;
-    std::string why;
-    if (!dds::from_msg(r.msg, s, why)) {
-      reject("state", "state sample rejected: " + why, why);
+    if (r.kind == dds::StateItem::Kind::Rejected) {
+      reject("state", "state sample rejected: " + r.why, r.why);
       continue;
     }
+    const dds::StateSample& s = r.state;
     if (hosted(s.id) && !identity_.ours(r.source)) {  // our id, from another participant
       on_duplicate(s.id, r.source, r.receive_stamp_ns);
       continue;
     }
-    for (auto& l : logics_)  // own id ignored
-      l->on_state(s.id, s.x, s.seq, r.receive_stamp_ns, s.command, s.arc, s.model_time, s.prev_x, s.prev_arc);
+    // Once into the shared table; each hosted agent leaves its own entry out.
+    table_->on_state(s.id, s.x, s.seq, r.receive_stamp_ns, s.command, s.arc, s.model_time, s.prev_x, s.prev_arc, dt);
     // Data age of samples from agents hosted elsewhere (a process's own samples are not a delivery).
     if (!hosted(s.id) && ages_us_.size() < ages_us_.capacity())
       ages_us_.push_back(static_cast<double>(r.receive_stamp_ns - s.stamp_ns) * 1e-3);
@@ -387,15 +403,26 @@ void AgentNode::drain_states() {
 
 void AgentNode::step(std::int64_t now) {
   stamp_ns_ = util::steady_ns();  // the samples' publication stamp: their data age includes the stepping
+  sharing_.clear();
   for (std::size_t k = 0; k < logics_.size(); ++k) {
     AgentLogic& l = *logics_[k];
     const bool had_target = l.following_target();
-    l.drop_stale(now);
+    l.drop_stale(now);  // the shared table drops once per tick
     if (k == 0 && had_target && !l.following_target())
       util::log_warn("tracking target unheard for 1 s: the centre follows the command's path on this agent's clock");
-    const std::uint64_t clamped = l.counters().steps_clamped;
-    l.step();
-    if (l.counters().steps_clamped != clamped)
+    if (group_ && l.shares_step_with(*logics_.front())) sharing_.push_back(&l);
+  }
+  std::vector<std::uint64_t>& clamped = clamped_before_;
+  clamped.clear();
+  for (const auto& l : logics_) clamped.push_back(l->steps_clamped());
+  // The arc law: one sorted list and offset for all hosted agents when they can share them (same
+  // command, model time and target), else (and always for one agent) each on its own.
+  if (sharing_.size() == logics_.size()) AgentLogic::step_shared(sharing_);
+  else
+    for (auto& l : logics_) l->step();
+  for (std::size_t k = 0; k < logics_.size(); ++k) {
+    const AgentLogic& l = *logics_[k];
+    if (l.steps_clamped() != clamped[k])
       throttled_.warn("clamp", "agent " + std::to_string(l.id()) +
                                    ": the command's step would leave the workspace; kept at its edge (safety.workspace = " +
                                    core::params::format_number(l.command().workspace) + ")");
@@ -405,6 +432,7 @@ void AgentNode::step(std::int64_t now) {
 void AgentNode::publish() {
   identity_.published();
   ++seq_;
+  batch_states_.clear();
   for (const auto& l : logics_) {
     dds::StateSample s;
     s.id = l->id();
@@ -418,8 +446,10 @@ void AgentNode::publish() {
     if (l->command().law == core::Law::Arc) s.arc = l->arc();
     s.prev_x = l->previous_position();
     s.prev_arc = l->previous_arc();
-    state_writer_.write(dds::to_msg(s));
+    if (batch_) batch_states_.push_back(s);
+    else state_writer_.write(dds::to_msg(s));
   }
+  if (batch_) batch_writer_.write(dds::to_msg(batch_states_));
 }
 
 void AgentNode::report() {

@@ -132,6 +132,9 @@ def main_rows() -> list[Row]:
     rows.append(Row("group", 50, 20.0, "default", 0.0, 25))
     rows.append(Row("group", 100, 20.0, "default", 0.0, 50))
     rows.append(Row("group", 100, 20.0, "default", 0.0, 25))
+    # 1000 agents in 10 and in 20 processes: each process publishes one AgentStateBatch per tick.
+    rows.append(Row("group", 1000, 20.0, "default", 0.0, 100))
+    rows.append(Row("group", 1000, 20.0, "default", 0.0, 50))
     return rows
 
 

@@ -24,10 +24,11 @@
 # viewer or agent_K); and `agent_0` .. `agent_{N-1}` (a group process uses the enclave of its first
 # agent id).
 # Permissions (the policy; topic names are the topic table's, common/dds/topics.cpp):
-#   agents      publish shapeform/state, shapeform/status;
-#               subscribe shapeform/command, shapeform/target, shapeform/state
+#   agents      publish shapeform/state, shapeform/state_batch, shapeform/status;
+#               subscribe shapeform/command, shapeform/target, shapeform/state, shapeform/state_batch
 #   supervisor  publish shapeform/command, shapeform/target, shapeform/metrics;
-#               subscribe shapeform/state, shapeform/status, shapeform/command (rival supervisors)
+#               subscribe shapeform/state, shapeform/state_batch, shapeform/status, shapeform/command
+#               (rival supervisors)
 #   viewer      subscribes to every shapeform topic, publishes nothing
 # Certificates and grants are valid for D days from now (default 365; the authorities for
 # max(D, 3650)). Running it again on an existing keystore keeps its authorities and enclaves and adds
@@ -119,10 +120,10 @@ topics() { for t in "$@"; do printf '<topic>shapeform/%s</topic>' "$t"; done; }
 rules() { # NAME -> the allow rules of its role
   case "$1" in
     supervisor) echo "<publish><topics>$(topics command target metrics)</topics></publish>"
-                echo "<subscribe><topics>$(topics state status command)</topics></subscribe>" ;;
-    viewer) echo "<subscribe><topics>$(topics state status command target metrics)</topics></subscribe>" ;;
-    agent_*) echo "<publish><topics>$(topics state status)</topics></publish>"
-             echo "<subscribe><topics>$(topics command target state)</topics></subscribe>" ;;
+                echo "<subscribe><topics>$(topics state state_batch status command)</topics></subscribe>" ;;
+    viewer) echo "<subscribe><topics>$(topics state state_batch status command target metrics)</topics></subscribe>" ;;
+    agent_*) echo "<publish><topics>$(topics state state_batch status)</topics></publish>"
+             echo "<subscribe><topics>$(topics command target state state_batch)</topics></subscribe>" ;;
   esac
 }
 

@@ -21,6 +21,7 @@
 #include "dds/convert.hpp"
 #include "dds/node.hpp"
 #include "dds/participant.hpp"
+#include "dds/state_input.hpp"
 #include "presentation.hpp"
 #include "record/recorder.hpp"
 #include "swarm_monitor.hpp"
@@ -179,11 +180,11 @@ class Supervisor {
   dds::Writer<msg::ShapeCommand> command_writer_;
   dds::Writer<msg::TrackingTarget> target_writer_;
   dds::Writer<msg::SwarmMetrics> metrics_writer_;
-  dds::Reader<msg::AgentState> state_reader_;
+  dds::StateInput state_input_;  ///< shapeform/state and shapeform/state_batch
   dds::Reader<msg::AgentStatus> status_reader_;
   dds::Reader<msg::ShapeCommand> command_reader_;
   std::vector<dds::Received<msg::ShapeCommand>> commands_;
-  std::vector<dds::Received<msg::AgentState>> states_;
+  std::vector<dds::StateItem> states_;
   std::vector<dds::Received<msg::AgentStatus>> statuses_;
   std::uint64_t rejected_ = 0;
   util::ThrottledLog throttled_{5.0};
@@ -309,28 +310,27 @@ void Supervisor::recover_from_stall() {
 
 void Supervisor::drain(std::int64_t now) {
   drain_commands(now);
-  state_reader_.drain(states_);
+  state_input_.drain(states_);
   for (const auto& r : states_) {
-    if (!r.valid_data) {
+    if (r.kind == dds::StateItem::Kind::Gone) {
       // Disposed, or its writer left (its dispose, best effort, may be lost) while it was still heard:
       // a clean exit, logged once. A writer leaving after the agent fell silent (a lease expiring after
       // a kill) changes nothing: that agent is shown dead already.
       // A duplicate's writer leaving (a second process with the id exiting) is not the agent leaving.
-      const auto it = monitor_.agents().find(r.key_id);
-      if (r.instance != dds::InstanceState::Alive && it != monitor_.agents().end() && monitor_.alive(it->second, now) &&
+      const auto it = monitor_.agents().find(r.id);
+      if (it != monitor_.agents().end() && monitor_.alive(it->second, now) &&
           (!r.source.known() || !it->second.source.known() || r.source == it->second.source)) {
-        monitor_.on_departed(r.key_id);
-        util::log_info("agent " + std::to_string(r.key_id) + " left");
+        monitor_.on_departed(r.id);
+        util::log_info("agent " + std::to_string(r.id) + " left");
       }
       continue;
     }
-    dds::StateSample s;
-    std::string why;
-    if (!dds::from_msg(r.msg, s, why)) {
+    if (r.kind == dds::StateItem::Kind::Rejected) {
       ++rejected_;
-      throttled_.warn(why.substr(0, why.find(':')), "agent state rejected: " + why);  // per refused field
+      throttled_.warn(r.why.substr(0, r.why.find(':')), "agent state rejected: " + r.why);  // per refused field
       continue;
     }
+    const dds::StateSample& s = r.state;
     if (!owned(s.id, r.source, now)) {
       ++rejected_;
       continue;
@@ -730,7 +730,7 @@ void Supervisor::open_dds() {
   command_writer_ = node_->writer<msg::ShapeCommand>(dds::TopicId::Command);
   target_writer_ = node_->writer<msg::TrackingTarget>(dds::TopicId::Target);
   metrics_writer_ = node_->writer<msg::SwarmMetrics>(dds::TopicId::Metrics);
-  state_reader_ = node_->reader<msg::AgentState>(dds::TopicId::State);
+  state_input_ = dds::StateInput(*node_);
   status_reader_ = node_->reader<msg::AgentStatus>(dds::TopicId::Status);
   command_reader_ = node_->reader<msg::ShapeCommand>(dds::TopicId::Command);
   char host[256] = {};

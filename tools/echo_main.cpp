@@ -63,6 +63,7 @@ int run(int argc, char** argv) {
   return app.run([&] {
     switch (*id) {
       case dds::TopicId::State: return echo<msg::AgentState>(*cfg, *id, count, timeout_s);
+      case dds::TopicId::StateBatch: return echo<msg::AgentStateBatch>(*cfg, *id, count, timeout_s);
       case dds::TopicId::Command: return echo<msg::ShapeCommand>(*cfg, *id, count, timeout_s);
       case dds::TopicId::Target: return echo<msg::TrackingTarget>(*cfg, *id, count, timeout_s);
       case dds::TopicId::Metrics: return echo<msg::SwarmMetrics>(*cfg, *id, count, timeout_s);

@@ -66,10 +66,9 @@ std::string topics_table(const std::vector<dds::TopicSeen>& topics) {
   return o.str();
 }
 
-bool sample_json(const msg::AgentState& m, nlohmann::json& out, std::string& why) {
-  dds::StateSample s;
-  if (!dds::from_msg(m, s, why)) return false;
-  out = {{"id", s.id},
+namespace {
+nlohmann::json state_json(const dds::StateSample& s) {
+  return {{"id", s.id},
          {"seq", s.seq},
          {"stamp_ns", s.stamp_ns},
          {"epoch", s.command.epoch},
@@ -80,6 +79,22 @@ bool sample_json(const msg::AgentState& m, nlohmann::json& out, std::string& why
          {"arc", or_null(s.arc)},
          {"prev_x", vec(s.prev_x)},
          {"prev_arc", or_null(s.prev_arc)}};
+}
+}  // namespace
+
+bool sample_json(const msg::AgentState& m, nlohmann::json& out, std::string& why) {
+  dds::StateSample s;
+  if (!dds::from_msg(m, s, why)) return false;
+  out = state_json(s);
+  return true;
+}
+
+bool sample_json(const msg::AgentStateBatch& m, nlohmann::json& out, std::string& why) {
+  std::vector<dds::StateSample> states;
+  if (!dds::from_msg(m, states, why)) return false;
+  nlohmann::json list = nlohmann::json::array();
+  for (const auto& s : states) list.push_back(state_json(s));
+  out = {{"first_id", m.first_id()}, {"states", std::move(list)}};
   return true;
 }
 

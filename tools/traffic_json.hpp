@@ -24,11 +24,13 @@ nlohmann::json topic_json(const dds::TopicSeen& t);
 std::string topics_table(const std::vector<dds::TopicSeen>& topics);
 
 /// Every field of a sample, from the plain struct its from_msg gives (ids and counters as integers,
-/// vectors as [x, y], undefined optionals as null). The command: {"epoch", then its keys as the
+/// vectors as [x, y], undefined optionals as null); a state batch: {"first_id", "states": [each state
+/// as one AgentState]}. The command: {"epoch", then its keys as the
 /// config file nests them (app::command_json)}; the metrics: {"epoch", "model_time", "stamp_ns",
 /// "converged", then app::metrics_json}.
 /// False (with `why`) when from_msg refuses the sample.
 bool sample_json(const msg::AgentState& m, nlohmann::json& out, std::string& why);
+bool sample_json(const msg::AgentStateBatch& m, nlohmann::json& out, std::string& why);
 bool sample_json(const msg::ShapeCommand& m, nlohmann::json& out, std::string& why);
 bool sample_json(const msg::TrackingTarget& m, nlohmann::json& out, std::string& why);
 bool sample_json(const msg::SwarmMetrics& m, nlohmann::json& out, std::string& why);

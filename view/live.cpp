@@ -6,6 +6,7 @@
 #include "dds/command_arbiter.hpp"
 #include "dds/convert.hpp"
 #include "dds/node.hpp"
+#include "dds/state_input.hpp"
 #include "util/log.hpp"
 
 namespace shapeform::view {
@@ -13,7 +14,7 @@ namespace shapeform::view {
 struct LiveFeed::Impl {
   explicit Impl(const config::Config& cfg)
       : node(dds::with_identity(cfg.transport, "viewer"), "shapeform_view"),
-        states(node.reader<msg::AgentState>(dds::TopicId::State)),
+        states(node),
         statuses(node.reader<msg::AgentStatus>(dds::TopicId::Status)),
         commands(node.reader<msg::ShapeCommand>(dds::TopicId::Command)),
         targets(node.reader<msg::TrackingTarget>(dds::TopicId::Target)),
@@ -21,8 +22,8 @@ struct LiveFeed::Impl {
 
   dds::Node node;  // readers only: the viewer never writes a topic
   // Each reader with the buffer its samples are drained into.
-  dds::Reader<msg::AgentState> states;
-  std::vector<dds::Received<msg::AgentState>> state_buf;
+  dds::StateInput states;  // shapeform/state and shapeform/state_batch
+  std::vector<dds::StateItem> state_buf;
   dds::Reader<msg::AgentStatus> statuses;
   std::vector<dds::Received<msg::AgentStatus>> status_buf;
   dds::Reader<msg::ShapeCommand> commands;
@@ -43,11 +44,10 @@ void LiveFeed::drain(Scene& scene, double now_s, double period_s) {
   std::string why;
   m.states.drain(m.state_buf);
   for (const auto& r : m.state_buf) {
-    dds::StateSample s;
-    if (!r.valid_data) {
-      if (r.instance == dds::InstanceState::Disposed && r.key_id >= 0) scene.on_departed(r.key_id);
-    } else if (dds::from_msg(r.msg, s, why)) {
-      scene.on_state(s.id, s.x, s.model_time, s.command.epoch, now_s);
+    if (r.kind == dds::StateItem::Kind::Gone) {
+      if (r.instance == dds::InstanceState::Disposed) scene.on_departed(r.id);
+    } else if (r.kind == dds::StateItem::Kind::State) {
+      scene.on_state(r.state.id, r.state.x, r.state.model_time, r.state.command.epoch, now_s);
     }
   }
   m.statuses.drain(m.status_buf);

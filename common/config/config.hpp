@@ -49,6 +49,9 @@ struct AgentConfig {
   /// swarm's discovery then runs on a nearly idle host instead of beside all-to-all state at the full rate
   /// (docs/BENCHMARKS.md, lever 10).
   double idle_rate_hz = 1000.0;
+  /// A process hosting several agents publishes their states as one AgentStateBatch per tick
+  /// (shapeform/state_batch) instead of one AgentState per agent (shapeform/state).
+  bool batch_state = true;
   /// On a clean stop, leave without the participant's goodbye (dds::Node::exit_without_goodbye): peers
   /// drop it after transport.lease_s instead of racing Fast DDS 2.9's lease timer.
   bool leave_by_lease = false;

@@ -96,6 +96,15 @@ std::vector<P> build() {
         sync, kSyncNames, [](auto& c) -> auto& { return c.agent.lockstep; });
     t.push_back(std::move(sync));
   }
+  t.push_back(param<bool>(
+      Type::Bool, "agent.batch_state", "", {},
+      "a process hosting several agents (`shapeform_agent_group`) publishes their states as one sample per "
+      "tick on `shapeform/state_batch` (one AgentStateBatch carrying every hosted agent) instead of one "
+      "AgentState per agent on `shapeform/state`: P processes put P samples per tick on the wire instead of N. "
+      "A batch of 100 agents is about 13 KB; one over a 64 KB datagram (over about 500 agents) is fragmented, "
+      "and best effort then loses the whole batch with any fragment. One-agent processes always publish "
+      "`shapeform/state`; every reader reads both",
+      [](auto& c) -> auto& { return c.agent.batch_state; }));
   t.push_back(real(
       "agent.idle_rate_hz", "Hz", params::above_up_to(0, kMaxRateHz),
       "state publication rate before the agent's first command, at most `agent.rate_hz` (the default: the "

@@ -29,4 +29,17 @@ struct StepResult {
 StepResult agent_step(const CompiledCommand& cmd, std::int32_t self_id, const Vec2& x,
                       const std::vector<Neighbour>& nbrs, double t);
 
+/// Whether agent_steps shares its work between the agents (the arc law integrated by Euler, not
+/// held): one sorted arc list and one offset for all (core::arc_velocities) instead of one per agent.
+/// Otherwise (the paper's law, RK4 whose stages move each agent's own arc length) it steps each
+/// agent on its own.
+bool shares_steps(const CompiledCommand& cmd);
+
+/// One step of several agents that see one swarm (the agents one process hosts), from model time t:
+/// out[k] is agent_step(cmd, hosted[k].id, hosted[k].x, nbrs_k, t) with nbrs_k = `others` plus the
+/// other hosted agents (their arc lengths unknown: projected, as each projects itself), bit for bit
+/// (tests/unit/core/law_arc_batch_test.cpp). Ids are distinct across both lists.
+void agent_steps(const CompiledCommand& cmd, const std::vector<Neighbour>& hosted, const std::vector<Neighbour>& others,
+                 double t, std::vector<StepResult>& out);
+
 }  // namespace shapeform::core

@@ -8,63 +8,112 @@ namespace shapeform::core {
 
 namespace {
 constexpr double kTwoPi = 6.283185307179586476925286766559;
-}  // namespace
 
-Vec2 arc_velocity(const ShapeSpec& s, const Curve& curve, const ArcParams& p, std::int32_t self_id,
-                  const Vec2& x, const std::vector<Neighbour>& nbrs) {
-  const Projection me = closest_point(s, curve, x);
-  const double length = s.scale * curve.length();
-  const bool closed = curve.closed();
-  const bool infinite = !std::isfinite(length);
-  const auto at = [&](double arc) { return to_world(s, curve.at(arc / s.scale)); };
+/// Every agent heard, with its arc length, in a deterministic order (arc length, then id).
+using ArcList = std::vector<std::pair<double, std::int32_t>>;
 
-  // Every agent heard, with its arc length, in a deterministic order (arc length, then id).
-  thread_local std::vector<std::pair<double, std::int32_t>> all;
-  all.clear();
-  all.emplace_back(me.s, self_id);
-  for (const Neighbour& n : nbrs)
-    all.emplace_back(std::isfinite(n.s) ? n.s : closest_point(s, curve, n.x).s, n.id);
-  std::sort(all.begin(), all.end());
-  const int count = static_cast<int>(all.size());
-  int rank = 0;
-  while (all[rank].second != self_id) ++rank;
+/// What every agent of one arc list agrees on: the slots and their common offset, computed once from
+/// the sorted list (the same data gives the same bits to every agent that holds it).
+struct Layout {
+  int count = 0;
+  double length = 0.0;  ///< the shape's length (infinite for the line)
+  bool closed = false, infinite = false;
+  double slot = 0.0;    ///< arc length between neighbouring slots
+  double offset = 0.0;  ///< where slot 0 is (closed curve, infinite line)
+  double cap = 0.0;     ///< bound of a step along a finite curve
+};
 
-  double slot = 0.0, error = 0.0;
+Layout layout(const ShapeSpec& s, const Curve& curve, const ArcParams& p, const ArcList& all) {
+  Layout l;
+  l.length = s.scale * curve.length();
+  l.closed = curve.closed();
+  l.infinite = !std::isfinite(l.length);
+  l.count = static_cast<int>(all.size());
+  const int count = l.count;
   if (count > 1) {
-    if (closed) {
+    if (l.closed) {
       // Slots L/N apart; their common offset is the circular mean of (s_j - rank_j L/N), which the
       // motion leaves unchanged, so every agent agrees on it from the same data.
-      slot = length / count;
+      l.slot = l.length / count;
       double sx = 0.0, sy = 0.0;
       for (int k = 0; k < count; ++k) {
-        const double ang = kTwoPi * (all[k].first - k * slot) / length;
+        const double ang = kTwoPi * (all[k].first - k * l.slot) / l.length;
         sx += std::cos(ang);
         sy += std::sin(ang);
       }
-      const double offset = length / kTwoPi * std::atan2(sy, sx);
-      error = std::remainder(offset + rank * slot - me.s, length);
-    } else if (infinite) {
+      l.offset = l.length / kTwoPi * std::atan2(sy, sx);
+    } else if (l.infinite) {
       // An infinite line: a finite row at the commanded spacing, centred where the swarm is.
-      slot = p.spacing;
+      l.slot = p.spacing;
       double offset = 0.0;
-      for (int k = 0; k < count; ++k) offset += all[k].first - k * slot;
-      offset /= count;
-      error = offset + rank * slot - me.s;
+      for (int k = 0; k < count; ++k) offset += all[k].first - k * l.slot;
+      l.offset = offset / count;
     } else {
-      slot = length / (count - 1);  // an open curve: from end to end
-      error = rank * slot - me.s;
+      l.slot = l.length / (count - 1);  // an open curve: from end to end
     }
+    if (!l.infinite) l.cap = std::min(0.5 * l.slot, 0.25 * shape_size(s, curve));
+  }
+  return l;
+}
+
+/// The velocity of the agent at x (projected to me) holding `rank` in the list that gave l.
+Vec2 velocity_at(const ShapeSpec& s, const Curve& curve, const ArcParams& p, const Layout& l, int rank,
+                 const Projection& me, const Vec2& x) {
+  double error = 0.0;
+  if (l.count > 1) {
+    if (l.closed) error = std::remainder(l.offset + rank * l.slot - me.s, l.length);
+    else if (l.infinite) error = l.offset + rank * l.slot - me.s;
+    else error = rank * l.slot - me.s;
   }
   // Move toward the curve point a bounded step ahead along the curve: on a curved shape the step never
   // exceeds half a slot (so agents keep their order) nor a quarter of the shape (so the chord stays
   // near the curve). On the infinite line the chord is the curve: no bound is needed.
   double step = p.k_tangent * error;
-  if (count > 1 && !infinite) {
-    const double cap = std::min(0.5 * slot, 0.25 * shape_size(s, curve));
-    step = std::clamp(step, -cap, cap);
-  }
-  const Vec2 q = count > 1 ? at(me.s + step) : me.point;
+  if (l.count > 1 && !l.infinite) step = std::clamp(step, -l.cap, l.cap);
+  const Vec2 q = l.count > 1 ? to_world(s, curve.at((me.s + step) / s.scale)) : me.point;
   return p.k_normal * (q - x);
+}
+
+/// A neighbour's arc length: the one it published when finite, else its position projected.
+double arc_of(const ShapeSpec& s, const Curve& curve, const Neighbour& n) {
+  return std::isfinite(n.s) ? n.s : closest_point(s, curve, n.x).s;
+}
+
+}  // namespace
+
+Vec2 arc_velocity(const ShapeSpec& s, const Curve& curve, const ArcParams& p, std::int32_t self_id,
+                  const Vec2& x, const std::vector<Neighbour>& nbrs) {
+  const Projection me = closest_point(s, curve, x);
+  thread_local ArcList all;
+  all.clear();
+  all.emplace_back(me.s, self_id);
+  for (const Neighbour& n : nbrs) all.emplace_back(arc_of(s, curve, n), n.id);
+  std::sort(all.begin(), all.end());
+  int rank = 0;
+  while (all[rank].second != self_id) ++rank;
+  return velocity_at(s, curve, p, layout(s, curve, p, all), rank, me, x);
+}
+
+void arc_velocities(const ShapeSpec& s, const Curve& curve, const ArcParams& p, const std::vector<Neighbour>& hosted,
+                    const std::vector<Neighbour>& others, std::vector<Vec2>& out) {
+  thread_local std::vector<Projection> me;
+  thread_local ArcList all;
+  me.clear();
+  all.clear();
+  for (const Neighbour& h : hosted) {
+    me.push_back(closest_point(s, curve, h.x));
+    all.emplace_back(me.back().s, h.id);
+  }
+  for (const Neighbour& n : others) all.emplace_back(arc_of(s, curve, n), n.id);
+  std::sort(all.begin(), all.end());
+  const Layout l = layout(s, curve, p, all);
+  out.resize(hosted.size());
+  for (std::size_t k = 0; k < hosted.size(); ++k) {
+    // The pairs are distinct (ids are), so the first pair not below ours is ours: its rank.
+    const std::pair<double, std::int32_t> mine{me[k].s, hosted[k].id};
+    const int rank = static_cast<int>(std::lower_bound(all.begin(), all.end(), mine) - all.begin());
+    out[k] = velocity_at(s, curve, p, l, rank, me[k], hosted[k].x);
+  }
 }
 
 }  // namespace shapeform::core

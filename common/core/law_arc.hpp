@@ -23,4 +23,14 @@ struct ArcParams {
 Vec2 arc_velocity(const ShapeSpec& s, const Curve& curve, const ArcParams& p, std::int32_t self_id,
                   const Vec2& x, const std::vector<Neighbour>& nbrs);
 
+/// The arc law for several agents that see one swarm (the agents one process hosts): out[k] is
+/// hosted[k]'s velocity when it hears every agent of `others` and every other agent of `hosted`.
+/// Bit for bit arc_velocity(s, curve, p, hosted[k].id, hosted[k].x, nbrs_k), nbrs_k being `others`
+/// plus the other hosted agents with their arc lengths unknown (NaN: projected, as each projects
+/// itself); the hosted agents' own `s` is ignored. The arc list is sorted and the common offset
+/// computed once for all: O((H + N) log(H + N)) for H hosted agents instead of O(H N log N).
+/// Ids are distinct across both lists.
+void arc_velocities(const ShapeSpec& s, const Curve& curve, const ArcParams& p, const std::vector<Neighbour>& hosted,
+                    const std::vector<Neighbour>& others, std::vector<Vec2>& out);
+
 }  // namespace shapeform::core

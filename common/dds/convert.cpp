@@ -1,5 +1,6 @@
 #include "dds/convert.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -285,6 +286,24 @@ bool valid_state(const msg::AgentState& s, std::string& why) {
   return true;
 }
 
+namespace {
+/// A valid AgentState -> StateSample.
+StateSample to_sample(const msg::AgentState& m) {
+  StateSample out;
+  out.id = m.id();
+  out.seq = m.seq();
+  out.stamp_ns = m.stamp_ns();
+  out.command = CommandId{m.epoch(), SourceId{m.issuer()}};
+  out.model_time = m.model_time();
+  out.x = core::Vec2(m.x(), m.y());
+  out.v = core::Vec2(m.vx(), m.vy());
+  out.arc = m.has_arc() ? std::optional<double>(m.arc()) : std::nullopt;
+  out.prev_x = core::Vec2(m.prev_x(), m.prev_y());
+  out.prev_arc = m.has_arc() ? std::optional<double>(m.prev_arc()) : std::nullopt;
+  return out;
+}
+}  // namespace
+
 msg::AgentState to_msg(const StateSample& s) {
   msg::AgentState m;
   m.id(s.id);
@@ -307,16 +326,64 @@ msg::AgentState to_msg(const StateSample& s) {
 
 bool from_msg(const msg::AgentState& m, StateSample& out, std::string& why) {
   if (!valid_state(m, why)) return false;
-  out.id = m.id();
-  out.seq = m.seq();
-  out.stamp_ns = m.stamp_ns();
-  out.command = CommandId{m.epoch(), SourceId{m.issuer()}};
-  out.model_time = m.model_time();
-  out.x = core::Vec2(m.x(), m.y());
-  out.v = core::Vec2(m.vx(), m.vy());
-  out.arc = m.has_arc() ? std::optional<double>(m.arc()) : std::nullopt;
-  out.prev_x = core::Vec2(m.prev_x(), m.prev_y());
-  out.prev_arc = m.has_arc() ? std::optional<double>(m.prev_arc()) : std::nullopt;
+  out = to_sample(m);
+  return true;
+}
+
+msg::AgentStateBatch to_msg(const std::vector<StateSample>& states) {
+  msg::AgentStateBatch m;
+  m.first_id(states.empty() ? 0 : states.front().id);
+  m.states().reserve(states.size());
+  for (const StateSample& s : states) m.states().push_back(to_msg(s));
+  return m;
+}
+
+bool from_msg(const msg::AgentStateBatch& m, std::vector<StateSample>& out, std::string& why) {
+  Problems p("state_batch");
+  const auto& states = m.states();
+  if (states.empty() || states.size() > kMaxBatchStates)
+    p.add("states", "must hold 1 to " + std::to_string(kMaxBatchStates) + " states, got " +
+                        std::to_string(states.size()));
+  else if (m.first_id() != states.front().id())
+    p.add("first_id", "must be the id of states[0] (" + std::to_string(states.front().id()) + "), got " +
+                          std::to_string(m.first_id()));
+  if (!p.empty()) {
+    why = p.joined();
+    return false;
+  }
+  std::string all;
+  for (std::size_t k = 0; k < states.size(); ++k) {
+    std::string one;
+    if (!valid_state(states[k], one)) {
+      // Name the element: "state.x: ..." -> "state_batch.states[3].x: ..." (built only on a refusal).
+      const std::string element = "state_batch.states[" + std::to_string(k) + "]";
+      for (std::size_t at = 0; (at = one.find("state.", at)) != std::string::npos;) {
+        if (at == 0 || (at >= 2 && one.compare(at - 2, 2, "; ") == 0)) {
+          one.replace(at, 5, element);
+          at += element.size();
+        } else {
+          at += 6;
+        }
+      }
+      all += (all.empty() ? "" : "; ") + one;
+    }
+  }
+  // Distinct ids: a batch naming one agent twice is malformed (checked on the valid ids only).
+  if (all.empty()) {
+    std::vector<std::int32_t> ids;
+    ids.reserve(states.size());
+    for (const auto& s : states) ids.push_back(s.id());
+    std::sort(ids.begin(), ids.end());
+    const auto dup = std::adjacent_find(ids.begin(), ids.end());
+    if (dup != ids.end()) all = "state_batch.states: id " + std::to_string(*dup) + " appears twice";
+  }
+  if (!all.empty()) {
+    why = all;
+    return false;
+  }
+  out.clear();
+  out.reserve(states.size());
+  for (const auto& s : states) out.push_back(to_sample(s));
   return true;
 }
 

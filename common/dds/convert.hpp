@@ -5,11 +5,13 @@
 /// with a message naming the field.
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "core/compiled_command.hpp"
 #include "core/metrics.hpp"
 #include "dds/samples.hpp"
 #include "shapeform/msg/AgentState.h"
+#include "shapeform/msg/AgentStateBatch.h"
 #include "shapeform/msg/AgentStatus.h"
 #include "shapeform/msg/ShapeCommand.h"
 #include "shapeform/msg/SwarmMetrics.h"
@@ -55,6 +57,19 @@ msg::AgentState to_msg(const StateSample& s);
 /// AgentState -> StateSample when valid_state(m) holds (arc and prev_arc are nullopt unless has_arc);
 /// otherwise false, `out` untouched and `why` naming every bad field.
 bool from_msg(const msg::AgentState& m, StateSample& out, std::string& why);
+
+/// Most states one AgentStateBatch may carry (shapeform_agent_group hosts at most this many agents).
+inline constexpr std::size_t kMaxBatchStates = 1000;
+
+/// The states of the agents one process hosts -> one AgentStateBatch (first_id: states[0].id; each
+/// element as to_msg(StateSample)). states holds 1 to kMaxBatchStates samples with distinct ids.
+msg::AgentStateBatch to_msg(const std::vector<StateSample>& states);
+
+/// AgentStateBatch -> one StateSample per element, in order, when the batch holds 1 to
+/// kMaxBatchStates states, first_id is the id of states[0], every element passes valid_state and no
+/// id appears twice. Otherwise false (the whole batch refused: its publisher is broken), `out`
+/// untouched and `why` naming every bad field, e.g. "state_batch.states[3].x: must be finite, got nan".
+bool from_msg(const msg::AgentStateBatch& m, std::vector<StateSample>& out, std::string& why);
 
 /// TargetSample -> TrackingTarget (every field).
 msg::TrackingTarget to_msg(const TargetSample& t);

@@ -3,6 +3,7 @@
 #include <cstdint>
 
 #include "dds/topics.hpp"
+#include "shapeform/msg/AgentStateBatchPubSubTypes.h"
 #include "shapeform/msg/AgentStatePubSubTypes.h"
 #include "shapeform/msg/AgentStatusPubSubTypes.h"
 #include "shapeform/msg/ShapeCommandPubSubTypes.h"
@@ -21,6 +22,14 @@ struct MsgTraits<msg::AgentState> {
   static constexpr TopicId topic = TopicId::State;
   static constexpr bool keyed = true;
   static std::int32_t key(const msg::AgentState& m) { return m.id(); }
+};
+
+template <>
+struct MsgTraits<msg::AgentStateBatch> {
+  using PubSubType = msg::AgentStateBatchPubSubType;
+  static constexpr TopicId topic = TopicId::StateBatch;
+  static constexpr bool keyed = true;
+  static std::int32_t key(const msg::AgentStateBatch& m) { return m.first_id(); }
 };
 
 template <>

@@ -98,6 +98,7 @@ void Node::open() {
   e.participant = create_participant(e.transport, name, e.refused.get());
 
   register_type<msg::AgentState>(e.participant, name);
+  register_type<msg::AgentStateBatch>(e.participant, name);
   register_type<msg::ShapeCommand>(e.participant, name);
   register_type<msg::TrackingTarget>(e.participant, name);
   register_type<msg::SwarmMetrics>(e.participant, name);

@@ -22,6 +22,8 @@ struct TopicRow {
 constexpr TopicRow kTable[] = {
   {TopicId::State,   "shapeform/state",   "shapeform::msg::AgentState",     true,
    fdds::BEST_EFFORT_RELIABILITY_QOS, fdds::VOLATILE_DURABILITY_QOS},
+  {TopicId::StateBatch, "shapeform/state_batch", "shapeform::msg::AgentStateBatch", true,
+   fdds::BEST_EFFORT_RELIABILITY_QOS, fdds::VOLATILE_DURABILITY_QOS},
   {TopicId::Command, "shapeform/command", "shapeform::msg::ShapeCommand",   false,
    fdds::RELIABLE_RELIABILITY_QOS,    fdds::TRANSIENT_LOCAL_DURABILITY_QOS},
   {TopicId::Target,  "shapeform/target",  "shapeform::msg::TrackingTarget", false,
@@ -96,8 +98,8 @@ fdds::DataReaderQos reader_qos(TopicId id) {
 
 fdds::DataReaderQos reader_qos(TopicId id, const TransportConfig& transport) {
   fdds::DataReaderQos q = reader_qos(id);
-  if (transport.multicast_data && id == TopicId::State) {
-    // Only the high-rate all-to-all topic: low-rate reliable topics stay unicast, so their heartbeats
+  if (transport.multicast_data && (id == TopicId::State || id == TopicId::StateBatch)) {
+    // Only the high-rate all-to-all topics: low-rate reliable topics stay unicast, so their heartbeats
     // and acknowledgements do not reach every process.
     q.endpoint().multicast_locator_list.push_back(data_multicast_locator(transport));
   }

@@ -13,13 +13,13 @@
 
 namespace shapeform::dds {
 
-enum class TopicId { State, Command, Target, Metrics, Status };
+enum class TopicId { State, StateBatch, Command, Target, Metrics, Status };
 
-inline constexpr std::array<TopicId, 5> kAllTopics = {TopicId::State, TopicId::Command, TopicId::Target,
-                                                      TopicId::Metrics, TopicId::Status};
+inline constexpr std::array<TopicId, 6> kAllTopics = {TopicId::State,   TopicId::StateBatch, TopicId::Command,
+                                                      TopicId::Target,  TopicId::Metrics,    TopicId::Status};
 
-/// DDS topic name: "shapeform/state", "shapeform/command", "shapeform/target", "shapeform/metrics",
-/// "shapeform/status".
+/// DDS topic name: "shapeform/state", "shapeform/state_batch", "shapeform/command", "shapeform/target",
+/// "shapeform/metrics", "shapeform/status".
 const char* topic_name(TopicId id);
 
 /// The topic named `name` ("shapeform/state"), or nullopt.
@@ -28,7 +28,8 @@ std::optional<TopicId> find_topic(std::string_view name);
 /// Registered type name of the topic's message, e.g. "shapeform::msg::AgentState".
 const char* type_name(TopicId id);
 
-/// True for topics with one instance per agent (@key id): State and Status.
+/// True for keyed topics: State and Status (one instance per agent, @key id), StateBatch (one per
+/// process, @key first_id).
 bool is_keyed(TopicId id);
 
 /// The endpoint's user id of static endpoint discovery (transport.static_edp), from the topic's row in
@@ -39,6 +40,7 @@ std::int16_t static_edp_user_id(TopicId id, bool writer);
 /// Writer QoS of a topic (data sharing always off; KEEP_LAST 1 everywhere; endpoint user id
 /// static_edp_user_id(id, true), which only static endpoint discovery reads):
 ///  - State:   BEST_EFFORT, VOLATILE        (every agent tick)
+///  - StateBatch: BEST_EFFORT, VOLATILE     (every tick of a process hosting several agents)
 ///  - Command: RELIABLE, TRANSIENT_LOCAL    (late joiners get the newest command)
 ///  - Target:  BEST_EFFORT, VOLATILE
 ///  - Metrics: RELIABLE, VOLATILE
@@ -52,8 +54,8 @@ eprosima::fastdds::dds::DataWriterQos writer_qos(TopicId id);
 /// lift max_instances (Fast DDS default 10 would silently hide agents 11 and up).
 eprosima::fastdds::dds::DataReaderQos reader_qos(TopicId id);
 
-/// reader_qos(id), plus, when transport.multicast_data is set and id is State, the State multicast
-/// locator (data_multicast_locator) as the reader's only locator.
+/// reader_qos(id), plus, when transport.multicast_data is set and id is State or StateBatch, the State
+/// multicast locator (data_multicast_locator) as the reader's only locator.
 eprosima::fastdds::dds::DataReaderQos reader_qos(TopicId id, const TransportConfig& transport);
 
 /// Heartbeat period of reliable writers, seconds (Fast DDS default 3 s).

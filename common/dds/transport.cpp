@@ -92,7 +92,8 @@ std::vector<P> build_table() {
       "", [](auto& c) -> auto& { return c.socket_buffer_bytes; }));
   t.push_back(param<bool>(
       Type::Bool, "transport.multicast_data", "", {},
-      "readers of the state topic listen on the multicast group 239.255.0.1, port 7400 + 250 domain + 1, "
+      "readers of the state topics (`shapeform/state`, `shapeform/state_batch`) listen on the multicast group "
+      "239.255.0.1, port 7400 + 250 domain + 1, "
       "instead of a unicast port, so a writer sends one datagram per sample instead of one per reader (the "
       "kernel or the switch fans it out); the group is joined and sent on the profile's interfaces only (`lo` "
       "for loopback and a discovery server on loopback, `transport.interfaces` for lan). Every other topic "

@@ -4,6 +4,9 @@
 - One group process hosting agents 0..5 and two single agent processes (6, 7) make one swarm: the
   supervisor hears 8 agents, every hosted agent hears the 7 others (in the process and over DDS), the
   circle converges and every agent stands apart.
+- The group's states travel as one batch per tick (shapeform/state_batch: agents 0..5 in one sample,
+  one sequence number), the single agents' as one sample each on shapeform/state, which carries none of
+  the hosted agents.
 - SIGTERM to the group process disposes every hosted agent: the supervisor sees the 6 leave at once and
   the two single agents go on, hearing only each other.
 - A bad --ids list exits with status 2 and a message naming --ids.
@@ -38,6 +41,16 @@ class GroupTest(harness.SwarmTestCase):
         self.assertEqual(m["clusters"], N, "every agent apart from the others")
         self.assert_all_alive([group] + singles)
 
+        batches = self.echo("shapeform/state_batch", 3)
+        for b in batches:
+            self.assertEqual(b["event"], "sample", b)
+            self.assertEqual(b["data"]["first_id"], 0)
+            self.assertEqual([s["id"] for s in b["data"]["states"]], list(range(HOSTED)))
+            self.assertEqual(len({s["seq"] for s in b["data"]["states"]}), 1, "one tick per batch")
+        self.assertEqual(len({b["source"] for b in batches}), 1, "from the group's one participant")
+        singles_ids = {s["data"]["id"] for s in self.echo("shapeform/state", 20)}
+        self.assertEqual(singles_ids, set(range(HOSTED, N)), "shapeform/state carries the single agents only")
+
         before = {a.name: a.mark() for a in singles}
         group.signal(signal.SIGTERM)
         self.assertEqual(group.wait(30), 0, "the group process stops cleanly")
@@ -48,6 +61,13 @@ class GroupTest(harness.SwarmTestCase):
             harness.poll(lambda a=a: a.hears(SINGLE - 1, before[a.name]), 30,
                          "%s to hear only the other single agent" % a.name)
         self.assert_all_alive(singles)
+
+    def echo(self, topic, count):
+        """count samples of topic as shapeform_echo prints them."""
+        r = harness.procs.run([harness.bin_path("shapeform_echo"), topic, "--domain", str(self.domain), "--count",
+                               str(count), "--timeout", "20"], timeout=40, check=False)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        return harness.procs.json_lines(r.stdout)
 
     def test_bad_ids_exit_2(self):
         for ids in ("5-2", "1,1", "x", "0-10000", ""):

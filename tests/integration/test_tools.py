@@ -20,6 +20,7 @@ AGENTS = 3
 SETS = ["--set", "swarm.agents=%d" % AGENTS]
 TOPICS = {  # name: (type, reliability, durability) as common/dds/topics.cpp declares them
     "shapeform/state": ("shapeform::msg::AgentState", "best_effort", "volatile"),
+    "shapeform/state_batch": ("shapeform::msg::AgentStateBatch", "best_effort", "volatile"),
     "shapeform/command": ("shapeform::msg::ShapeCommand", "reliable", "transient_local"),
     "shapeform/target": ("shapeform::msg::TrackingTarget", "best_effort", "volatile"),
     "shapeform/metrics": ("shapeform::msg::SwarmMetrics", "reliable", "volatile"),
@@ -60,7 +61,7 @@ class ToolsTest(harness.SwarmTestCase):
             return t if set(t) == set(TOPICS) and writers["shapeform/state"] == AGENT_NAMES \
                 and writers["shapeform/target"] == {"shapeform_supervisor"} \
                 and writers["shapeform/command"] == AGENT_NAMES | {"shapeform_supervisor"} else None
-        topics = harness.poll(complete, 60, "shapeform_topics to see the five topics and every writer", 0.5)
+        topics = harness.poll(complete, 60, "shapeform_topics to see the six topics and every writer", 0.5)
         host = socket.gethostname()
         pids = {"shapeform_supervisor": sup.pid}
         pids.update({"shapeform_agent_%d" % i: a.pid for i, a in enumerate(agents)})
@@ -76,6 +77,8 @@ class ToolsTest(harness.SwarmTestCase):
                         for n, t in topics.items()}
         sup_name = {"shapeform_supervisor"}
         self.assertEqual(participants["shapeform/state"], (AGENT_NAMES, AGENT_NAMES | sup_name))
+        # One-agent processes publish no batches; every reader of state also reads batches.
+        self.assertEqual(participants["shapeform/state_batch"], (set(), AGENT_NAMES | sup_name))
         # Every agent re-offers the command it follows; the supervisor reads the topic for the command in force.
         self.assertEqual(participants["shapeform/command"], (sup_name | AGENT_NAMES, AGENT_NAMES | sup_name))
         self.assertEqual(participants["shapeform/target"], (sup_name, AGENT_NAMES))

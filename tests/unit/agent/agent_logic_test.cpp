@@ -3,10 +3,12 @@
 #include "agent_logic.hpp"
 #include "core/swarm.hpp"
 
+#include <memory>
 #include <numeric>
 #include <random>
 
 using namespace shapeform;
+using agent::AgentCounters;
 using agent::AgentLogic;
 using core::Vec2;
 
@@ -104,6 +106,89 @@ TEST_CASE("before its first command a neighbour is dropped after the idle timeou
   a.drop_stale(2061 * kMs);  // commanded: 61 ms is past the loop's 60 ms
   CHECK(a.neighbours() == 0);
   CHECK(a.counters().stale_dropped == 2);
+}
+
+TEST_CASE("a shared table: each sample once, each hosted agent's counters as a table of its own", "[agent]") {
+  auto table = std::make_shared<agent::NeighbourTable>(std::vector<std::int32_t>{3, 4}, 60 * kMs);
+  AgentLogic a(3, Vec2(0, 0), table), b(4, Vec2(1, 0), table);
+  AgentLogic alone(3, Vec2(0, 0), 60 * kMs);  // agent 3 with a table of its own, hearing the same
+  const auto hear = [&](std::int32_t id, std::uint64_t seq, std::int64_t t) {
+    table->on_state(id, Vec2(id, 0), seq, t, {}, std::nullopt, 0.0, std::nullopt, std::nullopt, 1.0);
+    alone.on_state(id, Vec2(id, 0), seq, t);
+  };
+  hear(3, 1, 0);  // agent 3's own sample, back from the wire
+  hear(4, 1, 0);  // its co-hosted neighbour
+  hear(9, 1, 0);
+  hear(9, 4, 10 * kMs);  // 2 lost
+  hear(3, 3, 10 * kMs);  // agent 3 lost one of its own: not its loss
+  CHECK(table->entries().size() == 3);
+  CHECK(a.neighbours() == 2);  // 4 and 9
+  CHECK(b.neighbours() == 2);  // 3 and 9
+  CHECK(a.counters().samples_received == 3);  // 4 once, 9 twice
+  CHECK(a.counters().samples_lost == 2);
+  CHECK(b.counters().samples_received == 4);  // 3 twice, 9 twice
+  CHECK(b.counters().samples_lost == 3);
+  table->on_gone(4);
+  alone.on_gone(4);
+  hear(9, 5, 50 * kMs);
+  a.drop_stale(71 * kMs);  // 3 heard at 10 ms: dropped once, whichever agent asks
+  b.drop_stale(71 * kMs);
+  CHECK(b.counters().stale_dropped == 1);
+  CHECK(a.counters().stale_dropped == 0);  // its own entry is no neighbour of its own
+  CHECK(a.counters().departed == 1);
+  CHECK(b.counters().departed == 0);
+  for (const auto& k : {&AgentCounters::samples_received, &AgentCounters::samples_lost, &AgentCounters::stale_dropped,
+                        &AgentCounters::departed}) {
+    alone.drop_stale(71 * kMs);
+    CHECK(a.counters().*k == alone.counters().*k);
+  }
+  CHECK(a.neighbours() == alone.neighbours());
+}
+
+TEST_CASE("hosted agents stepped together take each one's own step (the arc law, bit for bit)", "[agent]") {
+  core::CompiledCommand c = circle();
+  c.law = core::Law::Arc;
+  const auto start = core::uniform_start(8, 3);
+  // Agents 0..4 hosted in one process; 5..7 heard from elsewhere with their arc lengths.
+  auto table = std::make_shared<agent::NeighbourTable>(std::vector<std::int32_t>{0, 1, 2, 3, 4}, 60 * kMs);
+  std::vector<std::unique_ptr<AgentLogic>> shared, own;
+  for (std::int32_t i = 0; i < 5; ++i) {
+    shared.push_back(std::make_unique<AgentLogic>(i, start[static_cast<std::size_t>(i)], table));
+    own.push_back(std::make_unique<AgentLogic>(i, start[static_cast<std::size_t>(i)], 60 * kMs));
+  }
+  for (auto* set : {&shared, &own})
+    for (auto& l : *set) REQUIRE(adopt(*l, c, 1));
+  std::vector<AgentLogic*> group;
+  for (auto& l : shared) {
+    CHECK(l->shares_step_with(*shared.front()));
+    group.push_back(l.get());
+  }
+  CHECK_FALSE(own[1]->shares_step_with(*own[0]));  // tables of their own
+  const dds::CommandId cmd = shared.front()->command_id();
+  for (std::uint64_t seq = 1; seq <= 20; ++seq) {
+    for (std::int32_t j = 5; j < 8; ++j) {
+      const Vec2 x = start[static_cast<std::size_t>(j)] * (1.0 - 0.02 * static_cast<double>(seq));
+      const double arc = core::closest_point(c.shape, c.curve(), x).s + 0.01 * j;
+      table->on_state(j, x, seq, 0, cmd, arc, 0.0, std::nullopt, std::nullopt, 1.0);
+      for (auto& l : own) l->on_state(j, x, seq, 0, cmd, arc);
+    }
+    // Each alone hears the other hosted agents where they are, without an arc length (projected),
+    // as a shared step sees them.
+    for (auto& l : own)
+      for (auto& m : own) l->on_state(m->id(), m->position(), seq, 0);
+    AgentLogic::step_shared(group);
+    for (auto& l : own) l->step();
+    for (std::size_t k = 0; k < 5; ++k) {
+      CHECK(shared[k]->position().x() == own[k]->position().x());
+      CHECK(shared[k]->position().y() == own[k]->position().y());
+      CHECK(shared[k]->velocity() == own[k]->velocity());
+      CHECK(shared[k]->model_time() == own[k]->model_time());
+      CHECK(shared[k]->previous_arc() == own[k]->previous_arc());
+    }
+  }
+  // The group does not share once its agents follow different model times.
+  shared[2]->step();
+  CHECK_FALSE(shared[2]->shares_step_with(*shared.front()));
 }
 
 TEST_CASE("tracking follows the latest target, extrapolated over model time", "[agent][tracking]") {

@@ -24,6 +24,7 @@
 #include "dds/node.hpp"
 #include "dds/participant.hpp"
 #include "dds/stall.hpp"
+#include "dds/state_input.hpp"
 #include "dds/topics.hpp"
 #include "dds/transport.hpp"
 #include "shapeform/msg/AgentStatePubSubTypes.h"
@@ -553,6 +554,54 @@ TEST_CASE("valid_state rejects non-finite and absurd samples", "[dds][convert]")
   s.vx(8e5);
   s.vy(8e5);  // each component fine, speed 1.13e6 is not
   CHECK(state_problem(s).find("state.v: speed must be <= 1000000") == 0);
+}
+
+TEST_CASE("a state batch converts element by element and is refused whole, naming the element", "[dds][convert]") {
+  std::vector<dds::StateSample> in(3);
+  for (int k = 0; k < 3; ++k) {
+    in[static_cast<std::size_t>(k)].id = 40 + k;
+    in[static_cast<std::size_t>(k)].seq = 9;
+    in[static_cast<std::size_t>(k)].x = core::Vec2(k, -k);
+    in[static_cast<std::size_t>(k)].arc = 0.5 * k;
+  }
+  msg::AgentStateBatch m = dds::to_msg(in);
+  CHECK(m.first_id() == 40);
+  REQUIRE(m.states().size() == 3);
+  std::vector<dds::StateSample> out;
+  std::string why;
+  REQUIRE(dds::from_msg(m, out, why));
+  REQUIRE(out.size() == 3);
+  for (std::size_t k = 0; k < 3; ++k) {
+    // Each element as the per-agent conversion reads it.
+    dds::StateSample one;
+    REQUIRE(dds::from_msg(dds::to_msg(in[k]), one, why));
+    CHECK(out[k].id == one.id);
+    CHECK(out[k].x == one.x);
+    CHECK(out[k].arc == one.arc);
+    CHECK(out[k].prev_arc == one.prev_arc);
+  }
+  const auto refused = [&](msg::AgentStateBatch b) {
+    std::vector<dds::StateSample> untouched(1);
+    std::string w;
+    CHECK_FALSE(dds::from_msg(b, untouched, w));
+    CHECK(untouched.size() == 1);
+    return w;
+  };
+  msg::AgentStateBatch bad = m;
+  bad.states()[1].x(std::nan(""));
+  bad.states()[2].vy(1e300);
+  CHECK(refused(bad) == "state_batch.states[1].x: must be finite, got nan; state_batch.states[2].v: speed must be <= "
+                        "1000000, got 1e+300");
+  bad = m;
+  bad.first_id(41);
+  CHECK(refused(bad) == "state_batch.first_id: must be the id of states[0] (40), got 41");
+  bad = m;
+  bad.states()[2].id(40);
+  CHECK(refused(bad) == "state_batch.states: id 40 appears twice");
+  bad.states().clear();
+  CHECK(refused(bad) == "state_batch.states: must hold 1 to 1000 states, got 0");
+  bad.states().assign(dds::kMaxBatchStates + 1, m.states()[0]);
+  CHECK(refused(bad) == "state_batch.states: must hold 1 to 1000 states, got 1001");
 }
 
 TEST_CASE("valid_state refuses ids outside 0..kMaxAgentId and absurd model times", "[dds][convert]") {
@@ -1164,6 +1213,7 @@ TEST_CASE("describe gives a one-line summary", "[dds][qos]") {
 
 TEST_CASE("topic table gives names and keys and QoS", "[dds][topics]") {
   CHECK(std::string(dds::topic_name(dds::TopicId::State)) == "shapeform/state");
+  CHECK(std::string(dds::topic_name(dds::TopicId::StateBatch)) == "shapeform/state_batch");
   CHECK(std::string(dds::topic_name(dds::TopicId::Command)) == "shapeform/command");
   CHECK(std::string(dds::topic_name(dds::TopicId::Target)) == "shapeform/target");
   CHECK(std::string(dds::topic_name(dds::TopicId::Metrics)) == "shapeform/metrics");
@@ -1171,6 +1221,8 @@ TEST_CASE("topic table gives names and keys and QoS", "[dds][topics]") {
 
   // The table's type names are the generated ones.
   CHECK(std::string(dds::type_name(dds::TopicId::State)) == msg::AgentStatePubSubType().getName());
+  CHECK(std::string(dds::type_name(dds::TopicId::StateBatch)) == msg::AgentStateBatchPubSubType().getName());
+  CHECK(msg::AgentStateBatchPubSubType().m_isGetKeyDefined);
   CHECK(std::string(dds::type_name(dds::TopicId::Command)) == msg::ShapeCommandPubSubType().getName());
   CHECK(std::string(dds::type_name(dds::TopicId::Target)) == msg::TrackingTargetPubSubType().getName());
   CHECK(std::string(dds::type_name(dds::TopicId::Metrics)) == msg::SwarmMetricsPubSubType().getName());
@@ -1191,7 +1243,8 @@ TEST_CASE("topic table gives names and keys and QoS", "[dds][topics]") {
     CHECK(r.history().depth == 1);
     CHECK(w.reliability().kind == r.reliability().kind);
     CHECK(w.durability().kind == r.durability().kind);
-    CHECK(dds::is_keyed(id) == (id == dds::TopicId::State || id == dds::TopicId::Status));
+    CHECK(dds::is_keyed(id) ==
+          (id == dds::TopicId::State || id == dds::TopicId::StateBatch || id == dds::TopicId::Status));
     if (dds::is_keyed(id)) {
       CHECK(r.resource_limits().max_instances == 0);
       CHECK(r.resource_limits().max_samples == 0);
@@ -1279,6 +1332,73 @@ TEST_CASE("loopback pub-sub delivers 12 keyed instances and a dispose", "[dds][n
     }
     return disposed;
   }));
+}
+
+TEST_CASE("StateInput hears single states and batches, and a disposed batch as each id it carried gone",
+          "[dds][node][pubsub]") {
+  const auto cfg = loopback(test_domain(0));
+  dds::Node pub(cfg, "test-pub");
+  dds::Node sub(cfg, "test-sub");
+  auto single = pub.writer<msg::AgentState>(dds::TopicId::State);
+  auto batch = pub.writer<msg::AgentStateBatch>(dds::TopicId::StateBatch);
+  dds::StateInput input(sub);
+  REQUIRE(wait_for([&] { return single.matched() >= 1 && batch.matched() >= 1; }));
+  std::vector<dds::StateSample> group(3);
+  for (int k = 0; k < 3; ++k) group[static_cast<std::size_t>(k)].id = 20 + k;
+  dds::StateSample alone;
+  alone.id = 7;
+  std::set<std::int32_t> heard, heard_batched;
+  std::vector<dds::StateItem> items;
+  std::uint64_t seq = 0;
+  REQUIRE(wait_for([&] {
+    ++seq;
+    alone.seq = seq;
+    for (auto& g : group) g.seq = seq;
+    single.write(dds::to_msg(alone));
+    batch.write(dds::to_msg(group));
+    input.drain(items);
+    for (const auto& r : items) {
+      REQUIRE(r.kind == dds::StateItem::Kind::State);
+      CHECK(r.id == r.state.id);
+      CHECK(r.source == pub.source());
+      heard.insert(r.id);
+      if (r.batched) heard_batched.insert(r.id);
+    }
+    return heard.size() == 4;
+  }));
+  CHECK(heard_batched == std::set<std::int32_t>{20, 21, 22});
+  CHECK(input.batches() >= 1);
+  // A refused batch is one Rejected item naming the element.
+  msg::AgentStateBatch bad = dds::to_msg(group);
+  bad.states()[1].x(std::nan(""));
+  bool rejected = false;
+  REQUIRE(wait_for([&] {
+    batch.write(bad);
+    input.drain(items);
+    for (const auto& r : items)
+      if (r.kind == dds::StateItem::Kind::Rejected) {
+        CHECK(r.why == "state_batch.states[1].x: must be finite, got nan");
+        rejected = true;
+      }
+    return rejected;
+  }));
+  // Disposing the batch instance: every id it last carried is gone (best effort, so repeat).
+  std::set<std::int32_t> gone;
+  REQUIRE(wait_for([&] {
+    batch.write(dds::to_msg(group));
+    msg::AgentStateBatch key;
+    key.first_id(20);
+    batch.dispose(key);
+    input.drain(items);
+    for (const auto& r : items) {
+      if (r.kind != dds::StateItem::Kind::Gone) continue;
+      CHECK(r.instance == dds::InstanceState::Disposed);
+      CHECK(r.batched);
+      gone.insert(r.id);
+    }
+    return gone.size() == 3;
+  }));
+  CHECK(gone == std::set<std::int32_t>{20, 21, 22});
 }
 
 TEST_CASE("multicast_data pub-sub: keyed state and a reliable topic between three nodes", "[dds][node][pubsub]") {
