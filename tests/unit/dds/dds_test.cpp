@@ -982,11 +982,17 @@ TEST_CASE("static_edp: STATIC endpoint discovery from a description of the topic
   // endpoint discovery to learn it from).
   cfg.multicast_data = true;
   const std::string mc = dds::static_edp_description(cfg);
-  const auto reader_at = mc.find("<reader><userId>" + std::to_string(dds::static_edp_user_id(dds::TopicId::State, false)));
-  REQUIRE(reader_at != std::string::npos);
+  // The two state topics' readers (State, StateBatch) carry the group; nothing else does.
   const std::string group = "<multicastLocator address=\"239.255.0.1\" port=\"9151\"/>";
-  CHECK(mc.find(group + "</reader>", reader_at) == mc.find("</reader>", reader_at) - group.size());
-  CHECK(mc.find("multicastLocator") == mc.rfind("multicastLocator"));  // that reader's only
+  std::size_t groups = 0;
+  for (std::size_t at = mc.find("multicastLocator"); at != std::string::npos; at = mc.find("multicastLocator", at + 1))
+    ++groups;
+  CHECK(groups == 2);
+  for (const dds::TopicId id : {dds::TopicId::State, dds::TopicId::StateBatch}) {
+    const auto reader_at = mc.find("<reader><userId>" + std::to_string(dds::static_edp_user_id(id, false)) + "<");
+    REQUIRE(reader_at != std::string::npos);
+    CHECK(mc.find(group + "</reader>", reader_at) == mc.find("</reader>", reader_at) - group.size());
+  }
   CHECK(mc.find("unicastLocator") == std::string::npos);
 
   // Refused where Fast DDS would not use it, by key.
