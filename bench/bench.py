@@ -42,7 +42,7 @@ CLK_TCK = os.sysconf("SC_CLK_TCK")
 # Transport presets: --set overrides given to every process of a run (agents, supervisor, probe,
 # baseline). "ds" additionally starts a discovery server on 127.0.0.1 for the run.
 PRESETS: dict[str, dict] = {
-    "default": {"sets": [], "ds": False,
+    "default": {"sets": [], "ds": False, "secure": False,
                 "about": "project defaults (loopback profile: unicast UDPv4 on 127.0.0.1, OS socket buffers)"},
 }
 
@@ -1084,6 +1084,16 @@ def report_plan(store: dict) -> dict:
         ("N=100 at 20 Hz: no process aborts", "aborts_total", "max", 0, str),
         ("N=100 at 20 Hz: the circle converges", "converged", "", 0, str),
     ]
+    g1000, g1000b = "group-n1000-r20-g100", "group-n1000-r20-g50"
+    targets_1000 = [
+        ("N=1000 at 20 Hz, 10-20 processes: delivery >= 99 %", "delivery", "min", 0.99, lambda v: f"{100 * v:.2f} %"),
+        ("N=1000 at 20 Hz, 10-20 processes: data age p99 <= 100 ms", "age_p99_ms", "max", 100.0, ms),
+        ("N=1000 at 20 Hz, 10-20 processes: everyone hears everyone within 10 s", "all_heard_s", "max", 10.0,
+         lambda v: f"{v:.1f} s"),
+        ("N=1000 at 20 Hz, 10-20 processes: the arc-law circle converges", "converged", "", 0, str),
+        ("N=1000 at 20 Hz, 10-20 processes: the host at most half busy", "host_busy_pct", "max", 50.0,
+         lambda v: f"{v:.0f} %"),
+    ]
     targets_25 = [
         ("N=25 at 20 Hz: data age p50 <= 1 ms", "age_p50_ms", "max", 1.0, ms),
         ("N=25 at 20 Hz: data age p99 <= 5 ms", "age_p99_ms", "max", 5.0, ms),
@@ -1098,6 +1108,9 @@ def report_plan(store: dict) -> dict:
         f"- **100 agent processes with a discovery server** (the same, discovery through `fast-discovery-server` on "
         f"127.0.0.1): {_summary(store, ds100)}.",
         f"- **The bare Fast DDS floor at N = 100** (same payload, transport and rate): {_summary(store, b100)}.",
+        f"- **1000 agents in 10 processes of 100** (`shapeform_agent_group`, one AgentStateBatch per process and "
+        f"tick): {_summary(store, g1000)}.",
+        f"- **1000 agents in 20 processes of 50**: {_summary(store, g1000b)}.",
         f"- **100 agents in 2 processes of 50** (`shapeform_agent_group`): {_summary(store, g50)}.",
         f"- **100 agents in 4 processes of 25**: {_summary(store, g25)}.",
         f"- **25 agent processes at 20 Hz**: {_summary(store, n25)}; baseline: {_summary(store, b25)}.",
@@ -1177,7 +1190,8 @@ def report_plan(store: dict) -> dict:
   live in Debian's Fast DDS 2.9 build: `PDP.cpp check_remote_participant_liveliness: Assertion
   GUID_t::unknown() != remote_participant->m_guid` (SIGABRT), when a remote participant's lease timer runs after
   its proxy was released; seen with simple discovery at N >= 50 on a saturated host."""
-    return {"main": main, "targets": [(n100, targets_100), (ds100, targets_100), (g50, targets_100), (n25, targets_25)],
+    return {"main": main, "targets": [(n100, targets_100), (ds100, targets_100), (g50, targets_100),
+                                      (g1000, targets_1000), (g1000b, targets_1000), (n25, targets_25)],
             "headline": headline, "limits": limits,
             "main_intro": f"Main rows use the large-swarm transport settings (`{MAIN_PRESET}`: "
                           f"{PRESETS[MAIN_PRESET]['about']}); grouped rows use the project defaults (2 participants do "
