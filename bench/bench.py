@@ -74,8 +74,6 @@ def large_swarm_sets() -> list[str]:
 
 LARGE_MIN = int(next(ln.split("=", 1)[1] for ln in (ROOT / "config" / "large_swarm.sets").read_text().splitlines()
                      if ln.startswith("min_agents=")))
-IDLE = "agent.idle_rate_hz=2"
-add_preset("mcbufannq", [MC, BUF] + ANN + [IDLE], "mcbufann + state at 2 Hz until the first command")
 add_preset("large", large_swarm_sets(), f"what scripts/launch_swarm.sh sets from {LARGE_MIN} agent processes on "
            f"(config/large_swarm.sets): {', '.join(large_swarm_sets())}")
 SEDP = "transport.static_edp=true"
