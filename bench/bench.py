@@ -93,7 +93,7 @@ class Row:
     rate: float
     preset: str = "default"
     stagger_s: float = 0.0
-    group: int = 0       # agents per process (kind == group)
+    group: int = 0       # agents per process (group; baseline: > 0 for the grouped shape, one batch per process)
     section: str = "main"
     view: bool = False   # shapeform_view beside the swarm, one browser-like client reading its event stream
     runs: int = 0        # runs of a main row when not given by --runs (0: the default, 3)
@@ -102,7 +102,7 @@ class Row:
     def id(self) -> str:
         r = f"{self.rate:g}"
         s = f"{self.kind}-n{self.n}-r{r}"
-        if self.kind == "group":
+        if self.group:
             s += f"-g{self.group}"
         if self.preset != "default":
             s += f"-{self.preset}"
@@ -127,13 +127,12 @@ def main_rows() -> list[Row]:
         for rate in ((20.0, 50.0) if n <= 25 else (20.0,)):
             rows.append(Row("baseline", n, rate, preset, MAIN_STAGGER))
             rows.append(Row("agents", n, rate, preset, MAIN_STAGGER, runs=5 if n >= 100 else 0))
-    # Several agents per process (shapeform_agent_group), measured the same way.
-    rows.append(Row("group", 50, 20.0, "default", 0.0, 25))
-    rows.append(Row("group", 100, 20.0, "default", 0.0, 50))
-    rows.append(Row("group", 100, 20.0, "default", 0.0, 25))
-    # 1000 agents in 10 and in 20 processes: each process publishes one AgentStateBatch per tick.
-    rows.append(Row("group", 1000, 20.0, "default", 0.0, 100))
-    rows.append(Row("group", 1000, 20.0, "default", 0.0, 50))
+    # Several agents per process (shapeform_agent_group), measured the same way, each beside the bare
+    # baseline of the same shape (one AgentStateBatch per process and tick). 1000 agents in 10 and in 20
+    # processes.
+    for n, k in ((50, 25), (100, 50), (100, 25), (1000, 100), (1000, 50)):
+        rows.append(Row("baseline", n, 20.0, "default", 0.0, k))
+        rows.append(Row("group", n, 20.0, "default", 0.0, k))
     return rows
 
 
@@ -588,13 +587,16 @@ def run_once(ctx: Ctx, row: Row, run_idx: int) -> dict:
             client = EventClient(start["url"])
             client.start()
         workers: list[procs.Proc] = []
-        if row.kind == "group":
+        if row.group:
             for first in range(0, row.n, row.group):
-                last = min(row.n, first + row.group) - 1
-                workers.append(spawn(f"group{first}", [
-                    str(ctx.bin / "shapeform_agent_group"), "--ids", f"{first}-{last}", "--config",
-                    str(ctx.scenario), "--seed", "1"] + common +
-                    procs.sets_args(rate_sets + ctx.scenario_sets)))
+                ids = f"{first}-{min(row.n, first + row.group) - 1}"
+                if row.kind == "group":
+                    argv = [str(ctx.bin / "shapeform_agent_group"), "--ids", ids, "--config", str(ctx.scenario),
+                            "--seed", "1"] + common + procs.sets_args(rate_sets + ctx.scenario_sets)
+                else:
+                    argv = [str(ctx.bin / "shapeform_bench_baseline"), "--ids", ids] + common + \
+                        procs.sets_args(rate_sets)
+                workers.append(spawn(f"group{first}", argv))
                 if row.stagger_s > 0:
                     time.sleep(row.stagger_s)
         else:
@@ -1190,7 +1192,8 @@ def report_plan(store: dict) -> dict:
   the supervisor with the script `wait agents N; start; wait converged; sleep W; quit`, then the N processes
   (`shapeform_agent --id i --config config/scenarios/arc_circle.yaml --seed 1 --set agent.rate_hz=R
   --set agent.status_rate_hz=2`, or `shapeform_agent_group --ids A-B` for grouped rows, or
-  `shapeform_bench_baseline --id i`). Baseline rows run until every process hears all others, then W seconds.
+  `shapeform_bench_baseline --id i`, or `shapeform_bench_baseline --ids A-B` for grouped baseline rows).
+  Baseline rows run until every agent hears all others, then W seconds.
   The measurement window is the last W seconds (W = 55 s at 20 Hz, 30 s at 50 Hz; 12 s with --quick).
   Processes are stopped with SIGTERM 10 ms apart; anything still alive after 20 s is killed and counted.
   Before each run the script waits for the host to be nearly idle; a run during which other jobs used more
@@ -1218,6 +1221,9 @@ def report_plan(store: dict) -> dict:
 - **Baseline**: `bench/baseline.cpp`, one participant from `dds::create_participant` (same transport config),
   one AgentState writer and reader with the topic table's QoS, a listener that books age and sequence gaps in
   place, the same RateLoop and the same AgentStatus reports; no mailbox, no control law, no other topics.
+  Grouped baseline rows (`-gK`): K ids per process, one AgentStateBatch writer and reader instead (each
+  element booked as one agent's sample, co-hosted ids heard in-process as in `shapeform_agent_group`) and one
+  AgentStatus per hosted id.
 - **Aborts**: processes that died of a signal other than our SIGTERM. The usual cause is an assert that is
   live in Debian's Fast DDS 2.9 build: `PDP.cpp check_remote_participant_liveliness: Assertion
   GUID_t::unknown() != remote_participant->m_guid` (SIGABRT), when a remote participant's lease timer runs after

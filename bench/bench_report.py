@@ -272,7 +272,7 @@ def agg_val(entry, key):
 
 
 def processes(row: dict) -> str:
-    if row["kind"] == "group":
+    if row.get("group"):
         k = row["group"]
         return f"{math.ceil(row['n'] / k)} x {k} agents"
     return f"{row['n']}"
@@ -280,7 +280,7 @@ def processes(row: dict) -> str:
 
 def row_label(row: dict) -> str:
     kind = {"baseline": "baseline", "agents": "agents", "group": "agents (grouped)"}[row["kind"]]
-    return kind
+    return "baseline (grouped)" if row["kind"] == "baseline" and row.get("group") else kind
 
 
 TABLE_HEAD = ("| row | kind | N | rate | processes | config | all hear all | delivery | age p50 | age p99 | age p99 worst window "
@@ -319,15 +319,14 @@ RATIO_HEAD = ("| agent row | baseline row | all hear all | delivery | age p50 | 
 
 
 def baseline_for(rows: dict, e: dict) -> dict | None:
+    """The baseline row of the same N, rate, transport and shape (agents per process), with the same
+    stagger if measured, else without."""
     r = e["row"]
-    bid = f"baseline-n{r['n']}-r{r['rate']:g}" + (f"-{r['preset']}" if r["preset"] != "default" else "")
-    if r.get("stagger_s"):
-        bid += f"-st{int(round(r['stagger_s'] * 1000))}"
-    if bid in rows:
-        return rows[bid]
-    # Same N, rate and transport without the stagger.
-    bid2 = f"baseline-n{r['n']}-r{r['rate']:g}" + (f"-{r['preset']}" if r["preset"] != "default" else "")
-    return rows.get(bid2)
+    bid = f"baseline-n{r['n']}-r{r['rate']:g}" + (f"-g{r['group']}" if r.get("group") else "") + \
+        (f"-{r['preset']}" if r["preset"] != "default" else "")
+    if r.get("stagger_s") and bid + f"-st{int(round(r['stagger_s'] * 1000))}" in rows:
+        return rows[bid + f"-st{int(round(r['stagger_s'] * 1000))}"]
+    return rows.get(bid)
 
 
 def pair_effect(rows: dict, a_id: str, b_id: str) -> str:
@@ -457,11 +456,11 @@ def render(store: dict, path: Path, plan: dict) -> None:
         if rid in rows:
             o.append(table_line(rid, rows[rid]))
     o.append("\n")
-    o.append("### Agent figures as a ratio to the baseline (same N, rate and transport)\n\n")
+    o.append("### Agent figures as a ratio to the baseline (same N, rate, transport and agents per process)\n\n")
     o.append(RATIO_HEAD)
     for rid in plan.get("main", []):
         e = rows.get(rid)
-        if e and e["row"]["kind"] == "agents":  # grouped rows have no baseline of the same shape
+        if e and e["row"]["kind"] in ("agents", "group"):
             o.append(ratio_line(rid, e, baseline_for(rows, e)))
     o.append("\n![delivery and p99 data age against N](figures/bench_scaling.png)\n\n")
 

@@ -4,10 +4,13 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <iostream>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -53,6 +56,43 @@ std::string writable_file_problem(const std::string& file) {
     return "'" + util::excerpt(file) + "' exists and is not a regular file: give a file path to write";
   const std::filesystem::path parent = p.has_parent_path() ? p.parent_path() : std::filesystem::path(".");
   return writable_dir_problem(parent.string());
+}
+
+bool parse_id_list(const std::string& text, int max_id, std::size_t max_count, std::vector<std::int32_t>& ids,
+                   std::string& error) {
+  ids.clear();
+  std::set<std::int32_t> seen;
+  std::size_t pos = 0;
+  while (pos <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', pos), text.size());
+    const std::string part = text.substr(pos, comma - pos);
+    long a = -1, b = -1;
+    char extra = 0;
+    if (std::sscanf(part.c_str(), "%ld-%ld%c", &a, &b, &extra) == 2) {
+    } else if (std::sscanf(part.c_str(), "%ld%c", &a, &extra) == 1) {
+      b = a;
+    } else {
+      error = "expected ids like 0-49 or 0,5,7, got '" + part + "'";
+      return false;
+    }
+    if (a < 0 || b > max_id || a > b) {
+      error = "ids must be in 0.." + std::to_string(max_id) + " with first <= last, got '" + part + "'";
+      return false;
+    }
+    for (long i = a; i <= b; ++i) {
+      if (!seen.insert(static_cast<std::int32_t>(i)).second) {
+        error = "id " + std::to_string(i) + " listed twice";
+        return false;
+      }
+      ids.push_back(static_cast<std::int32_t>(i));
+    }
+    pos = comma + 1;
+  }
+  if (ids.size() > max_count) {
+    error = "at most " + std::to_string(max_count) + " agents per process, got " + std::to_string(ids.size());
+    return false;
+  }
+  return !ids.empty();
 }
 
 namespace {

@@ -8,6 +8,8 @@
 ///   const auto cfg = app.load_config();
 ///   if (!cfg) return app::kExitUsage;
 #include <CLI/CLI.hpp>
+#include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <optional>
 #include <string>
@@ -29,6 +31,12 @@ std::string writable_dir_problem(const std::string& dir);
 /// Why `file` cannot be written, or "": its folder must be writable (writable_dir_problem) and the
 /// path, if it exists, a regular file.
 std::string writable_file_problem(const std::string& file);
+
+/// An id list as `--ids` takes it ("0-49", "3", "0-9,20-29") -> ids in the order given. False with
+/// `error` naming the bad part: not a number or range, outside 0..max_id, an id listed twice, more
+/// than max_count ids, or none.
+bool parse_id_list(const std::string& text, int max_id, std::size_t max_count, std::vector<std::int32_t>& ids,
+                   std::string& error);
 
 /// CLI11 checks for flags that name an output folder or file (`--record DIR`, `--csv FILE`): a bad
 /// path is a parse error, exit 2, before the program loads its config or creates a DDS participant.

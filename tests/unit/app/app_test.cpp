@@ -60,3 +60,26 @@ TEST_CASE("a flag checked with writable_dir() is a usage error (exit 2) at parse
   CHECK_FALSE(parse_record(t.path.string()).has_value());
   CHECK(parse_record("/proc/shapeform_record") == std::optional<int>(app::kExitUsage));
 }
+
+TEST_CASE("parse_id_list: ranges and lists in the order given; each bad part named", "[app]") {
+  std::vector<std::int32_t> ids;
+  std::string error;
+  REQUIRE(app::parse_id_list("4-6,0,9", 99, 10, ids, error));
+  CHECK(ids == std::vector<std::int32_t>{4, 5, 6, 0, 9});
+  REQUIRE(app::parse_id_list("7", 99, 10, ids, error));
+  CHECK(ids == std::vector<std::int32_t>{7});
+
+  CHECK_FALSE(app::parse_id_list("1-3,2", 99, 10, ids, error));
+  CHECK(error == "id 2 listed twice");
+  CHECK_FALSE(app::parse_id_list("5-2", 99, 10, ids, error));
+  CHECK(error == "ids must be in 0..99 with first <= last, got '5-2'");
+  CHECK_FALSE(app::parse_id_list("0-100", 99, 200, ids, error));
+  CHECK(error == "ids must be in 0..99 with first <= last, got '0-100'");
+  CHECK_FALSE(app::parse_id_list("0,x1", 99, 10, ids, error));
+  CHECK(error == "expected ids like 0-49 or 0,5,7, got 'x1'");
+  CHECK_FALSE(app::parse_id_list("1-2-3", 99, 10, ids, error));
+  CHECK(error == "expected ids like 0-49 or 0,5,7, got '1-2-3'");
+  CHECK_FALSE(app::parse_id_list("", 99, 10, ids, error));
+  CHECK_FALSE(app::parse_id_list("0-10", 99, 10, ids, error));
+  CHECK(error == "at most 10 agents per process, got 11");
+}
