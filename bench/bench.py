@@ -129,10 +129,11 @@ def main_rows() -> list[Row]:
             rows.append(Row("agents", n, rate, preset, MAIN_STAGGER, runs=5 if n >= 100 else 0))
     # Several agents per process (shapeform_agent_group), measured the same way, each beside the bare
     # baseline of the same shape (one AgentStateBatch per process and tick). 1000 agents in 10 and in 20
-    # processes.
+    # processes; those use multicast state (lever 13), the few processes of N <= 100 the defaults.
     for n, k in ((50, 25), (100, 50), (100, 25), (1000, 100), (1000, 50)):
-        rows.append(Row("baseline", n, 20.0, "default", 0.0, k))
-        rows.append(Row("group", n, 20.0, "default", 0.0, k))
+        preset = MAIN_PRESET if n >= 1000 else "default"
+        rows.append(Row("baseline", n, 20.0, preset, 0.0, k))
+        rows.append(Row("group", n, 20.0, preset, 0.0, k))
     return rows
 
 
@@ -290,6 +291,17 @@ LEVERS: list[dict] = [
              "all after 25 and 29 s with static discovery, not within 120 s without. It is the lever with an "
              "effect on discovery, but not one that reaches 10 s at N = 100 here; it stays off by default (every "
              "process of a swarm must use it, or they never match).",
+     "extra": True},
+    {"name": "13. Multicast state for 1000 agents in groups",
+     "question": "1000 agents in 10 or 20 `shapeform_agent_group` processes with the project's default transport "
+                 "(each AgentStateBatch sent by unicast to every other process: P sends of up to 13 KB per process "
+                 "and tick) against `mcbufann` (one multicast send on lo per batch; the kernel delivers it to the P "
+                 "readers). The receives stay P per process and tick: every process takes every batch. Measured "
+                 "for the agents and for the bare grouped baseline of the same shape.",
+     "pairs": [(_lv(B, 1000, "default", 0.0, 100), _lv(B, 1000, MAIN_PRESET, 0.0, 100)),
+               (_lv(G, 1000, "default", 0.0, 100), _lv(G, 1000, MAIN_PRESET, 0.0, 100)),
+               (_lv(B, 1000, "default", 0.0, 50), _lv(B, 1000, MAIN_PRESET, 0.0, 50)),
+               (_lv(G, 1000, "default", 0.0, 50), _lv(G, 1000, MAIN_PRESET, 0.0, 50))],
      "extra": True},
 ]
 # The rows of a lever, unless listed: the members of its pairs, in order.
@@ -1090,6 +1102,25 @@ def _summary(store, rid) -> str:
             f"host {a.get('host_busy_pct', 0) or 0:.0f} % busy (`{rid}`)")
 
 
+def _limits_1000(store: dict, g100: str, g50: str, b100: str, b50: str) -> str:
+    """What limits 1000 agents in groups, from the measured rows (empty until they are measured)."""
+    busy = {rid: _get(store, rid, "host_busy_pct") for rid in (g100, g50, b100, b50)}
+    if None in busy.values():
+        return ""
+    uni = {k: _get(store, f"group-n1000-r20-g{k}", "host_busy_pct") for k in (100, 50)}
+    uni_txt = (f" With the default unicast transport each batch leaves a process as P sends, and the same rows "
+               f"kept the host {uni[100]:.0f} % and {uni[50]:.0f} % busy (lever 13)."
+               if None not in uni.values() else "")
+    return (f" **1000 agents** in 10 processes of 100: each process publishes one AgentStateBatch per tick "
+            f"(10 x 9 x 20 = 1,800 inter-process deliveries/s instead of 19,980,000 agent-to-agent updates), and its "
+            f"agents share one table of the states heard and one sorted arc list per tick; the host was "
+            f"{busy[g100]:.0f} % busy (the bare grouped baseline of the same shape {busy[b100]:.0f} %). In 20 "
+            f"processes of 50 it was {busy[g50]:.0f} % busy (the bare baseline {busy[b50]:.0f} %): every process "
+            "receives, unpacks and tables the states of all N agents every tick whatever it hosts, so that work, "
+            "and the transport's part of it, which the baseline measures alone, grows with the number of processes "
+            "times N." + uni_txt)
+
+
 def report_plan(store: dict) -> dict:
     from bench_report import f_ms
     main = [r.id for r in main_rows()]
@@ -1106,7 +1137,8 @@ def report_plan(store: dict) -> dict:
         ("N=100 at 20 Hz: no process aborts", "aborts_total", "max", 0, str),
         ("N=100 at 20 Hz: the circle converges", "converged", "", 0, str),
     ]
-    g1000, g1000b = "group-n1000-r20-g100", "group-n1000-r20-g50"
+    g1000, g1000b = f"group-n1000-r20-g100-{mp}", f"group-n1000-r20-g50-{mp}"
+    bg1000, bg1000b = f"baseline-n1000-r20-g100-{mp}", f"baseline-n1000-r20-g50-{mp}"
     targets_1000 = [
         ("N=1000 at 20 Hz, 10-20 processes: delivery >= 99 %", "delivery", "min", 0.99, lambda v: f"{100 * v:.2f} %"),
         ("N=1000 at 20 Hz, 10-20 processes: data age p99 <= 100 ms", "age_p99_ms", "max", 100.0, ms),
@@ -1131,8 +1163,9 @@ def report_plan(store: dict) -> dict:
         f"127.0.0.1): {_summary(store, ds100)}.",
         f"- **The bare Fast DDS floor at N = 100** (same payload, transport and rate): {_summary(store, b100)}.",
         f"- **1000 agents in 10 processes of 100** (`shapeform_agent_group`, one AgentStateBatch per process and "
-        f"tick): {_summary(store, g1000)}.",
-        f"- **1000 agents in 20 processes of 50**: {_summary(store, g1000b)}.",
+        f"tick, multicast on lo): {_summary(store, g1000)}; the bare baseline of that shape: {_summary(store, bg1000)}.",
+        f"- **1000 agents in 20 processes of 50**: {_summary(store, g1000b)}; the bare baseline of that shape: "
+        f"{_summary(store, bg1000b)}.",
         f"- **100 agents in 2 processes of 50** (`shapeform_agent_group`): {_summary(store, g50)}.",
         f"- **100 agents in 4 processes of 25**: {_summary(store, g25)}.",
         f"- **25 agent processes at 20 Hz**: {_summary(store, n25)}; baseline: {_summary(store, b25)}.",
@@ -1180,14 +1213,7 @@ def report_plan(store: dict) -> dict:
         "any of the settings or code versions tried (lever 10): the one-process-per-agent rows of that day miss "
         "'everyone hears everyone' and the convergence, and their data age is that of a swarm still discovering "
         "itself while it runs."
-        + (f" **1000 agents** in 10 processes of 100: each process publishes one AgentStateBatch per tick "
-           f"(10 x 9 x 20 = 1,800 inter-process deliveries/s instead of 19,980,000 agent-to-agent updates), and its "
-           f"agents share one table of the states heard and one sorted arc list per tick; the host was "
-           f"{_get(store, 'group-n1000-r20-g100', 'host_busy_pct'):.0f} % busy. In 20 processes of 50 it was "
-           f"{_get(store, 'group-n1000-r20-g50', 'host_busy_pct') or 0:.0f} % busy: each process unpacks, tables and "
-           "sorts the states of all N agents every tick whatever it hosts, so that work grows with the number of "
-           "processes times N, and 10 processes of 100 are the configuration within the half-busy target."
-           if _get(store, "group-n1000-r20-g100", "host_busy_pct") is not None else ""))
+        + _limits_1000(store, g1000, g1000b, bg1000, bg1000b))
     method = """- **Runs.** Each run uses its own DDS domain (200..229 in turn), starts `shapeform_bench_probe`, then (agent rows)
   the supervisor with the script `wait agents N; start; wait converged; sleep W; quit`, then the N processes
   (`shapeform_agent --id i --config config/scenarios/arc_circle.yaml --seed 1 --set agent.rate_hz=R
@@ -1233,8 +1259,9 @@ def report_plan(store: dict) -> dict:
             "headline": headline, "limits": limits,
             "main_intro": f"Main rows of N <= 50 use the transport settings `{MAIN_PRESET}` "
                           f"({PRESETS[MAIN_PRESET]['about']}); the N = 100 rows what the launcher runs by default "
-                          f"from {LARGE_MIN} agents on (`large`: {PRESETS['large']['about']}); grouped rows use the project defaults (a "
-                          "few participants do not need them). The levers below compare them with the defaults.",
+                          f"from {LARGE_MIN} agents on (`large`: {PRESETS['large']['about']}); grouped rows of N <= 100 use the "
+                          f"project defaults (a few participants do not need them), the 1000-agent rows `{MAIN_PRESET}` "
+                          "(lever 13). The levers below compare them with the defaults.",
             "levers": [{"name": lv["name"], "question": lv["question"], "rows": [r.id for r in lv["rows"]],
                         "pairs": [(a.id, b.id) for a, b in lv.get("pairs", [])],
                         "note": lv.get("note", ""), "extra": lv.get("extra", False),
