@@ -18,6 +18,7 @@
 #include <iostream>
 #include <mutex>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include <fastdds/dds/domain/DomainParticipant.hpp>

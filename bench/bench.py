@@ -79,6 +79,14 @@ add_preset("large", large_swarm_sets(), f"what scripts/launch_swarm.sh sets from
 SEDP = "transport.static_edp=true"
 add_preset("mcbufannsedp", [MC, BUF, SEDP] + ANN, "mcbufann + static endpoint discovery (transport.static_edp)")
 add_preset("largesedp", large_swarm_sets() + [SEDP], "large + static endpoint discovery (transport.static_edp)")
+add_preset("largequiet", large_swarm_sets() + ["agent.idle_rate_hz=0.2"],
+           "large, but state every 5 s until the first command (agent.idle_rate_hz=0.2): the start-up traffic is "
+           "almost only discovery")
+add_preset("largeia1", large_swarm_sets() + ["transport.initial_announcements=1"],
+           "large + 1 initial participant announcement (transport.initial_announcements; Fast DDS default 5 at 0.1 s)")
+add_preset("largeia20", large_swarm_sets() + ["transport.initial_announcements=20", "transport.initial_announce_s=0.25"],
+           "large + 20 initial participant announcements every 0.25 s (transport.initial_announcements, "
+           "initial_announce_s)")
 add_preset("ds", [], "discovery server on 127.0.0.1 (transport.profile=discovery-server)", ds=True)
 add_preset("dsbuf", [BUF], "discovery server on 127.0.0.1 + 4 MiB socket buffers", ds=True)
 add_preset("dsmcbufann", [MC, BUF] + ANN, "discovery server on 127.0.0.1 + State on multicast on lo + 4 MiB socket "
@@ -302,6 +310,26 @@ LEVERS: list[dict] = [
                (_lv(G, 1000, "default", 0.0, 100), _lv(G, 1000, MAIN_PRESET, 0.0, 100)),
                (_lv(B, 1000, "default", 0.0, 50), _lv(B, 1000, MAIN_PRESET, 0.0, 50)),
                (_lv(G, 1000, "default", 0.0, 50), _lv(G, 1000, MAIN_PRESET, 0.0, 50))],
+     "extra": True},
+    {"name": "14. Initial announcements",
+     "question": "`transport.initial_announcements` / `initial_announce_s`: a new participant announces itself "
+                 "this many times at this interval (Fast DDS default 5 at 0.1 s) before the period `announce_s` "
+                 "(3 s here) takes over; each announcement goes to all 120 participant slots of the loopback "
+                 "profile. One announcement (less start-up traffic) and 20 every 0.25 s (a newcomer keeps "
+                 "announcing through the start-up storm) against the launcher's `large` settings.",
+     "pairs": [(_lv(A, 100, "large"), _lv(A, 100, "largeia1")), (_lv(A, 100, "large"), _lv(A, 100, "largeia20"))],
+     "extra": True},
+    {"name": "15. What participant discovery costs",
+     "question": "Agents that publish their state only every 5 s until the first command (`largequiet`), so "
+                 "that the traffic from launch to 'everyone hears everyone' is almost only discovery: the "
+                 "datagrams the host received in that time, at N = 50, 75 and 100. In Fast DDS 2.9 a participant "
+                 "that discovers a new one sends its own announcement (DATA(p)) again to every participant it "
+                 "knows and every slot it probes (PDPListener: assigning the newcomer's endpoints marks the "
+                 "announcement unsent for all readers of the StatelessWriter), so N participants starting together "
+                 "cause about N x (N - 1) announcements, each received and parsed by about N participants: N^3 "
+                 "datagrams, a million at N = 100.",
+     "rows": [_lv(A, 50, "largequiet"), _lv(A, 75, "largequiet"), _lv(A, 100, "largequiet")],
+     "pairs": [],
      "extra": True},
 ]
 # The rows of a lever, unless listed: the members of its pairs, in order.
@@ -794,6 +822,13 @@ def analyse(ctx: Ctx, row: Row, rdir: Path, res: dict, sampler: Sampler) -> None
             res["kernel_and_unattributed_pct"] = max(0.0, res["host_busy_pct"] * (os.cpu_count() or 1)
                                                       - res["ours_cpu_pct"] - res["other_cpu_pct"])
         ua, ub = a["udp"], b["udp"]
+        # Discovery's traffic: datagrams the host received from the first launch until everyone heard
+        # everyone (or the last sample before the end, when that never happened).
+        first = next((x for x in sampler.samples if x["t"] >= t0), None)
+        t_heard = t0 + res["all_heard_s"] * 1e9 if res.get("all_heard_s") is not None else t_end
+        last = next((x for x in reversed(sampler.samples) if x["t"] <= t_heard + 0.5e9), None)
+        if first is not None and last is not None and last["t"] > first["t"]:
+            res["disc_udp_in"] = last["udp"]["InDatagrams"] - first["udp"]["InDatagrams"]
         res["udp_in_per_s"] = (ub["InDatagrams"] - ua["InDatagrams"]) / span_s
         res["udp_rcvbuf_errors_per_s"] = (ub["RcvbufErrors"] - ua["RcvbufErrors"]) / span_s
         res["udp_out_per_s"] = (ub["OutDatagrams"] - ua["OutDatagrams"]) / span_s

@@ -491,11 +491,13 @@ def render(store: dict, path: Path, plan: dict) -> None:
             o.append("\n")
         extra = lv.get("extra")
         if extra:
-            o.append("| row | UDP datagrams in/s | UDP out/s | receive-buffer drops/s | our CPU (% of one core) |\n|---|---|---|---|---|\n")
+            o.append("| row | UDP datagrams in/s | UDP out/s | receive-buffer drops/s | our CPU (% of one core) "
+                     "| datagrams received, launch to all hear all |\n|---|---|---|---|---|---|\n")
             for rid in present:
                 a = rows[rid]["agg"]
                 o.append(f"| `{rid}` | {f_num(a.get('udp_in_per_s'), '{:.0f}')} | {f_num(a.get('udp_out_per_s'), '{:.0f}')} "
-                         f"| {f_num(a.get('udp_rcvbuf_errors_per_s'), '{:.0f}')} | {f_num(a.get('ours_cpu_pct'), '{:.0f}')} |\n")
+                         f"| {f_num(a.get('udp_rcvbuf_errors_per_s'), '{:.0f}')} | {f_num(a.get('ours_cpu_pct'), '{:.0f}')} "
+                         f"| {f_num(a.get('disc_udp_in'), '{:,.0f}')} |\n")
             o.append("\n")
         effects = [pair_effect(rows, a, b) for a, b in lv.get("pairs", []) if a in rows and b in rows]
         if effects:

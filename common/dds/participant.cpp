@@ -130,6 +130,8 @@ fdds::DomainParticipantQos participant_qos(const TransportConfig& cfg, const std
   builtin.discovery_config.leaseDuration = eprosima::fastrtps::Duration_t(cfg.lease_s);
   builtin.discovery_config.leaseDuration_announcementperiod =
       eprosima::fastrtps::Duration_t(cfg.announce_s);
+  builtin.discovery_config.initial_announcements.count = static_cast<std::uint32_t>(cfg.initial_announcements);
+  builtin.discovery_config.initial_announcements.period = eprosima::fastrtps::Duration_t(cfg.initial_announce_s);
 
   if (cfg.profile == kLoopback) {
     udp->interfaceWhiteList.push_back("127.0.0.1");
@@ -327,6 +329,9 @@ std::string describe(const TransportConfig& cfg) {
   }
   os << ", domain " << cfg.domain << ", lease " << cfg.lease_s << " s, announce " << cfg.announce_s
      << " s";
+  const TransportConfig defaults;
+  if (cfg.initial_announcements != defaults.initial_announcements || cfg.initial_announce_s != defaults.initial_announce_s)
+    os << ", " << cfg.initial_announcements << " initial announcements every " << cfg.initial_announce_s << " s";
   if (cfg.socket_buffer_bytes > 0) os << ", socket buffers " << cfg.socket_buffer_bytes << " B";
   if (cfg.multicast_data) os << ", state on multicast 239.255.0.1:" << user_multicast_port(cfg.domain);
   if (cfg.static_edp) os << ", static endpoint discovery";

@@ -86,6 +86,15 @@ std::vector<P> build_table() {
       "nothing else does)",
       " and `< lease_s`", [](auto& c) -> auto& { return c.announce_s; }));
   t.push_back(param<long long>(
+      Type::Integer, "transport.initial_announcements", "announcements", params::integers(0, 1000),
+      "announcements a new participant sends every `initial_announce_s` before `announce_s` takes over (0: the "
+      "first periodic one only); each goes to every participant slot probed and to every participant known",
+      "", [](auto& c) -> auto& { return c.initial_announcements; }));
+  t.push_back(param<double>(
+      Type::Real, "transport.initial_announce_s", "s", params::above(0),
+      "interval of the initial announcements", "",
+      [](auto& c) -> auto& { return c.initial_announce_s; }));
+  t.push_back(param<long long>(
       Type::Integer, "transport.socket_buffer_bytes", "bytes", params::integers(0, 2147483647),
       "UDP send/receive buffer size (0 = OS default); the kernel silently caps it at `net.core.rmem_max` / "
       "`wmem_max`",

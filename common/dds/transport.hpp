@@ -36,6 +36,10 @@ struct TransportConfig {
   std::string discovery_server = "127.0.0.1:11811";  ///< discovery-server: host:port
   double lease_s = 2.0;                              ///< participant lease duration
   double announce_s = 0.5;                           ///< participant announcement period
+  /// Announcements a new participant sends at `initial_announce_s` intervals before the period
+  /// announce_s takes over (Fast DDS's initial announcements; its defaults: 5 at 0.1 s).
+  int initial_announcements = 5;
+  double initial_announce_s = 0.1;  ///< interval of the initial announcements
   int socket_buffer_bytes = 0;                       ///< UDP send/receive buffer size; 0 = OS default
   /// State-topic readers listen on the multicast group 239.255.0.1 (the domain's user multicast port)
   /// instead of a unicast port: a writer sends one datagram per sample instead of one per reader.

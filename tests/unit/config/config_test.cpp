@@ -732,6 +732,18 @@ TEST_CASE("static_edp is off by default, read as a bool, and refused with a disc
             .find("transport.static_edp: cannot be used with security.enabled") == 0);
 }
 
+TEST_CASE("initial announcements: Fast DDS's defaults, a count and a positive interval") {
+  const Config d = load_string("schema_version: 1\n");
+  CHECK(d.transport.initial_announcements == 5);
+  CHECK(d.transport.initial_announce_s == 0.1);
+  const Config c = load("", {"transport.initial_announcements=20", "transport.initial_announce_s=0.25"});
+  CHECK(c.transport.initial_announcements == 20);
+  CHECK(c.transport.initial_announce_s == 0.25);
+  CHECK(load_string(to_yaml(c)).transport.initial_announcements == 20);
+  CHECK(problem_of("schema_version: 1\ntransport:\n  initial_announcements: -1\n").find("transport.initial_announcements:") == 0);
+  CHECK(problem_of("schema_version: 1\ntransport:\n  initial_announce_s: 0\n").find("transport.initial_announce_s:") == 0);
+}
+
 TEST_CASE("transport interfaces and peers are IPv4 addresses") {
   CHECK(problem_of("schema_version: 1\ntransport:\n  interfaces: [192.168.1.2, foo]\n") ==
         "transport.interfaces: must be a list of IPv4 addresses (\"foo\" is not one), got a list (line 3)");

@@ -554,6 +554,22 @@ TEST_CASE("valid_state rejects non-finite and absurd samples", "[dds][convert]")
   s.vx(8e5);
   s.vy(8e5);  // each component fine, speed 1.13e6 is not
   CHECK(state_problem(s).find("state.v: speed must be <= 1000000") == 0);
+  // Speeds near the limit are decided by the named checks (hypot), not the quick test before them.
+  s = good_state();
+  s.vx(6e5);
+  s.vy(8e5);  // exactly 1e6
+  CHECK(state_problem(s).empty());
+  s.vy(8.000001e5);
+  CHECK(state_problem(s).find("state.v: speed must be <= 1000000") == 0);
+  s.vx(0.0);
+  s.vy(-9.95e5);  // within the limit, past the quick test's 0.99
+  CHECK(state_problem(s).empty());
+  s = good_state();
+  s.prev_y(-kInf);
+  CHECK(state_problem(s) == "state.prev_y: must be finite, got -inf");
+  s = good_state();
+  s.model_time(-1.0);
+  CHECK(state_problem(s).find("state.model_time: must be in [0, ") == 0);
 }
 
 TEST_CASE("a state batch converts element by element and is refused whole, naming the element", "[dds][convert]") {
