@@ -75,9 +75,12 @@ class Supervisor {
       : cfg_(cfg),
         opt_(opt),
         out_(opt.json),
-        // Agents publish once per period: never call one dead before it missed 3 periods.
+        // Agents publish once per period: never call one dead before it missed 3 periods (of
+        // agent.idle_rate_hz while it follows no command yet).
         monitor_(static_cast<std::int64_t>(std::max(cfg.supervisor.agent_timeout_s, 3.0 / cfg.agent.rate_hz) * 1e9),
-                 cfg.supervisor.converge, cfg.agent.lockstep),
+                 cfg.supervisor.converge, cfg.agent.lockstep,
+                 static_cast<std::int64_t>(
+                     3.0 / std::min(cfg.agent.idle_rate_hz, cfg.agent.rate_hz) * 1e9)),
         recorder_(cfg.supervisor.flush_s),
         current_(cfg.command) {}
 

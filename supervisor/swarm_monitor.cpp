@@ -7,8 +7,12 @@
 
 namespace shapeform::supervisor {
 
-SwarmMonitor::SwarmMonitor(std::int64_t agent_timeout_ns, core::ConvergenceDetector::Params converge, bool lockstep)
-    : agent_timeout_ns_(agent_timeout_ns), detector_(converge), lockstep_(lockstep) {}
+SwarmMonitor::SwarmMonitor(std::int64_t agent_timeout_ns, core::ConvergenceDetector::Params converge, bool lockstep,
+                           std::int64_t idle_timeout_ns)
+    : agent_timeout_ns_(agent_timeout_ns),
+      idle_timeout_ns_(std::max(agent_timeout_ns, idle_timeout_ns)),
+      detector_(converge),
+      lockstep_(lockstep) {}
 
 SwarmMonitor::Claim SwarmMonitor::claim(std::int32_t id, const dds::SourceId& source, std::int64_t now_ns) {
   const auto it = agents_.find(id);
@@ -56,7 +60,7 @@ void SwarmMonitor::set_command(const core::CompiledCommand& cmd, dds::CommandId 
 }
 
 bool SwarmMonitor::alive(const AgentView& a, std::int64_t now_ns) const {
-  return !a.departed && now_ns - a.last_seen_ns <= agent_timeout_ns_;
+  return !a.departed && now_ns - a.last_seen_ns <= (a.command.none() ? idle_timeout_ns_ : agent_timeout_ns_);
 }
 
 int SwarmMonitor::alive_count(std::int64_t now_ns) const {

@@ -31,7 +31,10 @@ class SwarmMonitor {
  public:
   /// lockstep: the agents step together (agent.sync = lockstep), so a sample at model time t takes
   /// every agent at step t, the previous position of those already one step further.
-  SwarmMonitor(std::int64_t agent_timeout_ns, core::ConvergenceDetector::Params converge, bool lockstep = false);
+  /// idle_timeout_ns: how long an agent that follows no command yet may stay unheard (it publishes at
+  /// agent.idle_rate_hz until its first command); 0 = agent_timeout_ns.
+  SwarmMonitor(std::int64_t agent_timeout_ns, core::ConvergenceDetector::Params converge, bool lockstep = false,
+               std::int64_t idle_timeout_ns = 0);
 
   /// Whose a sample of agent `id` from participant `source` is. Owner: the id is unknown, not alive,
   /// or published by that same participant (or either participant is unknown), so the sample is the
@@ -98,6 +101,7 @@ class SwarmMonitor {
 
  private:
   std::int64_t agent_timeout_ns_;
+  std::int64_t idle_timeout_ns_;  ///< for agents that follow no command yet
   core::ConvergenceDetector detector_;
   bool lockstep_;
   std::map<std::int32_t, AgentView> agents_;

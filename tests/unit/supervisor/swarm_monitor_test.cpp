@@ -12,6 +12,20 @@ using test::circle;
 using test::kS;
 using test::ring;
 
+TEST_CASE("an agent that follows no command yet is alive for the idle timeout, a commanded one for the agent timeout",
+          "[supervisor]") {
+  SwarmMonitor m(kS, {}, false, 15 * kS);  // agent.idle_rate_hz = 0.2: a state every 5 s until commanded
+  m.on_state(0, Vec2(4, 0), Vec2(4, 0), 0, 0, 0);   // no command yet
+  m.on_state(1, Vec2(-4, 0), Vec2(-4, 0), 1, 0, 0);  // epoch 1
+  CHECK(m.alive(m.agents().at(0), 5 * kS));
+  CHECK_FALSE(m.alive(m.agents().at(1), 5 * kS));
+  CHECK(m.alive_count(15 * kS) == 1);
+  CHECK(m.alive_count(15 * kS + 1) == 0);
+  SwarmMonitor plain(kS, {});  // no idle timeout: the agent timeout for all
+  plain.on_state(0, Vec2(4, 0), Vec2(4, 0), 0, 0, 0);
+  CHECK_FALSE(plain.alive(plain.agents().at(0), 2 * kS));
+}
+
 TEST_CASE("alive, dead and departed agents", "[supervisor]") {
   SwarmMonitor m(kS, {});
   ring(m, 4, 4.0, 0, 0);
