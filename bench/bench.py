@@ -310,6 +310,13 @@ LEVERS: list[dict] = [
                (_lv(G, 1000, "default", 0.0, 100), _lv(G, 1000, MAIN_PRESET, 0.0, 100)),
                (_lv(B, 1000, "default", 0.0, 50), _lv(B, 1000, MAIN_PRESET, 0.0, 50)),
                (_lv(G, 1000, "default", 0.0, 50), _lv(G, 1000, MAIN_PRESET, 0.0, 50))],
+     "note": "Reading of the runs of 2026-12-02 (the default-transport group rows are from the morning, 2 runs; the "
+             "baselines single runs): multicast took the host from 28 to 22 % busy with 10 processes and from 62 to "
+             "40 % with 20, the bare grouped baseline from 17 to 11 % and from 39 to 29 %. The datagrams sent fell "
+             "by two thirds, those received stayed (every process still takes every batch): on loopback a unicast "
+             "send does the receiver's kernel work in the sender's system call, P times per batch. The agents' "
+             "own work above the baseline (unpacking, the table, the sorted arc list, statuses) is the rest: "
+             "x1.5 the baseline's CPU per agent.",
      "extra": True},
     {"name": "14. Initial announcements",
      "question": "`transport.initial_announcements` / `initial_announce_s`: a new participant announces itself "
@@ -318,6 +325,11 @@ LEVERS: list[dict] = [
                  "profile. One announcement (less start-up traffic) and 20 every 0.25 s (a newcomer keeps "
                  "announcing through the start-up storm) against the launcher's `large` settings.",
      "pairs": [(_lv(A, 100, "large"), _lv(A, 100, "largeia1")), (_lv(A, 100, "large"), _lv(A, 100, "largeia20"))],
+     "note": "Reading of the runs of 2026-12-02 (single runs beside the `large` row): neither made 100 processes "
+             "hear each other within the minute; the fewest agents any agent heard at best was 73 of 99 with one "
+             "announcement and 83 with twenty, against 95 with Fast DDS's five. The initial announcements are "
+             "N x count x 120 datagrams, a small part of the start-up traffic next to the announcements that "
+             "discovery itself triggers (lever 15).",
      "extra": True},
     {"name": "15. What participant discovery costs",
      "question": "Agents that publish their state only every 5 s until the first command (`largequiet`), so "
@@ -822,13 +834,6 @@ def analyse(ctx: Ctx, row: Row, rdir: Path, res: dict, sampler: Sampler) -> None
             res["kernel_and_unattributed_pct"] = max(0.0, res["host_busy_pct"] * (os.cpu_count() or 1)
                                                       - res["ours_cpu_pct"] - res["other_cpu_pct"])
         ua, ub = a["udp"], b["udp"]
-        # Discovery's traffic: datagrams the host received from the first launch until everyone heard
-        # everyone (or the last sample before the end, when that never happened).
-        first = next((x for x in sampler.samples if x["t"] >= t0), None)
-        t_heard = t0 + res["all_heard_s"] * 1e9 if res.get("all_heard_s") is not None else t_end
-        last = next((x for x in reversed(sampler.samples) if x["t"] <= t_heard + 0.5e9), None)
-        if first is not None and last is not None and last["t"] > first["t"]:
-            res["disc_udp_in"] = last["udp"]["InDatagrams"] - first["udp"]["InDatagrams"]
         res["udp_in_per_s"] = (ub["InDatagrams"] - ua["InDatagrams"]) / span_s
         res["udp_rcvbuf_errors_per_s"] = (ub["RcvbufErrors"] - ua["RcvbufErrors"]) / span_s
         res["udp_out_per_s"] = (ub["OutDatagrams"] - ua["OutDatagrams"]) / span_s
@@ -839,6 +844,15 @@ def analyse(ctx: Ctx, row: Row, rdir: Path, res: dict, sampler: Sampler) -> None
     conv = next((m["recv_ns"] for m in metrics if m["epoch"] >= 1 and m["converged"] >= 1), None)
     res["start_s"] = (started - t0) / 1e9 if started else None
     res["converge_s"] = (conv - t0) / 1e9 if conv else None
+    # Discovery's traffic: datagrams the host received from the first launch until everyone heard
+    # everyone, or until the supervisor's command when that came first (agents then publish at full rate).
+    ends = [t0 + res["all_heard_s"] * 1e9] if res.get("all_heard_s") is not None else []
+    ends += [started] if started else []
+    first = next((x for x in sampler.samples if x["t"] >= t0), None)
+    last = next((x for x in reversed(sampler.samples) if x["t"] <= min(ends + [t_end]) + 0.5e9), None)
+    if first is not None and last is not None and last["t"] > first["t"]:
+        res["disc_udp_in"] = last["udp"]["InDatagrams"] - first["udp"]["InDatagrams"]
+        res["disc_udp_s"] = (last["t"] - first["t"]) / 1e9
     j = procs.summary(procs.read_text(rdir / "supervisor.out"))
     if j:
         for key in ("converged", "shape_error_mean", "gap_cv", "agents_seen"):
@@ -1082,8 +1096,10 @@ def main(argv=None) -> int:
     only_rows = [o for o in args.only if o != "sim"]
     if args.only:
         pool = all_rows + lever_rows + selected
+        ids = {r.id for r in pool}
+        # A row id selects that row; anything else is a prefix (agents-n100 selects every N = 100 agent row).
         selected = [r for r in dict((r.id, r) for r in pool).values()
-                    if any(r.id == o or r.id.startswith(o) for o in only_rows)]
+                    if any(r.id == o or (o not in ids and r.id.startswith(o)) for o in only_rows)]
         if not selected and not run_sim:
             print("bench: --only matched no row (see --list)", file=sys.stderr)
             return 2
@@ -1135,6 +1151,22 @@ def _summary(store, rid) -> str:
             f"{f_ms(a.get('age_p99_ms'))}, everyone hears everyone: {f_s(a.get('all_heard_s'))}, "
             f"launch to converged: {conv}, {a.get('aborts_total', 0)} aborted processes in {a.get('runs', 1)} runs, "
             f"host {a.get('host_busy_pct', 0) or 0:.0f} % busy (`{rid}`)")
+
+
+def _disc_reading(store: dict) -> str:
+    """The measured cost of discovery (lever 15), as a clause; empty until measured."""
+    parts = []
+    for n in (50, 75, 100):
+        rid = f"agents-n{n}-r20-largequiet"
+        d, t, heard = _get(store, rid, "disc_udp_in"), _get(store, rid, "disc_udp_s"), _get(store, rid, "all_heard_s")
+        if d is None or t is None:
+            continue
+        done = heard is not None and not math.isinf(heard)
+        parts.append(f"N = {n}: {d / 1e6:.1f} million in {t:.0f} s" + ("" if done else " without finishing"))
+    if not parts:
+        return ""
+    return (" (lever 15, agents silent but for a state every 5 s until commanded, datagrams the host received from "
+            "launch to 'everyone hears everyone': " + "; ".join(parts) + ")")
 
 
 def _limits_1000(store: dict, g100: str, g50: str, b100: str, b50: str) -> str:
@@ -1245,9 +1277,13 @@ def report_plan(store: dict) -> dict:
         + ("; that configuration meets every N = 100 target." if meets_100(g50) else ".")
         + ("" if not meets_100(n100) else " (One process per agent met the N = 100 targets as well in these runs.)")
         + " On 2026-12-02 this host no longer finished the discovery of 100 agent processes within a minute, with "
-        "any of the settings or code versions tried (lever 10): the one-process-per-agent rows of that day miss "
-        "'everyone hears everyone' and the convergence, and their data age is that of a swarm still discovering "
-        "itself while it runs."
+        "any of the settings or code versions tried (levers 10, 12, 14): the one-process-per-agent rows of that day "
+        "miss 'everyone hears everyone' and the convergence, and their data age is that of a swarm still "
+        "discovering itself while it runs. Discovery is the wall: in Fast DDS 2.9 a participant that discovers a "
+        "new one sends its own announcement again to every participant it knows and every slot it probes, so N "
+        "processes starting together make about N x N announcements, each received and parsed by about N "
+        "processes, and simple endpoint discovery adds a reliable exchange per pair on top"
+        + _disc_reading(store) + "."
         + _limits_1000(store, g1000, g1000b, bg1000, bg1000b))
     method = """- **Runs.** Each run uses its own DDS domain (200..229 in turn), starts `shapeform_bench_probe`, then (agent rows)
   the supervisor with the script `wait agents N; start; wait converged; sleep W; quit`, then the N processes

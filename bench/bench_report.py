@@ -255,6 +255,13 @@ def f_num(v, fmt="{:.1f}"):
     return "-" if v is None else fmt.format(v)
 
 
+def _disc(a: dict) -> str:
+    """Datagrams received from launch to all hear all (or the command), and in how many seconds."""
+    if a.get("disc_udp_in") is None:
+        return "-"
+    return f"{a['disc_udp_in']:,.0f}" + (f" in {a['disc_udp_s']:.0f} s" if a.get("disc_udp_s") is not None else "")
+
+
 def ratio(a, b):
     if a is None or b is None:
         return "-"
@@ -492,12 +499,12 @@ def render(store: dict, path: Path, plan: dict) -> None:
         extra = lv.get("extra")
         if extra:
             o.append("| row | UDP datagrams in/s | UDP out/s | receive-buffer drops/s | our CPU (% of one core) "
-                     "| datagrams received, launch to all hear all |\n|---|---|---|---|---|---|\n")
+                     "| datagrams received from launch to all hear all (or to the command) |\n|---|---|---|---|---|---|\n")
             for rid in present:
                 a = rows[rid]["agg"]
                 o.append(f"| `{rid}` | {f_num(a.get('udp_in_per_s'), '{:.0f}')} | {f_num(a.get('udp_out_per_s'), '{:.0f}')} "
                          f"| {f_num(a.get('udp_rcvbuf_errors_per_s'), '{:.0f}')} | {f_num(a.get('ours_cpu_pct'), '{:.0f}')} "
-                         f"| {f_num(a.get('disc_udp_in'), '{:,.0f}')} |\n")
+                         f"| {_disc(a)} |\n")
             o.append("\n")
         effects = [pair_effect(rows, a, b) for a, b in lv.get("pairs", []) if a in rows and b in rows]
         if effects:
