@@ -342,6 +342,14 @@ LEVERS: list[dict] = [
                  "datagrams, a million at N = 100.",
      "rows": [_lv(A, 50, "largequiet"), _lv(A, 75, "largequiet"), _lv(A, 100, "largequiet")],
      "pairs": [],
+     "note": "Reading of the runs of 2026-12-02 (single runs, after the supervisor fix of that day, commit dce693c: "
+             "before it the supervisor took agents publishing every 5 s for dead, commanded at its 60 s timeout, "
+             "and the full-rate traffic then slowed the rest of discovery). N = 50: everyone heard everyone after "
+             "27 s, the host having received 1.0 million datagrams; N = 75: 53 s, 2.8 million (x2.7 for x1.5 "
+             "processes; N^3 would be x3.4); N = 100: not within the minute, 2.2 million by the command at 61 s, "
+             "with the host saturated (it received fewer datagrams per second than at N = 75). The same host "
+             "had all of 50 agent processes hear each other in 2.8 s on 2026-11-22 (`agents-n50-r20-mcbufann`), "
+             "so it is also slower than it was (lever 10); the growth with N is that of Fast DDS.",
      "extra": True},
 ]
 # The rows of a lever, unless listed: the members of its pairs, in order.
