@@ -34,9 +34,6 @@ namespace {
 /// Data ages kept per status period (the rest of a period's samples are not booked).
 constexpr std::size_t kAgeCapacity = 4096;
 
-/// The state rate before the first command (agent.idle_rate_hz), at most the loop rate.
-double idle_rate(const config::AgentConfig& a) { return std::min(a.idle_rate_hz, a.rate_hz); }
-
 std::uint64_t ticks_per(double rate_hz, double every_hz) {
   return std::max<std::uint64_t>(1, static_cast<std::uint64_t>(std::llround(rate_hz / every_hz)));
 }
@@ -222,7 +219,7 @@ AgentNode::AgentNode(const std::vector<std::int32_t>& ids, const std::vector<cor
       batch_(group_ && cfg.agent.batch_state),
       table_(std::make_shared<NeighbourTable>(
           ids, static_cast<std::int64_t>(cfg.agent.neighbour_timeout_periods / cfg.agent.rate_hz * 1e9),
-          static_cast<std::int64_t>(cfg.agent.neighbour_timeout_periods / idle_rate(cfg.agent) * 1e9))),
+          static_cast<std::int64_t>(cfg.agent.neighbour_timeout_periods / cfg.agent.idle_state_rate_hz() * 1e9))),
       node_(agent_transport(cfg, ids), node_name(ids)),
       state_writer_(batch_ ? dds::Writer<msg::AgentState>() : node_.writer<msg::AgentState>(dds::TopicId::State)),
       batch_writer_(batch_ ? node_.writer<msg::AgentStateBatch>(dds::TopicId::StateBatch)
@@ -236,7 +233,7 @@ AgentNode::AgentNode(const std::vector<std::int32_t>& ids, const std::vector<cor
       loop_(cfg.agent.rate_hz),
       log_every_(ticks_per(cfg.agent.rate_hz, 1.0)),
       status_every_(ticks_per(cfg.agent.rate_hz, cfg.agent.status_rate_hz)),
-      idle_every_(ticks_per(cfg.agent.rate_hz, idle_rate(cfg.agent))),
+      idle_every_(ticks_per(cfg.agent.rate_hz, cfg.agent.idle_state_rate_hz())),
       identity_(node_.source(), util::steady_ns() + static_cast<std::int64_t>(cfg.agent.identity_grace_s * 1e9)) {
   const int max_wait_ticks = static_cast<int>(std::lround(5.0 * cfg.agent.rate_hz));
   for (std::size_t k = 0; k < ids.size(); ++k)

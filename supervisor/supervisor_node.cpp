@@ -79,8 +79,7 @@ class Supervisor {
         // agent.idle_rate_hz while it follows no command yet).
         monitor_(static_cast<std::int64_t>(std::max(cfg.supervisor.agent_timeout_s, 3.0 / cfg.agent.rate_hz) * 1e9),
                  cfg.supervisor.converge, cfg.agent.lockstep,
-                 static_cast<std::int64_t>(
-                     3.0 / std::min(cfg.agent.idle_rate_hz, cfg.agent.rate_hz) * 1e9)),
+                 static_cast<std::int64_t>(3.0 / cfg.agent.idle_state_rate_hz() * 1e9)),
         recorder_(cfg.supervisor.flush_s),
         current_(cfg.command) {}
 

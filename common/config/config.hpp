@@ -49,6 +49,8 @@ struct AgentConfig {
   /// swarm's discovery then runs on a nearly idle host instead of beside all-to-all state at the full rate
   /// (docs/BENCHMARKS.md, lever 10).
   double idle_rate_hz = 1000.0;
+  /// The state rate before the first command: idle_rate_hz, at most the loop rate.
+  double idle_state_rate_hz() const { return idle_rate_hz < rate_hz ? idle_rate_hz : rate_hz; }
   /// A process hosting several agents publishes their states as one AgentStateBatch per tick
   /// (shapeform/state_batch) instead of one AgentState per agent (shapeform/state).
   bool batch_state = true;
