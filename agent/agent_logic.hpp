@@ -12,8 +12,8 @@
 
 #include "core/compiled_command.hpp"
 #include "core/law.hpp"
-#include "dds/command_arbiter.hpp"
-#include "dds/samples.hpp"
+#include "protocol/command_arbiter.hpp"
+#include "protocol/samples.hpp"
 
 namespace shapeform::agent {
 

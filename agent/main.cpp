@@ -5,7 +5,7 @@
 #include "agent_logic.hpp"
 #include "agent_node.hpp"
 #include "app/app.hpp"
-#include "dds/samples.hpp"
+#include "protocol/samples.hpp"
 
 int main(int argc, char** argv) {
   using namespace shapeform;

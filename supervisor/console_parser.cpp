@@ -12,6 +12,8 @@
 #include <vector>
 
 #include "core/envelope.hpp"
+#include "core/command_table.hpp"
+#include "core/enum_names.hpp"
 #include "core/params.hpp"
 #include "shapes/shapes.hpp"
 #include "util/text.hpp"

@@ -17,7 +17,7 @@
 #include "app/json.hpp"
 #include "console_input.hpp"
 #include "console_parser.hpp"
-#include "dds/command_arbiter.hpp"
+#include "protocol/command_arbiter.hpp"
 #include "dds/convert.hpp"
 #include "dds/node.hpp"
 #include "dds/participant.hpp"

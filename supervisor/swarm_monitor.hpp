@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "core/metrics.hpp"
-#include "dds/samples.hpp"
+#include "protocol/samples.hpp"
 
 namespace shapeform::supervisor {
 

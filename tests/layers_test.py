@@ -10,29 +10,32 @@ import re
 import sys
 
 # folder -> project folders its code may include (besides its own). "shapeform" is the generated IDL
-# code (shapeform/msg/*.h), which only common/dds and the benchmark include.
+# code (shapeform/msg/*.h), which only common/dds and the benchmark include. A folder is a library (or
+# several): its name is the first path component of an include ("core/params.hpp").
 ALLOWED = {
     "common/core": set(),
     "common/shapes": {"core"},
     "common/util": set(),
-    "common/dds": {"core", "shapes", "util", "shapeform"},
-    "common/config": {"core", "shapes", "util", "dds/transport.hpp"},
-    "common/sim": {"core", "util", "app", "record"},
+    "common/protocol": {"core", "util"},
+    "common/dds": {"core", "shapes", "util", "protocol", "shapeform"},
+    "common/config": {"core", "shapes", "util", "protocol"},
     "common/record": {"core", "config", "util"},
-    "common/app": {"config", "core", "util", "dds/transport.hpp"},
-    "agent": {"core", "shapes", "dds", "config", "util", "app"},
-    "supervisor": {"core", "shapes", "dds", "config", "util", "app", "record"},
-    "bench": {"core", "dds", "config", "util", "app", "shapeform"},
-    "tools": {"core", "dds", "config", "util", "app"},
-    "view": {"core", "shapes", "dds", "config", "util", "app", "record"},  # replay reads what record writes
+    "common/app": {"config", "core", "util", "protocol"},
+    "sim": {"core", "util", "app", "record"},
+    "agent": {"core", "shapes", "protocol", "dds", "config", "util", "app"},
+    "supervisor": {"core", "shapes", "protocol", "dds", "config", "util", "app", "record"},
+    "bench": {"core", "protocol", "dds", "config", "util", "app", "shapeform"},
+    "tools": {"core", "protocol", "dds", "config", "util", "app"},
+    "view": {"core", "shapes", "protocol", "dds", "config", "util", "app", "record"},  # replay reads what record writes
 }
 # Third-party headers each folder may use: core is pure maths, and only common/dds sees Fast DDS.
 FORBIDDEN_SYSTEM = {
     "common/core": re.compile(r"^(fastdds|fastrtps|fastcdr|yaml-cpp|nlohmann|CLI|muParser)"),
     "common/shapes": re.compile(r"^(fastdds|fastrtps|fastcdr|yaml-cpp|nlohmann|CLI)"),
     "common/util": re.compile(r"^(fastdds|fastrtps|fastcdr|yaml-cpp|Eigen)"),
+    "common/protocol": re.compile(r"^(fastdds|fastrtps|fastcdr|yaml-cpp)"),
     "common/config": re.compile(r"^(fastdds|fastrtps|fastcdr)"),
-    "common/sim": re.compile(r"^(fastdds|fastrtps|fastcdr|yaml-cpp)"),
+    "sim": re.compile(r"^(fastdds|fastrtps|fastcdr|yaml-cpp)"),
     "common/app": re.compile(r"^(fastdds|fastrtps|fastcdr)"),
     "common/record": re.compile(r"^(fastdds|fastrtps|fastcdr|yaml-cpp)"),
     "agent": re.compile(r"^(fastdds|fastrtps|fastcdr|yaml-cpp)"),
@@ -43,14 +46,78 @@ FORBIDDEN_SYSTEM = {
 # Libraries a folder's CMake targets must not link.
 FORBIDDEN_LINKS = {
     "common/core": ("shapeform_", "yaml-cpp", "fastrtps", "fastcdr"),
+    "common/protocol": ("shapeform_dds", "shapeform_config", "yaml-cpp", "fastrtps", "fastcdr"),
     "common/dds": ("shapeform_config", "yaml-cpp"),
     "common/util": ("shapeform_", "yaml-cpp", "fastrtps"),
 }
 INCLUDE = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]', re.M)
 
 
+def unit_of(path):
+    """A header and its source are one unit: "common/dds/topics"."""
+    return os.path.splitext(path)[0]
+
+
+def include_cycles(source):
+    """Units of the project (a .hpp with its .cpp) whose headers include each other, directly or
+    through others: every strongly connected component of more than one unit."""
+    headers, edges = {}, {}
+    for folder in ALLOWED:
+        for root, _, files in os.walk(os.path.join(source, folder)):
+            for name in files:
+                if name.endswith((".cpp", ".hpp")):
+                    rel = os.path.relpath(os.path.join(root, name), source)
+                    if name.endswith(".hpp"):
+                        top = folder.split("/")[-1]
+                        headers[rel[rel.index(top + "/"):] if "/" in rel else rel] = unit_of(rel)
+                        headers.setdefault(os.path.relpath(os.path.join(root, name), os.path.join(source, folder)),
+                                           unit_of(rel))
+                    edges.setdefault(unit_of(rel), set())
+    for unit in list(edges):
+        for ext in (".cpp", ".hpp"):
+            path = os.path.join(source, unit + ext)
+            if not os.path.exists(path):
+                continue
+            with open(path, errors="replace") as f:
+                for kind, target in INCLUDE.findall(f.read()):
+                    dep = headers.get(target) if kind == '"' else None
+                    if dep is None and kind == '"':
+                        local = os.path.normpath(os.path.join(os.path.dirname(unit), target))
+                        dep = local if local in edges else None
+                    if dep and dep != unit:
+                        edges[unit].add(dep)
+    index, low, stack, on, out = {}, {}, [], set(), []
+
+    def visit(v):  # Tarjan's strongly connected components
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on.add(v)
+        for w in sorted(edges[v]):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(sorted(comp))
+
+    for v in sorted(edges):
+        if v not in index:
+            visit(v)
+    return out
+
+
 def main(source):
-    problems = []
+    problems = ["these files include each other's headers (directly or in a circle): %s" % ", ".join(c)
+                for c in include_cycles(source)]
     for folder, allowed in ALLOWED.items():
         own = os.path.basename(folder)
         for root, _, files in os.walk(os.path.join(source, folder)):

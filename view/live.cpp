@@ -3,7 +3,7 @@
 #include <cmath>
 #include <vector>
 
-#include "dds/command_arbiter.hpp"
+#include "protocol/command_arbiter.hpp"
 #include "dds/convert.hpp"
 #include "dds/node.hpp"
 #include "dds/state_input.hpp"

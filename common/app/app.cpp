@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "dds/transport.hpp"
+#include "protocol/transport.hpp"
 #include "util/text.hpp"
 
 #include "shapeform_version.hpp"  // generated in the build tree

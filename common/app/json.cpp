@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/metric_table.hpp"
+#include "core/command_table.hpp"
 #include "core/params.hpp"
 
 namespace shapeform::app {

@@ -24,6 +24,7 @@
 #include <string_view>
 #include <system_error>
 
+#include "core/command_table.hpp"
 #include "core/envelope.hpp"
 #include "shapes/shapes.hpp"
 #include "util/text.hpp"

@@ -12,7 +12,7 @@
 #include "core/compiled_command.hpp"
 #include "core/metrics.hpp"
 #include "core/params.hpp"
-#include "dds/transport.hpp"
+#include "protocol/transport.hpp"
 
 namespace shapeform::config {
 

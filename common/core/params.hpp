@@ -6,8 +6,9 @@
 /// config/README.md's key tables, the command receiver's validation (dds::from_msg) and the
 /// console's parameter bounds are all driven by these tables.
 ///
-/// Also here: the one name table of each enumeration (core's to_string / parse_* use them) and the
-/// one degrees -> radians constant. Pure: standard library and Eigen only.
+/// Also here: the name-table machinery of enumerations (the tables are in enum_names.hpp) and the one
+/// degrees -> radians constant. The command's table is command_table.hpp. Pure: standard library and
+/// Eigen only.
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -19,7 +20,7 @@
 #include <variant>
 #include <vector>
 
-#include "command.hpp"
+#include "types.hpp"
 
 namespace shapeform::core::params {
 
@@ -71,25 +72,13 @@ inline constexpr Range above_up_to(double lo, double hi) { return {lo, true, hi,
 inline constexpr Range integers(double lo, double hi) { return {lo, false, hi, false, true}; }
 
 // ---------------------------------------------------------------------------------------------
-// Enumeration names: one table per enumeration.
+// Enumeration names: Name<E> tables (enum_names.hpp holds one per enumeration).
 
 template <class E>
 struct Name {
   E value;
   std::string_view name;
 };
-
-/// Spellings used in config files, console commands, JSON and on the wire.
-inline constexpr Name<ShapeKind> kShapeKindNames[] = {
-    {ShapeKind::Line, "line"},         {ShapeKind::Circle, "circle"},  {ShapeKind::Ellipse, "ellipse"},
-    {ShapeKind::Square, "square"},     {ShapeKind::Polar, "polar"},    {ShapeKind::Parametric, "parametric"},
-    {ShapeKind::Implicit, "implicit"}, {ShapeKind::Polygon, "polygon"}};
-inline constexpr Name<CentrePath::Kind> kPathKindNames[] = {{CentrePath::Kind::Fixed, "fixed"},
-                                                            {CentrePath::Kind::Line, "line"},
-                                                            {CentrePath::Kind::Circle, "circle"}};
-inline constexpr Name<Integrator> kIntegratorNames[] = {{Integrator::Euler, "euler"},
-                                                        {Integrator::RK4, "rk4"}};
-inline constexpr Name<Law> kLawNames[] = {{Law::Paper, "paper"}, {Law::Arc, "arc"}};
 
 /// The name of v in table, "?" when absent.
 template <class E, std::size_t N>
@@ -213,16 +202,5 @@ void bind_choice(Param<T>& p, const Name<E> (&table)[N], Field field) {
   p.get = [&table, field](const T& t) { return Value(std::string(name_of(table, field(t)))); };
   p.set = [&table, field](T& t, const Value& v) { parse_name(table, std::get<std::string>(v), field(t)); };
 }
-
-/// The command table: one entry per field of core::Command (shape, tracking, gains and max_speed,
-/// law and arc parameters, integration), keyed by config key, with its ShapeCommand field name(s).
-const std::vector<Param<Command>>& command_table();
-
-/// The entry of a config key ("integration.dt"), or null.
-const Param<Command>* find_key(std::string_view key);
-/// The entry holding ShapeCommand field `wire` ("dt", "cx", "path_radius"), or null.
-const Param<Command>* find_wire(std::string_view wire);
-/// The range of ShapeCommand field `wire`; throws std::logic_error for a field not in the table.
-const Range& wire_range(std::string_view wire);
 
 }  // namespace shapeform::core::params

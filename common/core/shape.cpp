@@ -3,19 +3,11 @@
 #include <algorithm>
 #include <cmath>
 
-#include "params.hpp"
-
 namespace shapeform::core {
 
 namespace {
 constexpr double kTwoPi = 6.283185307179586476925286766559;
 }  // namespace
-
-std::string_view to_string(ShapeKind kind) { return params::name_of(params::kShapeKindNames, kind); }
-
-bool parse_shape_kind(std::string_view name, ShapeKind& out) {
-  return params::parse_name(params::kShapeKindNames, name, out);
-}
 
 std::shared_ptr<const Curve> make_curve(const ShapeSpec& s) {
   switch (s.kind) {
@@ -68,12 +60,6 @@ double shape_size(const ShapeSpec& s, const Curve& curve) {
 
 Vec2 target_point(const ShapeSpec& s, const Curve& curve, const Vec2& x) {
   return to_world(s, curve.target(to_local(s, x)));
-}
-
-std::string_view to_string(CentrePath::Kind kind) { return params::name_of(params::kPathKindNames, kind); }
-
-bool parse_path_kind(std::string_view name, CentrePath::Kind& out) {
-  return params::parse_name(params::kPathKindNames, name, out);
 }
 
 Vec2 centre_at(const CentrePath& p, double t) {

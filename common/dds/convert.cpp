@@ -9,6 +9,8 @@
 
 #include "core/envelope.hpp"
 #include "core/metric_table.hpp"
+#include "core/command_table.hpp"
+#include "core/enum_names.hpp"
 #include "core/params.hpp"
 #include "shapes/shapes.hpp"
 #include "util/text.hpp"

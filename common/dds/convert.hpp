@@ -1,5 +1,5 @@
 #pragma once
-/// Conversions between wire messages and core types (or the plain structs of dds/samples.hpp), one
+/// Conversions between wire messages and core types (or the plain structs of protocol/samples.hpp), one
 /// to_msg / from_msg pair per message, and validation of received samples.
 /// Received data is never trusted: non-finite numbers, unknown names and absurd values are rejected
 /// with a message naming the field.
@@ -9,7 +9,7 @@
 
 #include "core/compiled_command.hpp"
 #include "core/metrics.hpp"
-#include "dds/samples.hpp"
+#include "protocol/samples.hpp"
 #include "shapeform/msg/AgentState.h"
 #include "shapeform/msg/AgentStateBatch.h"
 #include "shapeform/msg/AgentStatus.h"

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "dds/transport.hpp"
+#include "protocol/transport.hpp"
 
 namespace shapeform::dds {
 
@@ -26,11 +26,6 @@ struct TopicSeen {
   std::vector<std::string> types;  ///< every type name its endpoints use (one, unless they disagree)
   std::vector<EndpointSeen> writers, readers;  ///< sorted by participant, then guid
 };
-
-/// Property names every participant of the project announces in discovery (propagated
-/// participant properties): its host name and process id, so a tool can say where it runs.
-inline constexpr const char* kHostProperty = "shapeform.host";
-inline constexpr const char* kPidProperty = "shapeform.pid";
 
 /// Joins cfg's domain as participant `name` (create_participant: the transport profiles), listens
 /// wait_s seconds (returning early when `stop` becomes true), and returns every topic any other

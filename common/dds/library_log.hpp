@@ -5,7 +5,7 @@
 #include <string_view>
 #include <vector>
 
-#include "dds/samples.hpp"
+#include "protocol/samples.hpp"
 
 namespace shapeform::dds {
 

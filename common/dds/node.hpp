@@ -34,9 +34,9 @@
 #include <fastdds/dds/topic/Topic.hpp>
 
 #include "dds/msg_traits.hpp"
-#include "dds/samples.hpp"
+#include "protocol/samples.hpp"
 #include "dds/stall.hpp"
-#include "dds/transport.hpp"
+#include "protocol/transport.hpp"
 #include "dds/topics.hpp"
 #include "util/clock.hpp"
 

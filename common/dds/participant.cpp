@@ -16,8 +16,8 @@
 #include <fastrtps/utils/IPLocator.h>
 #include <unistd.h>
 
-#include "dds/discovery.hpp"
 #include "dds/library_log.hpp"
+#include "dds/locators.hpp"
 #include "dds/topics.hpp"
 #include "util/ipv4.hpp"
 
@@ -36,28 +36,6 @@ std::string str(const T& v) {
   std::ostringstream os;
   os << v;
   return os.str();
-}
-
-frtps::Locator_t udp_locator(const std::array<std::uint8_t, 4>& ip, std::uint32_t port) {
-  frtps::Locator_t loc;
-  loc.kind = LOCATOR_KIND_UDPv4;
-  frtps::IPLocator::setIPv4(loc, ip[0], ip[1], ip[2], ip[3]);
-  loc.port = port;
-  return loc;
-}
-
-frtps::Locator_t loopback_locator(std::uint32_t port) { return udp_locator({127, 0, 0, 1}, port); }
-
-/// RTPS well-known discovery multicast port of a domain: PB + DG * domain + d0 = 7400 + 250 d.
-std::uint32_t metatraffic_multicast_port(int domain) { return 7400u + 250u * static_cast<std::uint32_t>(domain); }
-
-/// RTPS well-known user-data multicast port of a domain: PB + DG * domain + d2 = 7400 + 250 d + 1.
-std::uint32_t user_multicast_port(int domain) { return 7400u + 250u * static_cast<std::uint32_t>(domain) + 1u; }
-
-/// RTPS metatraffic unicast port of participant slot 0 of a domain: PB + DG * domain + d1 = 7400 + 250 d + 10.
-/// Slot k has it at + 2k and its user unicast port right after (d3 = 11).
-std::uint32_t metatraffic_unicast_port0(int domain) {
-  return 7410u + 250u * static_cast<std::uint32_t>(domain);
 }
 
 /// The UDP ports this process has bound: socket inodes from /proc/self/fd matched against
@@ -198,11 +176,6 @@ fdds::DomainParticipantQos participant_qos(const TransportConfig& cfg, const std
     for (const auto& [key, value] : security_properties(cfg.security)) props.emplace_back(key, value);
   }
   return pq;
-}
-
-frtps::Locator_t data_multicast_locator(const TransportConfig& cfg) {
-  validate(cfg);
-  return udp_locator(kMulticastGroup, user_multicast_port(cfg.domain));
 }
 
 std::string static_edp_description(const TransportConfig& cfg) {

@@ -10,7 +10,8 @@
 #include <fastdds/dds/domain/DomainParticipantListener.hpp>
 #include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
 
-#include "dds/transport.hpp"
+#include "dds/locators.hpp"
+#include "protocol/transport.hpp"
 
 namespace shapeform::dds {
 
@@ -18,10 +19,10 @@ namespace shapeform::dds {
 inline constexpr const char* kDiscoveryServerPrefix = "44.53.00.5f.45.50.52.4f.53.49.4d.41";
 /// Discovery-server client sync period, seconds (Fast DDS default 0.45 s; 0.1 s discovers faster).
 inline constexpr double kDiscoveryServerSyncPeriod_s = 0.1;
-/// The project's one multicast group (administratively scoped, Fast DDS's default): lan's multicast
-/// discovery on port 7400 + 250 domain, State samples on port 7400 + 250 domain + 1 when
-/// transport.multicast_data is on. Joined and sent on the profile's interfaces only.
-inline constexpr std::array<std::uint8_t, 4> kMulticastGroup = {239, 255, 0, 1};
+/// Property names every participant of the project announces in discovery (propagated
+/// participant properties): its host name and process id, so a tool can say where it runs.
+inline constexpr const char* kHostProperty = "shapeform.host";
+inline constexpr const char* kPidProperty = "shapeform.pid";
 
 /// The participant QoS of a transport profile, built by hand (never the factory default, which an XML
 /// file could change): builtin transports off, one UDPv4 descriptor, no shared memory.
@@ -42,26 +43,16 @@ inline constexpr std::array<std::uint8_t, 4> kMulticastGroup = {239, 255, 0, 1};
 /// Lease and announcement period come from lease_s / announce_s; socket_buffer_bytes > 0 sets the
 /// UDP send and receive buffer sizes (the kernel caps them at net.core.rmem_max / wmem_max).
 /// Every participant announces its host name and process id in discovery (the propagated
-/// properties kHostProperty and kPidProperty of dds/discovery.hpp), for shapeform_topics.
+/// properties kHostProperty and kPidProperty), for shapeform_topics.
 /// multicast_data (loopback, lan without peers) changes no participant setting: see
 /// data_multicast_locator(). static_edp replaces simple endpoint discovery by STATIC EDP with
 /// static_edp_description(cfg), given inline ("data://"). security.enabled adds the DDS Security plugin properties of the enclave
-/// (dds/security.hpp: security_properties).
+/// (protocol/security.hpp: security_properties).
 /// Pure: creates nothing.
 /// Throws std::runtime_error naming the offending field (validate(): "transport.domain: must be in 0..232,
 /// got 300").
 eprosima::fastdds::dds::DomainParticipantQos participant_qos(const TransportConfig& cfg,
                                                              const std::string& name);
-
-/// The multicast locator readers of the State topic listen on when cfg.multicast_data is set:
-/// 239.255.0.1:(7400 + 250 domain + 1), the domain's user multicast port. A writer whose matched readers
-/// share it sends each sample once (UDPTransportInterface::select_locators) and the kernel fans it out;
-/// it is joined and sent on the whitelisted interfaces only (lo for loopback, transport.interfaces for
-/// lan). Such readers
-/// advertise no unicast locator: a writer switching from the group to the unicast locator of its last
-/// reader would send to a locator Fast DDS 2.9 never registered and abort on an assert
-/// (statistics/rtps/messages/OutputTrafficManager.hpp:87). Throws like participant_qos().
-eprosima::fastrtps::rtps::Locator_t data_multicast_locator(const TransportConfig& cfg);
 
 /// The STATIC EDP description (Fast DDS's <staticdiscovery> XML) every participant of a static_edp swarm
 /// is given: one <participant> with a writer and a reader of every topic of the topic table, each with
@@ -76,7 +67,7 @@ eprosima::fastrtps::rtps::Locator_t data_multicast_locator(const TransportConfig
 std::string static_edp_description(const TransportConfig& cfg);
 
 /// Creates a participant on cfg.domain from participant_qos(cfg, name). Never returns null:
-/// throws SecurityError (dds/security.hpp) when security is enabled and the enclave fails check_enclave()
+/// throws SecurityError (protocol/security.hpp) when security is enabled and the enclave fails check_enclave()
 /// or Fast DDS refuses it, never creating an unsecured participant instead; otherwise
 /// std::runtime_error naming the problem, including a participant that got no unicast port
 /// (every participant slot it may take, max_participants of them, is in use on this host: Fast DDS

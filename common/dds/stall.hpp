@@ -9,7 +9,7 @@
 #include <cstdint>
 #include <optional>
 
-#include "dds/transport.hpp"
+#include "protocol/transport.hpp"
 
 namespace shapeform::dds {
 

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "dds/node.hpp"
-#include "dds/samples.hpp"
+#include "protocol/samples.hpp"
 #include "shapeform/msg/AgentState.h"
 #include "shapeform/msg/AgentStateBatch.h"
 

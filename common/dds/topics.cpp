@@ -2,7 +2,7 @@
 
 #include <stdexcept>
 
-#include "dds/participant.hpp"
+#include "dds/locators.hpp"
 
 namespace shapeform::dds {
 namespace {

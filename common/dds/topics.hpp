@@ -9,7 +9,7 @@
 #include <fastdds/dds/publisher/qos/DataWriterQos.hpp>
 #include <fastdds/dds/subscriber/qos/DataReaderQos.hpp>
 
-#include "dds/transport.hpp"
+#include "protocol/transport.hpp"
 
 namespace shapeform::dds {
 

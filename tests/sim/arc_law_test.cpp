@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "shapes/shapes.hpp"
-#include "sim/simulation.hpp"
+#include "simulation.hpp"
 
 using namespace shapeform;
 using core::Vec2;

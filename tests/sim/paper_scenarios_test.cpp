@@ -5,7 +5,7 @@
 #include <functional>
 
 #include "config/config.hpp"
-#include "sim/simulation.hpp"
+#include "simulation.hpp"
 
 using namespace shapeform;
 

@@ -4,7 +4,7 @@
 #include <catch2/catch.hpp>
 
 #include "config/config.hpp"
-#include "sim/simulation.hpp"
+#include "simulation.hpp"
 
 using namespace shapeform;
 using Why = core::ConvergenceDetector::Why;

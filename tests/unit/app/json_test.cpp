@@ -3,7 +3,7 @@
 
 #include "app/json.hpp"
 #include "config/config.hpp"
-#include "core/params.hpp"
+#include "core/command_table.hpp"
 
 using namespace shapeform;
 

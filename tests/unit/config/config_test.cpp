@@ -1,5 +1,7 @@
 #include "config/config.hpp"
 
+#include "core/command_table.hpp"
+
 #include <catch2/catch.hpp>
 #include <algorithm>
 #include <cstdint>

@@ -1,4 +1,6 @@
 // The declared parameter table: ranges and their texts, the enum name tables, the command table.
+#include "core/command_table.hpp"
+#include "core/enum_names.hpp"
 #include "core/params.hpp"
 
 #include <catch2/catch.hpp>

@@ -18,6 +18,7 @@
 #include <fastrtps/xmlparser/XMLProfileManager.h>
 
 #include "core/metric_table.hpp"
+#include "core/command_table.hpp"
 #include "core/params.hpp"
 #include "dds/convert.hpp"
 #include "dds/discovery.hpp"
@@ -26,7 +27,7 @@
 #include "dds/stall.hpp"
 #include "dds/state_input.hpp"
 #include "dds/topics.hpp"
-#include "dds/transport.hpp"
+#include "protocol/transport.hpp"
 #include "shapeform/msg/AgentStatePubSubTypes.h"
 #include "shapeform/msg/ShapeCommandPubSubTypes.h"
 #include "shapes/shapes.hpp"

@@ -1,4 +1,4 @@
-// Unit tests of DDS Security's edges (common/dds/security, the participant factory, library_log): the
+// Unit tests of DDS Security's edges (common/protocol/security, the participant factory, library_log): the
 // enclave check names the bad file for each way a keystore goes wrong, the factory never creates an
 // unsecured participant instead, the keys validate, and secured nodes exchange samples only within
 // their permissions. Keystores come from scripts/make_keystore.sh (openssl), made in a temporary folder.
@@ -17,8 +17,8 @@
 #include "dds/library_log.hpp"
 #include "dds/node.hpp"
 #include "dds/participant.hpp"
-#include "dds/security.hpp"
-#include "dds/transport.hpp"
+#include "protocol/security.hpp"
+#include "protocol/transport.hpp"
 
 namespace shapeform {
 namespace {

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <vector>
 
+#include "core/enum_names.hpp"
 #include "core/params.hpp"
 
 #include "shapes/shapes.hpp"

@@ -6,7 +6,6 @@
 
 #include "app/json.hpp"
 #include "core/metric_table.hpp"
-#include "core/params.hpp"
 #include "traffic_json.hpp"
 
 namespace shapeform {

@@ -1,7 +1,6 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
-#include "core/params.hpp"
 #include "scene.hpp"
 #include "shapes/shapes.hpp"
 

@@ -1,4 +1,4 @@
-#include "dds/transport.hpp"
+#include "protocol/transport.hpp"
 
 #include <cmath>
 #include <stdexcept>

@@ -1,4 +1,4 @@
-#include "dds/security.hpp"
+#include "protocol/security.hpp"
 
 #include <cstdio>
 #include <ctime>

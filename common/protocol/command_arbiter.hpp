@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "dds/samples.hpp"
+#include "protocol/samples.hpp"
 
 namespace shapeform::dds {
 

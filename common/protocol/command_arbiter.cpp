@@ -1,4 +1,4 @@
-#include "dds/command_arbiter.hpp"
+#include "protocol/command_arbiter.hpp"
 
 #include <algorithm>
 

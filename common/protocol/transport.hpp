@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "core/params.hpp"
-#include "dds/security.hpp"
+#include "protocol/security.hpp"
 
 namespace shapeform::dds {
 

@@ -8,6 +8,7 @@
 #include "simulation.hpp"
 #include "app/app.hpp"
 #include "app/json.hpp"
+#include "core/enum_names.hpp"
 #include "core/params.hpp"
 #include "record/recorder.hpp"
 
