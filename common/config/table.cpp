@@ -1,6 +1,6 @@
 /// The config table: every key of the schema with its type, unit, range and description, in the
 /// order of the file (and of to_yaml and config/README.md). The command's keys come from the command
-/// table (core/params.hpp), the transport's from the transport table (protocol/transport.hpp); the rest
+/// table (core/command_table.hpp), the transport's from the transport table (protocol/transport.hpp); the rest
 /// are declared here. Defaults are read from Config{}.
 #include "config/config.hpp"
 

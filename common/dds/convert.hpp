@@ -28,7 +28,7 @@ msg::ShapeCommand to_msg(const core::Command& cmd, const CommandId& id, const st
 /// Wire message -> core::CompiledCommand, its shape compiled (shapes::compile).
 /// On failure returns false, leaves `out` untouched and sets `error` to every problem found,
 /// separated by "; ", each naming its field, e.g. "command.dt: must be in (0, 10], got 50". Checks:
-/// every number finite and within the range the command table (core/params.hpp) declares for its
+/// every number finite and within the range the command table (core/command_table.hpp) declares for its
 /// field, the same bounds as the config loader and the console; shape_kind, path_kind, integrator,
 /// law one of the names of their tables; vertices of even length. When all of that passes, the
 /// shape is compiled; a core::ShapeError is reported as "command: <its message>", e.g.
