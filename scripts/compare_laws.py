@@ -138,7 +138,7 @@ def main():
                f"{datetime.datetime.utcnow():%Y-%m-%d %H:%M} UTC. Same starts for both laws (seed {seed}, uniform "
                f"in [-5,5]^2), Euler dt = 1, {steps} iterations; the arc law with its defaults "
                "(k_normal 0.5, k_tangent 1, spacing 1). The law is explained in [LAW.md](LAW.md).\n")
-    out.append("Criteria of the arc law (issue 5): curve error (distance to the true closest point) mean <= 1e-3 "
+    out.append("The arc law's acceptance criteria: curve error (distance to the true closest point) mean <= 1e-3 "
                "of the shape's size; arc-length gap CV <= 0.01 (closed curves; on the line a row of fixed "
                "length); largest per-step displacement at the end <= 1e-4 of the size; settling no slower "
                "than the paper's law.\n")

@@ -211,8 +211,8 @@ def write_acceptance(o, acc):
     n_ok = sum(1 for x in acc if x[4])
     bad = [x for x in acc if not x[4]]
     bad_cons = [x for x in acc if x[5] is False]
-    w(f"**Acceptance (issue 4): distributed plateau metrics within 10 % (or 0.02) of the simulator's from the "
-      f"same start, settling steps within 20 %: {n_ok} of {len(acc)} checks pass.**"
+    w(f"**Acceptance, processes against the simulator: distributed plateau metrics within 10 % (or 0.02) of "
+      f"the simulator's from the same start, settling steps within 20 %: {n_ok} of {len(acc)} checks pass.**"
       + (" (`--quick`: the runs stop at 200 iterations, before the plateau; the check is meant for the full run.)"
          if o.quick else ""))
     if bad:
@@ -353,8 +353,8 @@ def async_pairs(runs_a, runs_b):
 def write_ff_vs_fixed(o):
     """Feed-forward against the fixed centre: processes, simulator and the async model's phasings."""
     w = o.w
-    w("Feed-forward against the fixed centre (issue 4: within 0.1 after the transient), largest difference over "
-      "t = 160 and 200:")
+    w("Feed-forward against the fixed centre (its acceptance criterion: within 0.1 after the transient), "
+      "largest difference over t = 160 and 200:")
     w("")
     o.head("| case | run | centroid error | ring error | within 0.1? |")
     for pth, lab, ffn, fxn in FF_VS_FIXED:
