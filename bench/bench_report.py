@@ -2,7 +2,8 @@
 """Simulator rows and the Markdown report of the benchmark (see bench.py).
 
 render() turns a results file (bench_results.json) into BENCHMARKS.md; every number in the report comes
-from that file, which bench.py fills from the processes' own reports. Run on its own it renders a report:
+from that file, which bench.py fills from the processes' own reports, and its prose from bench/notes.toml
+(report_plan() pairs the two). Run on its own it renders a report:
 
 usage: bench/bench_report.py [RESULTS_JSON] [--out MD | --write-docs]
 
@@ -11,30 +12,22 @@ runs/<UTC time>-bench/BENCHMARKS.md), or with --write-docs to the committed docs
 """
 from __future__ import annotations
 
-import datetime
+import argparse
 import json
 import math
-import os
-import resource
-import statistics
-import subprocess
+import sys
 import time
 from pathlib import Path
 
-# --------------------------------------------------------------------------------------------
-# Simulator throughput (shapeform_bench_sim, one JSON object per call).
+sys.dont_write_bytecode = True  # no __pycache__ beside the sources
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_plan import LARGE_MIN, LEVERS, MAIN_PRESET, NOTES, PRESETS, ROOT, main_rows  # noqa: E402
 
-# (agents, impl, instruction set ("best": the one the simulator picks), threads, steps per call, beta
-# (None: the paper's 1.2)). One thread runs on core 0 only (taskset -c 0), two on both cores. Steps
-# chosen so one call takes about a second on this machine; --quick takes a quarter.
-SIM_ROWS = [(100, "fast", "best", 1, 5000, None), (100, "reference", None, 1, 1000, None),
-            (1000, "fast", "best", 1, 1500, None), (1000, "fast", "best", 1, 4000, 1.0),
-            (1000, "fast", "avx2", 1, 500, None), (1000, "fast", "generic", 1, 200, None),
-            (1000, "reference", None, 1, 20, None),
-            (10000, "fast", "best", 1, 20, None), (10000, "fast", "best", 2, 40, None),
-            (10000, "reference", None, 1, 1, None)]
-SIM_SIZES = (100, 1000, 10000)
-SIM_TARGETS = {1000: 1000.0, 10000: 20.0}  # Euler steps/s (issue 17): N = 1000 on one core
+# --------------------------------------------------------------------------------------------
+# The simulator's rows (bench_run.sim_rows measures them).
+
+# The simulator's throughput targets, Euler steps/s: N = 1000 on one core, N = 10000 on one core or both.
+SIM_TARGETS = {1000: 1000.0, 10000: 20.0}
 # Multiply-adds and multiplies per pair in the AVX-512 pair pass (common/core/batch_avx512.cpp), counted
 # in its compiled inner loop (objdump of batch_avx512.cpp.o, 2026-12-02: 50 vfmadd/vfnmadd/vmulpd among 119
 # vector instructions per 16 pairs): the power 19 (the logarithm's reduction and degree-6 polynomial with
@@ -43,90 +36,11 @@ SIM_TARGETS = {1000: 1000.0, 10000: 20.0}  # Euler steps/s (issue 17): N = 1000 
 SIM_FMA_PER_PAIR = 25
 
 
-def _host_cpu() -> tuple[int, int]:
-    """(all, idle) CPU ticks of the host since boot."""
-    with open("/proc/stat") as f:
-        vals = [int(v) for v in f.readline().split()[1:]]
-    return sum(vals), vals[3] + vals[4]
-
-
 def sim_label(r: dict) -> str:
     if r["impl"] == "reference":
         return f"sim {r['agents']} reference"
     return (f"sim {r['agents']} fast {r.get('simd') or '?'}" + (f" {r['threads']} threads" if r["threads"] > 1 else "")
             + (f" beta {r['beta']:g}" if r.get("beta") is not None else ""))
-
-
-def sim_rows(bindir: Path, quick: bool, before=None) -> dict:
-    """Runs the simulator rows (3 calls each, 1 with --quick; median) and the peak probes. `before`
-    (optional) is called before each call: bench.py waits there for a quiet host and returns how busy
-    it was."""
-    exe = bindir / "shapeform_bench_sim"
-    out: dict = {"available": exe.exists(), "rows": [], "peak": {},
-                 "when": datetime.datetime.now().isoformat(timespec="seconds")}
-    if not exe.exists():
-        return out
-    runs = 1 if quick else 3
-
-    def call(args: list[str], cores: str) -> tuple[dict | None, str | None, float | None]:
-        """One call; repeated (up to twice) when other jobs used more than a quarter of a core during it.
-        Returns its JSON (with `other_load`: other jobs' CPU in cores), an error, and how busy the host was."""
-        for attempt in range(3):
-            busy = before() if before else None
-            t0, c0, r0 = time.monotonic(), _host_cpu(), resource.getrusage(resource.RUSAGE_CHILDREN)
-            try:
-                p = subprocess.run(["taskset", "-c", cores, str(exe)] + args, capture_output=True, text=True,
-                                   timeout=600)
-                if p.returncode != 0:
-                    return None, (p.stderr.strip().splitlines() or ["exit %d" % p.returncode])[-1], busy
-                res = json.loads(p.stdout.strip().splitlines()[-1])
-            except (subprocess.TimeoutExpired, json.JSONDecodeError, IndexError, OSError) as e:
-                return None, str(e), busy
-            wall, c1, r1 = time.monotonic() - t0, _host_cpu(), resource.getrusage(resource.RUSAGE_CHILDREN)
-            ours = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
-            host = ((c1[0] - c0[0]) - (c1[1] - c0[1])) / os.sysconf("SC_CLK_TCK")
-            res["other_load"] = max(0.0, host - ours) / wall
-            if res["other_load"] <= 0.25:
-                break
-        return res, None, busy
-
-    available = None
-    for simd in ("generic", "avx2", "avx512"):
-        res, err, _ = call(["--peak", "--simd", simd], "0")
-        if res:
-            out["peak"][simd] = res["fma_per_s"]
-            available = simd
-    for n, impl, simd, threads, steps, beta in SIM_ROWS:
-        if simd == "best":
-            simd = available
-        elif simd is not None and simd not in out["peak"]:
-            continue  # this CPU lacks it
-        if quick:
-            steps = max(1, steps // 4)
-        args = ["--agents", str(n), "--steps", str(steps), "--impl", impl]
-        if simd:
-            args += ["--simd", simd, "--threads", str(threads)]
-        if beta is not None:
-            args += ["--beta", f"{beta:g}"]
-        cores = "0" if threads == 1 else ",".join(str(c) for c in range(threads))
-        results, error, busy = [], None, []
-        for _ in range(runs):
-            res, error, b = call(args, cores)
-            if res is None:
-                break
-            results.append(res)
-            busy.append(b)
-        row = {"agents": n, "impl": impl, "simd": simd, "threads": threads, "beta": beta, "steps": steps, "runs": len(results),
-               "command": f"taskset -c {cores} build/bin/shapeform_bench_sim " + " ".join(args)}
-        if results:
-            for k in ("steps_per_s", "rss_mb", "seconds", "ns_per_pair", "other_load"):
-                row[k] = statistics.median(r[k] for r in results)
-            if any(b is not None for b in busy):
-                row["host_busy_before"] = max(b for b in busy if b is not None)
-        if error:
-            row["error"] = error
-        out["rows"].append(row)
-    return out
 
 
 def sim_best(sim: dict, n: int, threads: int) -> dict | None:
@@ -162,67 +76,48 @@ def sim_target_rows(sim: dict) -> str:
     return o
 
 
+def sim_line(sim: dict, r: dict, ref: dict) -> str:
+    """One simulator row of the table; ref: the reference rows' steps/s by N."""
+    sps = r.get("steps_per_s")
+    n, fast = r["agents"], r["impl"] == "fast"
+    speed = f"x{sps / ref[n]:.1f}" if fast and sps and ref.get(n) and r.get("beta") is None else ""
+    target = SIM_TARGETS.get(n) if fast and r is sim_best(sim, n, r.get("threads", 1)) else None
+    if target is None or (n == 1000 and r.get("threads", 1) != 1):
+        tgt, verdict = "", ""
+    else:
+        tgt = f">= {target:g}/s"
+        verdict = "met" if sps is not None and sps >= target else (
+            f"**missed** by {target - sps:.1f}/s" if sps is not None else "not measured")
+    val = f"{sps:,.1f}" if sps is not None else f"failed: {r.get('error', '?')}"
+    beta = "1.2 (paper)" if r.get("beta") is None else f"{r['beta']:g}"
+    return (f"| {n} | {r['impl']} | {beta} | {r.get('simd') or 'scalar'} | {r.get('threads', 1)} | {val} "
+            f"| {f_num(r.get('ns_per_pair'), '{:.2f}')} | {f_num(r.get('rss_mb'))} | {speed} "
+            f"| {f_num(r.get('other_load'), '{:.2f}')} | {tgt} | {verdict} |\n")
+
+
 def sim_section(sim: dict) -> str:
     o = ["## Simulator\n\n"]
     if not sim.get("available"):
         o.append("`build/bin/shapeform_bench_sim` was not built when this report was generated.\n\n")
         return "".join(o)
     peak = sim.get("peak") or {}
-    o.append("Paper law, Euler dt = 1, the paper's circle, uniform start (`shapeform_bench_sim`; run alone: "
-             "`scripts/bench.sh --only sim`). `fast`: the batched kernel the simulator uses from 64 agents on "
-             "(`core::paper_velocities_batch`: each pair once, in vectors of the instruction set picked at run time, "
-             "O(N) memory; equal to the per-agent law within 6e-15 of the sum of the terms' magnitudes on the unit tests' swarms, asserted to 1e-13, with the same nearest neighbours); `reference`: "
-             "every agent through `core::agent_step` as an agent process computes it (each pair twice). One thread runs "
-             "on core 0 alone (`taskset -c 0`); two threads split the pairs over both cores. ns per pair: time per step "
-             "over N (N - 1) / 2 pairs, the per-agent work (attraction, repulsion, integration) included. Each figure is "
-             "the median of 3 calls; before each call the host must be quiet (up to 2 minutes of waiting), and a call "
-             "during which other jobs took more than a quarter of a core is repeated (twice at most); other load: what "
-             "they took (median, in cores).\n\n")
+    text = NOTES["sim"]
+    o.append(text["intro"] + "\n\n")
     o.append("| N | impl | beta | instruction set | cores | Euler steps/s | ns per pair | RSS MB | speed-up vs reference "
              "| other load | target | verdict |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n")
     ref = {r["agents"]: r.get("steps_per_s") for r in sim["rows"] if r["impl"] == "reference"}
     for r in sim["rows"]:
-        sps = r.get("steps_per_s")
-        n, fast = r["agents"], r["impl"] == "fast"
-        speed = f"x{sps / ref[n]:.1f}" if fast and sps and ref.get(n) and r.get("beta") is None else ""
-        target = SIM_TARGETS.get(n) if fast and r is sim_best(sim, n, r.get("threads", 1)) else None
-        if target is None or (n == 1000 and r.get("threads", 1) != 1):
-            tgt, verdict = "", ""
-        else:
-            tgt = f">= {target:g}/s"
-            verdict = "met" if sps is not None and sps >= target else (
-                f"**missed** by {target - sps:.1f}/s" if sps is not None else "not measured")
-        val = f"{sps:,.1f}" if sps is not None else f"failed: {r.get('error', '?')}"
-        beta = "1.2 (paper)" if r.get("beta") is None else f"{r['beta']:g}"
-        o.append(f"| {n} | {r['impl']} | {beta} | {r.get('simd') or 'scalar'} | {r.get('threads', 1)} | {val} "
-                 f"| {f_num(r.get('ns_per_pair'), '{:.2f}')} | {f_num(r.get('rss_mb'))} | {speed} "
-                 f"| {f_num(r.get('other_load'), '{:.2f}')} | {tgt} | {verdict} |\n")
+        o.append(sim_line(sim, r, ref))
     o.append("\n")
     if peak:
-        o.append("**Against the machine's limit.** Peak double-precision multiply-adds one thread sustains on core 0 "
-                 "(independent chains, `shapeform_bench_sim --peak`): "
-                 + ", ".join(f"{k} {v / 1e9:.1f} G/s" for k, v in peak.items()) + ". ")
+        o.append(text["peak"].format(peaks=", ".join(f"{k} {v / 1e9:.1f} G/s" for k, v in peak.items())))
         big = sim_best(sim, 10000, 1)
         if "avx512" in peak and big and big.get("simd") == "avx512" and big.get("ns_per_pair"):
             bound = SIM_FMA_PER_PAIR / peak["avx512"] * 1e9
-            o.append(f"The AVX-512 pair pass executes {SIM_FMA_PER_PAIR} multiply-adds or multiplies per pair (counted "
-                     f"in its compiled loop), so at that peak a pair takes at least {bound:.2f} ns; measured at N = 10000 "
-                     f"on one core: {big['ns_per_pair']:.2f} ns, x{big['ns_per_pair'] / bound:.1f} the bound. ")
-        o.append(SIM_LIMITS + "\n\n")
+            o.append(text["bound"].format(fma=SIM_FMA_PER_PAIR, bound=bound, measured=big["ns_per_pair"],
+                                          ratio=big["ns_per_pair"] / bound))
+        o.append(text["limits"] + "\n\n")
     return "".join(o)
-
-
-SIM_LIMITS = (
-    "What separates the two: each pair's weight (sigma^2 + d^2)^-beta, computed as 2^(-beta log2(sigma^2 + d^2)) "
-    "with 16-entry tables read by one permute and polynomials of degree 6 and 5, is a chain of some 20 dependent "
-    "operations (about 70 cycles), and the core's out-of-order window holds only a few pairs' chains at once "
-    "(evaluating the polynomials in Horner's order, a longer chain with fewer operations, was slower); the other "
-    "vector operations (permutes, compares, blends, the nearest-neighbour bookkeeping, loads and stores) share the "
-    "pipes, 119 vector instructions per 16 pairs in all. More rows per pass (one row shares j's loads and "
-    "stores with the next) spilled registers: two rows measured fastest. The paper's beta = 1.2 has no cheaper form; "
-    "beta = 1/2, 1, 3/2 or 2 take a square root and a division instead (within 2 ulp of std::pow), the row with "
-    "beta = 1 shows the gain. The other instruction sets use the same scheme without the tables (AVX2, generic) "
-    "and a division in the logarithm.")
 
 
 # --------------------------------------------------------------------------------------------
@@ -272,10 +167,6 @@ def ratio(a, b):
     if b == 0:
         return "-"
     return f"x{a / b:.2f}"
-
-
-def agg_val(entry, key):
-    return entry["agg"].get(key) if entry else None
 
 
 def processes(row: dict) -> str:
@@ -377,59 +268,199 @@ def verdict_min(v, limit, unit_fmt):
     return unit_fmt(v), f"**missed** by {unit_fmt(limit - v)}"
 
 
+def target_line(rows: dict, rid: str, e: dict, target: tuple) -> str:
+    """One target's line for the measured row e."""
+    label, key, kind, limit, fmt = target
+    a = e["agg"]
+    if key == "aborts_total":
+        v = a.get("aborts_total", 0)
+        runs = a.get("runs", 1)
+        return f"| {label} | `{rid}` | {v} in {runs} run{'s' if runs != 1 else ''} | {'met' if v == 0 else '**missed**'} |\n"
+    if key == "converged":
+        # Met only when every run converged (the first converged SwarmMetrics sample); the median
+        # time and the supervisor's final verdict are shown beside it.
+        c, runs = a.get("converge_s"), a.get("runs", 1)
+        n_conv = a.get("converged_runs", 0 if c is None or math.isinf(c) else runs)
+        ok = n_conv == runs
+        return (f"| {label} | `{rid}` | converged in {n_conv} of {runs} runs, median {f_s(c)} (the supervisor's "
+                f"final summary: converged in {a.get('sup_converged_runs', 0)}) | {'met' if ok else '**missed**'} |\n")
+    if key == "ratio_p50" or key == "ratio_p99":
+        base = baseline_for(rows, e)
+        k = "age_p50_ms" if key == "ratio_p50" else "age_p99_ms"
+        if base is None or a.get(k) is None or not base["agg"].get(k):
+            return f"| {label} | `{rid}` | no baseline | - |\n"
+        v = a[k] / base["agg"][k]
+        txt, verdict = verdict_max(v, limit, lambda x: f"{x:.2f}")
+        return f"| {label} | `{rid}` vs `{base['row']['id']}` | x{txt} | {verdict} |\n"
+    v = a.get(key)
+    txt, verdict = (verdict_min if kind == "min" else verdict_max)(v, limit, fmt)
+    return f"| {label} | `{rid}` | {txt} | {verdict} |\n"
+
+
 def target_rows(rows: dict, rid: str, targets: list) -> str:
     e = rows.get(rid)
-    out = ""
-    for label, key, kind, limit, fmt in targets:
-        if e is None:
-            out += f"| {label} | `{rid}` | not run | - |\n"
+    if e is None:
+        return "".join(f"| {t[0]} | `{rid}` | not run | - |\n" for t in targets)
+    return "".join(target_line(rows, rid, e, t) for t in targets)
+
+
+def _pct(v):
+    return f"{100 * v:.2f} %"
+
+
+def _secs(v):
+    return f"{v:.1f} s"
+
+
+# (label, key of the row's figures, "min" | "max" | "" (special), limit, format of the measured value)
+TARGETS_100 = [
+    ("N=100 at 20 Hz: delivery >= 99 %", "delivery", "min", 0.99, _pct),
+    ("N=100 at 20 Hz: data age p99 <= 100 ms", "age_p99_ms", "max", 100.0, f_ms),
+    ("N=100 at 20 Hz: everyone hears everyone within 10 s", "all_heard_s", "max", 10.0, _secs),
+    ("N=100 at 20 Hz: no process aborts", "aborts_total", "max", 0, str),
+    ("N=100 at 20 Hz: the circle converges", "converged", "", 0, str),
+]
+TARGETS_1000 = [
+    ("N=1000 at 20 Hz, 10-20 processes: delivery >= 99 %", "delivery", "min", 0.99, _pct),
+    ("N=1000 at 20 Hz, 10-20 processes: data age p99 <= 100 ms", "age_p99_ms", "max", 100.0, f_ms),
+    ("N=1000 at 20 Hz, 10-20 processes: everyone hears everyone within 10 s", "all_heard_s", "max", 10.0, _secs),
+    ("N=1000 at 20 Hz, 10-20 processes: the arc-law circle converges", "converged", "", 0, str),
+    ("N=1000 at 20 Hz, 10-20 processes: the host at most half busy", "host_busy_pct", "max", 50.0,
+     lambda v: f"{v:.0f} %"),
+]
+TARGETS_25 = [
+    ("N=25 at 20 Hz: data age p50 <= 1 ms", "age_p50_ms", "max", 1.0, f_ms),
+    ("N=25 at 20 Hz: data age p99 <= 5 ms", "age_p99_ms", "max", 5.0, f_ms),
+    ("N=25 at 20 Hz: p50 age within 1.5x of the baseline", "ratio_p50", "max", 1.5, str),
+    ("N=25 at 20 Hz: p99 age within 1.5x of the baseline", "ratio_p99", "max", 1.5, str),
+    ("N=25 at 20 Hz: RSS <= 20 MB per agent", "rss_mb", "max", 20.0, lambda v: f"{v:.1f} MB"),
+    ("N=25 at 20 Hz: loop lateness p99 <= 1 ms", "lateness_p99_ms", "max", 1.0, f_ms),
+]
+
+# --------------------------------------------------------------------------------------------
+# What the report says about the measured rows: report_plan() pairs the rows of bench_plan and the
+# prose of notes.toml with the stored results.
+
+MP = MAIN_PRESET
+# The rows the headline, the targets and 'what limits' speak of, by the names notes.toml uses.
+ROW_NAMES = {
+    "n100": "agents-n100-r20-large", "ds100": f"agents-n100-r20-ds{MP}", "b100": "baseline-n100-r20-large",
+    "g1000": f"group-n1000-r20-g100-{MP}", "bg1000": f"baseline-n1000-r20-g100-{MP}",
+    "g1000b": f"group-n1000-r20-g50-{MP}", "bg1000b": f"baseline-n1000-r20-g50-{MP}",
+    "g50": "group-n100-r20-g50", "g25": "group-n100-r20-g25",
+    "n25": f"agents-n25-r20-{MP}", "b25": f"baseline-n25-r20-{MP}",
+}
+
+
+def _get(store, rid, key):
+    e = store.get("rows", {}).get(rid)
+    return e["agg"].get(key) if e else None
+
+
+def _summary(store, rid) -> str:
+    e = store.get("rows", {}).get(rid)
+    if not e:
+        return f"`{rid}`: not run yet"
+    a = e["agg"]
+    conv = f_s(a.get("converge_s")) if e["row"]["kind"] != "baseline" else "n/a"
+    return (f"delivery {f_pct(a.get('delivery'))}, data age p50 {f_ms(a.get('age_p50_ms'))} / p99 "
+            f"{f_ms(a.get('age_p99_ms'))}, everyone hears everyone: {f_s(a.get('all_heard_s'))}, "
+            f"launch to converged: {conv}, {a.get('aborts_total', 0)} aborted processes in {a.get('runs', 1)} runs, "
+            f"host {a.get('host_busy_pct', 0) or 0:.0f} % busy (`{rid}`)")
+
+
+def headline(store: dict) -> list[str]:
+    """The headline's lines: its heading, then a bullet per notes.toml [report] headline."""
+    summaries = {name: _summary(store, rid) for name, rid in ROW_NAMES.items()}
+    return ["## Headline\n"] + [line.format(**summaries) for line in NOTES["report"]["headline"]]
+
+
+def _disc_reading(store: dict) -> str:
+    """The measured cost of discovery (lever 15), as a clause; empty until measured."""
+    parts = []
+    for n in (50, 75, 100):
+        rid = f"agents-n{n}-r20-largequiet"
+        d, t, heard = _get(store, rid, "disc_udp_in"), _get(store, rid, "disc_udp_s"), _get(store, rid, "all_heard_s")
+        if d is None or t is None:
             continue
-        a = e["agg"]
-        if key == "aborts_total":
-            v = a.get("aborts_total", 0)
-            runs = a.get("runs", 1)
-            out += f"| {label} | `{rid}` | {v} in {runs} run{'s' if runs != 1 else ''} | {'met' if v == 0 else '**missed**'} |\n"
-            continue
-        if key == "converged":
-            # Met only when every run converged (the first converged SwarmMetrics sample); the median
-            # time and the supervisor's final verdict are shown beside it.
-            c, runs = a.get("converge_s"), a.get("runs", 1)
-            n_conv = a.get("converged_runs", 0 if c is None or math.isinf(c) else runs)
-            ok = n_conv == runs
-            out += (f"| {label} | `{rid}` | converged in {n_conv} of {runs} runs, median {f_s(c)} (the supervisor's "
-                    f"final summary: converged in {a.get('sup_converged_runs', 0)}) | {'met' if ok else '**missed**'} |\n")
-            continue
-        if key == "ratio_p50" or key == "ratio_p99":
-            base = baseline_for(rows, e)
-            k = "age_p50_ms" if key == "ratio_p50" else "age_p99_ms"
-            if base is None or a.get(k) is None or not base["agg"].get(k):
-                out += f"| {label} | `{rid}` | no baseline | - |\n"
-                continue
-            v = a[k] / base["agg"][k]
-            txt, verdict = verdict_max(v, limit, lambda x: f"{x:.2f}")
-            out += f"| {label} | `{rid}` vs `{base['row']['id']}` | x{txt} | {verdict} |\n"
-            continue
-        v = a.get(key)
-        txt, verdict = (verdict_min if kind == "min" else verdict_max)(v, limit, fmt)
-        out += f"| {label} | `{rid}` | {txt} | {verdict} |\n"
-    return out
+        done = heard is not None and not math.isinf(heard)
+        parts.append(f"N = {n}: {d / 1e6:.1f} million in {t:.0f} s" + ("" if done else " without finishing"))
+    if not parts:
+        return ""
+    return NOTES["limits"]["discovery_cost"].format(readings="; ".join(parts))
+
+
+def _limits_1000(store: dict) -> str:
+    """What limits 1000 agents in groups, from the measured rows (empty until they are measured)."""
+    text = NOTES["limits"]
+    names = {"g100": "g1000", "g50": "g1000b", "b100": "bg1000", "b50": "bg1000b"}
+    busy = {k: _get(store, ROW_NAMES[name], "host_busy_pct") for k, name in names.items()}
+    if None in busy.values():
+        return ""
+    uni = {f"g{k}": _get(store, f"group-n1000-r20-g{k}", "host_busy_pct") for k in (100, 50)}
+    uni_txt = text["groups_1000_unicast"].format(**uni) if None not in uni.values() else ""
+    return text["groups_1000"].format(**busy) + uni_txt
+
+
+def _meets_100(store: dict, rid: str) -> bool:
+    """Whether a row meets every N = 100 target."""
+    d, p99, heard = _get(store, rid, "delivery"), _get(store, rid, "age_p99_ms"), _get(store, rid, "all_heard_s")
+    conv, aborts = _get(store, rid, "converge_s"), _get(store, rid, "aborts_total")
+    return (None not in (d, p99, heard, conv) and d >= 0.99 and p99 <= 100 and heard <= 10
+            and not math.isinf(conv) and not aborts)
+
+
+def limits_text(store: dict) -> str:
+    """'What limits N = 100 processes': the pieces of notes.toml [limits], with the measured figures."""
+    text = NOTES["limits"]
+    b100 = ROW_NAMES["b100"]
+    busy, udp_in, ours = (_get(store, b100, k) for k in ("host_busy_pct", "udp_in_per_s", "ours_cpu_pct"))
+    ds_busy = _get(store, ROW_NAMES["ds100"], "host_busy_pct")
+    g_busy = _get(store, ROW_NAMES["g50"], "host_busy_pct")
+    o = [text["opening"]]
+    if None not in (busy, udp_in, ours):
+        o.append(text["baseline_floor"].format(udp_in=udp_in, ours=ours, busy=busy))
+    o.append(text["load"])
+    if ds_busy is not None:
+        o.append(text["ds_busy"].format(busy=ds_busy))
+    o.append(text["grouping"])
+    if g_busy is not None:
+        o.append(text["group_busy"].format(busy=g_busy))
+    o.append(text["group_meets"] if _meets_100(store, ROW_NAMES["g50"]) else ".")
+    if _meets_100(store, ROW_NAMES["n100"]):
+        o.append(text["agents_meet"])
+    o += [text["discovery"], _disc_reading(store), ".", _limits_1000(store)]
+    return "".join(o)
+
+
+def report_plan(store: dict) -> dict:
+    """What render() writes besides the tables: {"main": [row ids], "targets": [(row id, targets)],
+    "headline": [lines], "limits", "main_intro", "levers": [{name, question, rows, pairs, note, extra,
+    view}], "levers_intro", "presets": {name: about}, "method"}."""
+    r, report = ROW_NAMES, NOTES["report"]
+    main_intro = report["main_intro"].format(main_preset=MAIN_PRESET, main_about=PRESETS[MAIN_PRESET]["about"],
+                                             large_min=LARGE_MIN, large_about=PRESETS["large"]["about"])
+    return {"main": [row.id for row in main_rows()],
+            "targets": [(r["n100"], TARGETS_100), (r["ds100"], TARGETS_100), (r["g50"], TARGETS_100),
+                        (r["g1000"], TARGETS_1000), (r["g1000b"], TARGETS_1000), (r["n25"], TARGETS_25)],
+            "headline": headline(store), "limits": limits_text(store), "main_intro": main_intro,
+            "levers": [{"name": lv["name"], "question": lv["question"], "rows": [row.id for row in lv["rows"]],
+                        "pairs": [(a.id, b.id) for a, b in lv.get("pairs", [])],
+                        "note": lv.get("note", ""), "extra": lv.get("extra", False),
+                        "view": lv.get("view", False)} for lv in LEVERS],
+            "levers_intro": report["levers_intro"],
+            "presets": {k: v["about"] for k, v in PRESETS.items()}, "method": report["method"]}
 
 
 # --------------------------------------------------------------------------------------------
+# The report.
 
 
-def render(store: dict, path: Path, plan: dict) -> None:
-    """plan: {"main": [row ids], "levers": [{"name", "question", "rows": [ids], "note"}], "targets": {...},
-    "presets": {name: about}, "notes": [str], "limits": str}"""
+def _header(store: dict, plan: dict) -> list[str]:
+    """The title, the preamble, date, machine and runs, and the headline."""
     rows = store.get("rows", {})
     m = store.get("machine", {})
-    o = []
-    o.append("# Benchmarks\n\n")
-    o.append("Generated by `scripts/bench.sh` (do not edit by hand: rerun it). Every figure below comes from the "
-             "processes themselves: agents and baseline processes publish `AgentStatus` (loop ticks, overruns, "
-             "lateness, neighbours heard, samples received, data age percentiles, CPU, RSS), recorded by "
-             "`shapeform_bench_probe`; convergence from the supervisor's `SwarmMetrics`; supervisor and host CPU and "
-             "the kernel's UDP counters from `/proc`.\n\n")
+    o = ["# Benchmarks\n\n", NOTES["report"]["preamble"] + "\n\n"]
     quick = sorted(k for k, e in rows.items() if e.get("quick"))
     o.append(f"- **Date**: {store.get('date', '-')}; **commit**: `{store.get('commit', '-')}` (of the last invocation; "
              "each row's own commit and time are in the last table)"
@@ -441,27 +472,27 @@ def render(store: dict, path: Path, plan: dict) -> None:
              f"rmem_default = {m.get('rmem_default', '?')} (bench.sh does not change them)\n")
     o.append("- **Runs**: each row is the median of its runs (the per-run values are in "
              "`docs/figures/bench_results.json`); rerun one row with the command in the last table.\n\n")
-
-    for note in plan.get("headline", []):
-        o.append(note + "\n")
+    o += [note + "\n" for note in plan.get("headline", [])]
     o.append("\n")
+    return o
 
-    # Targets
-    o.append("## Targets\n\n| target | row | measured | verdict |\n|---|---|---|---|\n")
-    for rid, targets in plan.get("targets", []):
-        o.append(target_rows(rows, rid, targets))
+
+def _targets(store: dict, plan: dict) -> list[str]:
+    """The targets table and what limits them."""
+    rows = store.get("rows", {})
+    o = ["## Targets\n\n| target | row | measured | verdict |\n|---|---|---|---|\n"]
+    o += [target_rows(rows, rid, targets) for rid, targets in plan.get("targets", [])]
     o.append(sim_target_rows(store.get("sim") or {}))
     o.append("\n")
     if plan.get("limits"):
         o.append(plan["limits"] + "\n\n")
+    return o
 
-    # Main table
-    o.append("## Agents and baseline\n\n")
-    o.append(plan.get("main_intro", "") + "\n\n")
-    o.append(TABLE_HEAD)
-    for rid in plan.get("main", []):
-        if rid in rows:
-            o.append(table_line(rid, rows[rid]))
+
+def _main_table(rows: dict, plan: dict) -> list[str]:
+    """The main rows, and the agent rows as ratios to their baselines."""
+    o = ["## Agents and baseline\n\n", plan.get("main_intro", "") + "\n\n", TABLE_HEAD]
+    o += [table_line(rid, rows[rid]) for rid in plan.get("main", []) if rid in rows]
     o.append("\n")
     o.append("### Agent figures as a ratio to the baseline (same N, rate, transport and agents per process)\n\n")
     o.append(RATIO_HEAD)
@@ -470,60 +501,60 @@ def render(store: dict, path: Path, plan: dict) -> None:
         if e and e["row"]["kind"] in ("agents", "group"):
             o.append(ratio_line(rid, e, baseline_for(rows, e)))
     o.append("\n![delivery and p99 data age against N](figures/bench_scaling.png)\n\n")
+    return o
 
-    # Levers
-    o.append("## Levers, measured one at a time\n\n")
-    o.append(plan.get("levers_intro", "") + "\n\n")
-    for lv in plan.get("levers", []):
-        o.append(f"### {lv['name']}\n\n{lv['question']}\n\n")
-        present = [rid for rid in lv["rows"] if rid in rows]
-        if not lv["rows"]:
-            if lv.get("note"):
-                o.append(lv["note"] + "\n\n")
-            continue
-        if not present:
-            o.append("_not run yet: `scripts/bench.sh --levers`_\n\n")
-            continue
-        o.append(TABLE_HEAD)
+
+def _lever(rows: dict, lv: dict) -> list[str]:
+    """One lever: its question, its rows' tables, the measured effect of each pair and the reading."""
+    o = [f"### {lv['name']}\n\n{lv['question']}\n\n"]
+    present = [rid for rid in lv["rows"] if rid in rows]
+    if not lv["rows"]:
+        return o + ([lv["note"] + "\n\n"] if lv.get("note") else [])
+    if not present:
+        return o + ["_not run yet: `scripts/bench.sh --levers`_\n\n"]
+    o += [TABLE_HEAD] + [table_line(rid, rows[rid]) for rid in present] + ["\n"]
+    if lv.get("view") and any(rows[rid]["row"].get("view") for rid in present):
+        o.append("| row | viewer CPU (% of one core) | viewer RSS MB | frames/s received |\n|---|---|---|---|\n")
         for rid in present:
-            o.append(table_line(rid, rows[rid]))
+            a = rows[rid]["agg"]
+            if rows[rid]["row"].get("view"):
+                o.append(f"| `{rid}` | {f_num(a.get('view_cpu_pct'))} | {f_num(a.get('view_rss_mb'))} "
+                         f"| {f_num(a.get('view_fps'))} |\n")
         o.append("\n")
-        if lv.get("view") and any(rows[rid]["row"].get("view") for rid in present):
-            o.append("| row | viewer CPU (% of one core) | viewer RSS MB | frames/s received |\n|---|---|---|---|\n")
-            for rid in present:
-                a = rows[rid]["agg"]
-                if rows[rid]["row"].get("view"):
-                    o.append(f"| `{rid}` | {f_num(a.get('view_cpu_pct'))} | {f_num(a.get('view_rss_mb'))} "
-                             f"| {f_num(a.get('view_fps'))} |\n")
-            o.append("\n")
-        extra = lv.get("extra")
-        if extra:
-            o.append("| row | UDP datagrams in/s | UDP out/s | receive-buffer drops/s | our CPU (% of one core) "
-                     "| datagrams received from launch to all hear all (or to the command) |\n|---|---|---|---|---|---|\n")
-            for rid in present:
-                a = rows[rid]["agg"]
-                o.append(f"| `{rid}` | {f_num(a.get('udp_in_per_s'), '{:.0f}')} | {f_num(a.get('udp_out_per_s'), '{:.0f}')} "
-                         f"| {f_num(a.get('udp_rcvbuf_errors_per_s'), '{:.0f}')} | {f_num(a.get('ours_cpu_pct'), '{:.0f}')} "
-                         f"| {_disc(a)} |\n")
-            o.append("\n")
-        effects = [pair_effect(rows, a, b) for a, b in lv.get("pairs", []) if a in rows and b in rows]
-        if effects:
-            o.append("Measured effect:\n\n" + "".join(f"- {e}\n" for e in effects) + "\n")
-        if lv.get("note"):
-            o.append(lv["note"] + "\n\n")
+    if lv.get("extra"):
+        o.append("| row | UDP datagrams in/s | UDP out/s | receive-buffer drops/s | our CPU (% of one core) "
+                 "| datagrams received from launch to all hear all (or to the command) |\n|---|---|---|---|---|---|\n")
+        for rid in present:
+            a = rows[rid]["agg"]
+            o.append(f"| `{rid}` | {f_num(a.get('udp_in_per_s'), '{:.0f}')} | {f_num(a.get('udp_out_per_s'), '{:.0f}')} "
+                     f"| {f_num(a.get('udp_rcvbuf_errors_per_s'), '{:.0f}')} | {f_num(a.get('ours_cpu_pct'), '{:.0f}')} "
+                     f"| {_disc(a)} |\n")
+        o.append("\n")
+    effects = [pair_effect(rows, a, b) for a, b in lv.get("pairs", []) if a in rows and b in rows]
+    if effects:
+        o.append("Measured effect:\n\n" + "".join(f"- {e}\n" for e in effects) + "\n")
+    if lv.get("note"):
+        o.append(lv["note"] + "\n\n")
+    return o
 
-    # Experiments
+
+def _levers(rows: dict, plan: dict) -> list[str]:
+    """The levers, then the ad-hoc rows (--row) under 'Other measured rows'."""
+    o = ["## Levers, measured one at a time\n\n", plan.get("levers_intro", "") + "\n\n"]
+    for lv in plan.get("levers", []):
+        o += _lever(rows, lv)
     exp = [rid for rid, e in rows.items() if e["row"].get("section") == "experiment"]
     if exp:
         o.append("### Other measured rows\n\n" + TABLE_HEAD)
-        for rid in sorted(exp):
-            o.append(table_line(rid, rows[rid]))
+        o += [table_line(rid, rows[rid]) for rid in sorted(exp)]
         o.append("\n")
+    return o
 
-    o.append(sim_section(store.get("sim") or {}))
 
-    # Rerun commands
-    o.append("## Rerun a row\n\n| row | measured | command |\n|---|---|---|\n")
+def _rerun_and_method(store: dict, plan: dict) -> list[str]:
+    """The command that reruns each row, the method and the transport configurations."""
+    rows = store.get("rows", {})
+    o = ["## Rerun a row\n\n| row | measured | command |\n|---|---|---|\n"]
     for rid in sorted(rows):
         e = rows[rid]
         o.append(f"| `{rid}` | {e.get('when', '-')}, `{e.get('commit', '-')}` | `{e.get('command', '-')}` |\n")
@@ -532,34 +563,32 @@ def render(store: dict, path: Path, plan: dict) -> None:
         for r in sim["rows"]:
             o.append(f"| {sim_label(r)} | {sim.get('when', '-')}, `{sim.get('commit', '-')}` | `{r['command']}` |\n")
     o.append("\n")
-
-    # Method
     o.append("## Method\n\n" + plan.get("method", "") + "\n")
     o.append("\n### Transport configurations\n\n| config | what it sets |\n|---|---|\n")
-    for name, about in plan.get("presets", {}).items():
-        o.append(f"| `{name}` | {about} |\n")
+    o += [f"| `{name}` | {about} |\n" for name, about in plan.get("presets", {}).items()]
     o.append("\n")
+    return o
+
+
+def render(store: dict, path: Path, plan: dict) -> None:
+    """Writes the report of `store` (a results file's contents) to `path`; plan: report_plan(store)."""
+    rows = store.get("rows", {})
+    o = (_header(store, plan) + _targets(store, plan) + _main_table(rows, plan) + _levers(rows, plan)
+         + [sim_section(store.get("sim") or {})] + _rerun_and_method(store, plan))
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text("".join(o))
 
 
 def main(argv=None) -> int:
-    import argparse
-    import sys
-    import time
-    root = Path(__file__).resolve().parent.parent
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0],
                                  usage="bench/bench_report.py [RESULTS_JSON] [--out MD | --write-docs]")
-    ap.add_argument("results", nargs="?", default=str(root / "docs" / "figures" / "bench_results.json"))
+    ap.add_argument("results", nargs="?", default=str(ROOT / "docs" / "figures" / "bench_results.json"))
     ap.add_argument("--out", help="the report to write (default runs/<UTC time>-bench/BENCHMARKS.md)")
     ap.add_argument("--write-docs", action="store_true", help="rewrite the committed docs/BENCHMARKS.md")
     a = ap.parse_args(argv)
-    out = Path(a.out) if a.out else (root / "docs" / "BENCHMARKS.md" if a.write_docs else
-                                     root / "runs" / (time.strftime("%Y%m%dT%H%M%SZ", time.gmtime()) + "-bench")
+    out = Path(a.out) if a.out else (ROOT / "docs" / "BENCHMARKS.md" if a.write_docs else
+                                     ROOT / "runs" / (time.strftime("%Y%m%dT%H%M%SZ", time.gmtime()) + "-bench")
                                      / "BENCHMARKS.md")
-    sys.dont_write_bytecode = True
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from bench import report_plan  # noqa: E402 (same folder)
     store = json.loads(Path(a.results).read_text())
     out.parent.mkdir(parents=True, exist_ok=True)
     render(store, out, report_plan(store))

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Analysis of a reproduction's run folder (what scripts/paper/run.py recorded): per-step series,
-plateaus, the acceptance checks of issue 4. Imported by report.py and scripts/plot_paper.py; run on its
-own it prints the acceptance checks, one JSON object per line.
+plateaus, the acceptance checks (processes against the simulator). Imported by report.py and
+scripts/plot_paper.py; run on its own it prints the acceptance checks, one JSON object per line.
 
   scripts/paper/analyse.py --data DIR
 
@@ -240,7 +240,8 @@ def shape_rows(r):
 
 
 def acceptance(data):
-    """Issue 4's checks: [(shape, metric, processes, simulator, ok, consistent with the async model)].
+    """The acceptance checks, processes against the simulator: [(shape, metric, processes, simulator, ok,
+    consistent with the async model)].
     The line's settling step is left out: the line never settles (it keeps growing), so the rule's
     plateau is a moving target and a step found by it is an accident of when the gap CV dips."""
     acc = []

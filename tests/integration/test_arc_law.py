@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""The arc law on agent processes (issue 5): a polar star and a polygon formed by 12 processes through
-the launcher reach the law's plateau criteria (on the curve, evenly spaced by arc length)."""
+"""The arc law on agent processes: a polar star and a polygon formed by 12 processes through the
+launcher meet the law's acceptance criteria at the plateau (on the curve, evenly spaced by arc length)."""
 import argparse
 import glob
 import os

@@ -107,9 +107,9 @@ class CommandsTest(harness.SwarmTestCase):
         self.assertEqual(sup.wait(20), 0, "bad console lines do not change the exit status")
 
     def test_equation_shapes_from_the_console(self):
-        # Issue 5's acceptance at the console of a running swarm (arc law, 10 processes): a polar star
-        # and a polygon are formed exactly and evenly; a malformed expression is refused with a message
-        # and the swarm keeps the shape it has.
+        # The arc law's acceptance criteria at the console of a running swarm (arc law, 10 processes): a
+        # polar star and a polygon are formed exactly and evenly; a malformed expression is refused with a
+        # message and the swarm keeps the shape it has.
         sup, agents = self.converged_swarm("arc_circle")
 
         def formed(epoch, size):

@@ -107,8 +107,9 @@ class LauncherTest(harness.SwarmTestCase):
 
     def test_readme_main_command(self):
         # The README's main job, as written there (12 agent processes, the paper's circle, until
-        # converged), with --json for the summary. Issue 3's acceptance: converged, shape error mean
-        # within 0.02 of the simulator's plateau for the same scenario and starts, gap CV <= 0.10.
+        # converged), with --json for the summary. The acceptance criterion of the swarm against the
+        # simulator: converged, shape error mean within 0.02 of the simulator's plateau for the same
+        # scenario and starts, gap CV <= 0.10.
         sim = self.run_sim(harness.scenario("circle"), ["--steps", "500"])
         p = self.launch(["-n", "12", "--scenario", "circle", "--json"])
         self.assertEqual(p.wait(150), 0, "launcher exit status (0: converged)")

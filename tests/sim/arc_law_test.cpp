@@ -1,4 +1,4 @@
-// The arc law's plateau criteria (issue 5) for every shape and swarm size, in the simulator.
+// The arc law's acceptance criteria at the plateau, for every shape and swarm size, in the simulator.
 #include <catch2/catch.hpp>
 #include <algorithm>
 #include <cmath>
