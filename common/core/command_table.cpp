@@ -222,11 +222,4 @@ const Param<Command>* find_wire(std::string_view wire) {
   return nullptr;
 }
 
-const Range& wire_range(std::string_view wire) {
-  const Param<Command>* p = find_wire(wire);
-  if (p == nullptr)
-    throw std::logic_error("no ShapeCommand field '" + std::string(wire) + "' in the command table");
-  return p->range;
-}
-
 }  // namespace shapeform::core::params

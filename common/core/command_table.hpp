@@ -1,7 +1,8 @@
 #pragma once
 /// The command table: every field of core::Command declared once (config key, type, unit, range,
 /// description and its ShapeCommand field names), in the parameter machinery of params.hpp. The
-/// config loader, the console's bounds and the command's wire conversion (dds/convert) read it.
+/// config loader, the console's bounds and the command's wire conversion read it (dds/convert_command,
+/// which binds each field name to the generated message's accessors and loops over the table).
 #include <string_view>
 #include <vector>
 
@@ -18,7 +19,5 @@ const std::vector<Param<Command>>& command_table();
 const Param<Command>* find_key(std::string_view key);
 /// The entry holding ShapeCommand field `wire` ("dt", "cx", "path_radius"), or null.
 const Param<Command>* find_wire(std::string_view wire);
-/// The range of ShapeCommand field `wire`; throws std::logic_error for a field not in the table.
-const Range& wire_range(std::string_view wire);
 
 }  // namespace shapeform::core::params

@@ -7,12 +7,7 @@
 #include <utility>
 #include <vector>
 
-#include "core/envelope.hpp"
 #include "core/metric_table.hpp"
-#include "core/command_table.hpp"
-#include "core/enum_names.hpp"
-#include "core/params.hpp"
-#include "shapes/shapes.hpp"
 #include "util/text.hpp"
 
 namespace shapeform::dds {
@@ -27,12 +22,6 @@ class Problems {
     if (std::isfinite(v)) return true;
     add(field, "must be finite, got " + util::format_g10(v));
     return false;
-  }
-  /// A ShapeCommand number: finite and within the range the command table declares for `field`.
-  void ranged(const char* field, double v) {
-    if (!finite(field, v)) return;
-    const core::params::Range& range = core::params::wire_range(field);
-    if (!range.contains(v)) add(field, range.text() + ", got " + util::format_g10(v));
   }
   /// |v| (or what `what` names) at most kStateLimit: the bound of every received position and speed.
   void within_limit(const std::string& field, const std::string& what, double v) {
@@ -54,15 +43,6 @@ class Problems {
   std::vector<std::string> list_;
 };
 
-/// A received string as a message quotes it: at most util::kQuoteMax characters of it.
-std::string quoted(const std::string& s) { return "\"" + util::excerpt(s) + "\""; }
-
-/// " (line|circle|...)": the names a ShapeCommand enumeration field accepts.
-template <class E, std::size_t N>
-std::string accepted(const core::params::Name<E> (&table)[N]) {
-  return " (" + core::params::join(core::params::names(table), "|") + ")";
-}
-
 /// A received metric: negative (-1) or non-finite values are undefined.
 template <class Optional, class T>
 Optional defined_or_null(T v) {
@@ -71,195 +51,6 @@ Optional defined_or_null(T v) {
 }
 
 }  // namespace
-
-msg::ShapeCommand to_msg(const core::Command& cmd, const CommandId& id, const std::string& issuer_name) {
-  msg::ShapeCommand m;
-  m.epoch(id.epoch);
-  m.issuer(id.issuer.prefix);
-  m.issuer_name(issuer_name);
-  const core::ShapeSpec& s = cmd.shape;
-  m.shape_kind(std::string(core::to_string(s.kind)));
-  m.m(s.m);
-  m.c(s.c);
-  m.r0(s.r0);
-  m.a(s.a);
-  m.b(s.b);
-  m.cx(s.centre.x());
-  m.cy(s.centre.y());
-  m.rotation(s.rotation);
-  m.scale(s.scale);
-  m.r_expr(s.r_expr);
-  m.x_expr(s.x_expr);
-  m.y_expr(s.y_expr);
-  m.f_expr(s.f_expr);
-  std::vector<double> flat;
-  flat.reserve(2 * s.vertices.size());
-  for (const core::Vec2& v : s.vertices) {
-    flat.push_back(v.x());
-    flat.push_back(v.y());
-  }
-  m.vertices(std::move(flat));
-  m.closed(s.closed);
-
-  const core::Tracking& t = cmd.tracking;
-  m.tracking(t.enabled);
-  m.path_kind(std::string(core::to_string(t.path.kind)));
-  m.path_px(t.path.point.x());
-  m.path_py(t.path.point.y());
-  m.path_vx(t.path.velocity.x());
-  m.path_vy(t.path.velocity.y());
-  m.path_ox(t.path.origin.x());
-  m.path_oy(t.path.origin.y());
-  m.path_radius(t.path.radius);
-  m.path_period(t.path.period);
-  m.path_phase(t.path.phase);
-  m.feedforward(t.feedforward);
-
-  m.k1(cmd.gains.k1);
-  m.k2(cmd.gains.k2);
-  m.sigma(cmd.gains.sigma);
-  m.beta(cmd.gains.beta);
-  m.r(cmd.gains.r);
-  m.max_speed(cmd.max_speed);
-
-  m.integrator(std::string(core::to_string(cmd.integrator)));
-  m.dt(cmd.dt);
-  m.law(std::string(core::to_string(cmd.law)));
-  m.k_normal(cmd.arc.k_normal);
-  m.k_tangent(cmd.arc.k_tangent);
-  m.spacing(cmd.arc.spacing);
-  m.hold(cmd.hold);
-  m.workspace(cmd.workspace);
-  return m;
-}
-
-bool from_msg(const msg::ShapeCommand& m, core::CompiledCommand& out, std::string& error) {
-  Problems p("command");
-  core::Command c;
-
-  if (!core::parse_shape_kind(m.shape_kind(), c.shape.kind)) {
-    p.add("shape_kind", "unknown shape " + quoted(m.shape_kind()) +
-                            accepted(core::params::kShapeKindNames));
-  }
-  p.ranged("m", m.m());
-  p.ranged("c", m.c());
-  p.ranged("r0", m.r0());
-  p.ranged("a", m.a());
-  p.ranged("b", m.b());
-  p.ranged("cx", m.cx());
-  p.ranged("cy", m.cy());
-  c.shape.m = m.m();
-  c.shape.c = m.c();
-  c.shape.r0 = m.r0();
-  c.shape.a = m.a();
-  c.shape.b = m.b();
-  c.shape.centre = core::Vec2(m.cx(), m.cy());
-  p.ranged("rotation", m.rotation());
-  p.ranged("scale", m.scale());
-  c.shape.rotation = m.rotation();
-  c.shape.scale = m.scale();
-  c.shape.r_expr = m.r_expr();
-  c.shape.x_expr = m.x_expr();
-  c.shape.y_expr = m.y_expr();
-  c.shape.f_expr = m.f_expr();
-  const std::vector<double>& flat = m.vertices();
-  if (flat.size() % 2 != 0) {
-    p.add("vertices", "must hold x, y pairs (an even count), got " + std::to_string(flat.size()) +
-                          " numbers");
-  } else {
-    for (std::size_t i = 0; i < flat.size(); ++i) p.finite("vertices[" + std::to_string(i) + "]", flat[i]);
-    c.shape.vertices.reserve(flat.size() / 2);
-    for (std::size_t i = 0; i + 1 < flat.size(); i += 2)
-      c.shape.vertices.emplace_back(flat[i], flat[i + 1]);
-  }
-  c.shape.closed = m.closed();
-
-  c.tracking.enabled = m.tracking();
-  if (!core::parse_path_kind(m.path_kind(), c.tracking.path.kind)) {
-    p.add("path_kind", "unknown path " + quoted(m.path_kind()) + accepted(core::params::kPathKindNames));
-  }
-  p.ranged("path_px", m.path_px());
-  p.ranged("path_py", m.path_py());
-  p.ranged("path_vx", m.path_vx());
-  p.ranged("path_vy", m.path_vy());
-  p.ranged("path_ox", m.path_ox());
-  p.ranged("path_oy", m.path_oy());
-  p.ranged("path_radius", m.path_radius());
-  p.ranged("path_period", m.path_period());
-  p.ranged("path_phase", m.path_phase());
-  c.tracking.path.point = core::Vec2(m.path_px(), m.path_py());
-  c.tracking.path.velocity = core::Vec2(m.path_vx(), m.path_vy());
-  c.tracking.path.origin = core::Vec2(m.path_ox(), m.path_oy());
-  c.tracking.path.radius = m.path_radius();
-  c.tracking.path.period = m.path_period();
-  c.tracking.path.phase = m.path_phase();
-  c.tracking.feedforward = m.feedforward();
-
-  p.ranged("k1", m.k1());
-  p.ranged("k2", m.k2());
-  p.ranged("sigma", m.sigma());
-  p.ranged("beta", m.beta());
-  p.ranged("r", m.r());
-  p.ranged("max_speed", m.max_speed());
-  c.gains.k1 = m.k1();
-  c.gains.k2 = m.k2();
-  c.gains.sigma = m.sigma();
-  c.gains.beta = m.beta();
-  c.gains.r = m.r();
-  c.max_speed = m.max_speed();
-
-  if (!core::parse_integrator(m.integrator(), c.integrator)) {
-    p.add("integrator", "unknown integrator " + quoted(m.integrator()) + accepted(core::params::kIntegratorNames));
-  }
-  p.ranged("dt", m.dt());
-  c.dt = m.dt();
-  if (!core::parse_law(m.law(), c.law)) p.add("law", "unknown law " + quoted(m.law()) + accepted(core::params::kLawNames));
-  p.ranged("k_normal", m.k_normal());
-  p.ranged("k_tangent", m.k_tangent());
-  p.ranged("spacing", m.spacing());
-  c.arc.k_normal = m.k_normal();
-  c.arc.k_tangent = m.k_tangent();
-  c.arc.spacing = m.spacing();
-  c.hold = m.hold();
-  p.ranged("workspace", m.workspace());
-  c.workspace = m.workspace();
-
-  if (!p.empty()) {
-    error = p.joined();
-    return false;
-  }
-  // Only a well-formed command is compiled: a shape that cannot be built is refused as a whole.
-  core::CompiledCommand compiled;
-  try {
-    compiled = shapes::compile(c);
-  } catch (const core::ShapeError& e) {
-    error = "command: " + util::excerpt(e.what(), util::kLineMax);  // it quotes the received expression
-    return false;
-  }
-  // A command that could carry the swarm out of its workspace is refused as a whole, too.
-  for (const core::EnvelopeProblem& e : core::envelope_problems(compiled)) p.add(e.wire, e.text);
-  if (!p.empty()) {
-    error = p.joined();
-    return false;
-  }
-  out = std::move(compiled);
-  return true;
-}
-
-bool from_msg(const msg::ShapeCommand& m, const SourceId& source, CommandSample& out, std::string& error) {
-  core::CompiledCommand cmd;
-  const bool ok = from_msg(m, cmd, error);
-  if (m.epoch() == 0) error = "command.epoch: must be >= 1, got 0" + (ok ? std::string() : "; " + error);
-  if (!ok || m.epoch() == 0) return false;
-  out.command = std::move(cmd);
-  out.id.epoch = m.epoch();
-  out.id.issuer.prefix = m.issuer();
-  if (!out.id.issuer.known()) out.id.issuer = source;
-  out.issuer_name.clear();
-  for (const char ch : m.issuer_name().substr(0, kIssuerNameMax))
-    out.issuer_name += (static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f) ? '?' : ch;
-  return true;
-}
 
 namespace {
 /// Whether a state passes every check of valid_state, decided without building any message: a
