@@ -1,7 +1,5 @@
 #include "command_table.hpp"
 
-#include <stdexcept>
-
 #include "envelope.hpp"
 #include "enum_names.hpp"
 
