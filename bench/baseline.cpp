@@ -36,7 +36,7 @@
 
 #include "dds/convert.hpp"
 #include "dds/participant.hpp"
-#include "dds/topics.hpp"
+#include "dds/topic_qos.hpp"
 #include "shapeform/msg/AgentStateBatchPubSubTypes.h"
 #include "shapeform/msg/AgentStatePubSubTypes.h"
 #include "shapeform/msg/AgentStatusPubSubTypes.h"

@@ -13,6 +13,8 @@
 
 #include "dds/library_log.hpp"
 #include "dds/participant.hpp"
+#include "dds/topic_qos.hpp"
+#include "shapeform/msg/all_pubsub_types.h"  // every idl/*.idl's PubSubType, generated
 #include "util/log.hpp"
 
 namespace shapeform::dds {
@@ -68,17 +70,25 @@ std::vector<SourceId> RefusedWatch::take() {
 
 namespace {
 
-template <class Msg>
-void register_type(fdds::DomainParticipant* p, const std::string& node) {
-  fdds::TypeSupport type(new typename MsgTraits<Msg>::PubSubType());
+/// Registers the type of topic id (`pubsub`, taken over) on p; checks its generated name is the table's.
+void register_type(fdds::DomainParticipant* p, fdds::TopicDataType* pubsub, TopicId id, const std::string& node) {
+  fdds::TypeSupport type(pubsub);
   if (!detail::is_ok(type.register_type(p))) {
     throw std::runtime_error("register_type failed for " + type.get_type_name() + " (node " + node + ")");
   }
-  const char* expected = type_name(MsgTraits<Msg>::topic);
+  const char* expected = type_name(id);
   if (type.get_type_name() != expected) {
     throw std::logic_error("dds: generated type name " + type.get_type_name() +
                            " differs from the topic table's " + expected);
   }
+}
+
+/// Every topic's type, registered on p.
+void register_types(fdds::DomainParticipant* p, const std::string& node) {
+#define SHAPEFORM_REGISTER_TYPE(Id, name, Type, ...) \
+  register_type(p, new msg::Type##PubSubType(), TopicId::Id, node);
+  SHAPEFORM_TOPICS(SHAPEFORM_REGISTER_TYPE)
+#undef SHAPEFORM_REGISTER_TYPE
 }
 
 }  // namespace
@@ -97,12 +107,7 @@ void Node::open() {
   const std::string& name = e.name;
   e.participant = create_participant(e.transport, name, e.refused.get());
 
-  register_type<msg::AgentState>(e.participant, name);
-  register_type<msg::AgentStateBatch>(e.participant, name);
-  register_type<msg::ShapeCommand>(e.participant, name);
-  register_type<msg::TrackingTarget>(e.participant, name);
-  register_type<msg::SwarmMetrics>(e.participant, name);
-  register_type<msg::AgentStatus>(e.participant, name);
+  register_types(e.participant, name);
 
   // Constructed QoS (not *_QOS_DEFAULT, which XML profiles could change).
   e.publisher = e.participant->create_publisher(fdds::PublisherQos());

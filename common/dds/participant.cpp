@@ -18,7 +18,7 @@
 
 #include "dds/library_log.hpp"
 #include "dds/locators.hpp"
-#include "dds/topics.hpp"
+#include "dds/topic_qos.hpp"
 #include "util/ipv4.hpp"
 
 namespace shapeform::dds {
