@@ -35,7 +35,7 @@
 #include <fastdds/dds/topic/qos/TopicQos.hpp>
 
 #include "dds/convert.hpp"
-#include "dds/participant.hpp"
+#include "dds/participant_factory.hpp"
 #include "dds/topic_qos.hpp"
 #include "shapeform/msg/AgentStateBatchPubSubTypes.h"
 #include "shapeform/msg/AgentStatePubSubTypes.h"

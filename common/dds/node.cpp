@@ -12,7 +12,7 @@
 #include <fastdds/dds/topic/qos/TopicQos.hpp>
 
 #include "dds/library_log.hpp"
-#include "dds/participant.hpp"
+#include "dds/participant_factory.hpp"
 #include "dds/topic_qos.hpp"
 #include "shapeform/msg/all_pubsub_types.h"  // every idl/*.idl's PubSubType, generated
 #include "util/log.hpp"
