@@ -23,6 +23,7 @@
 #include "dds/convert.hpp"
 #include "dds/discovery.hpp"
 #include "dds/node.hpp"
+#include "dds/node_entities.hpp"
 #include "dds/participant_factory.hpp"
 #include "dds/stall.hpp"
 #include "dds/state_input.hpp"
