@@ -9,7 +9,7 @@
 namespace shapeform::tools {
 namespace {
 
-/// The text of the file, or nullopt-like false when it cannot be read.
+/// Reads the whole file into text; false when it cannot be read.
 bool read_file(const std::string& path, std::string& text) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return false;
