@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
 """The layering rule of docs/ARCHITECTURE.md, checked on the source: which folder's C++ may include
-which of the project's folders. A new include that crosses a layer fails this test; change the table
-here and in docs/ARCHITECTURE.md together when a layer really moves.
+which of the project's folders, which third-party headers it must not use, that no headers include
+each other in a circle, and that the processes reach no Fast DDS header through the project's headers
+either. A new include that crosses a layer fails this test; change the table here and in
+docs/ARCHITECTURE.md together when a layer really moves.
 
 Usage: layers_test.py SOURCE_DIR
 """
