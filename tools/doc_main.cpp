@@ -51,9 +51,10 @@ int update(const DocProgram& program, const std::string& path, bool check) {
 }  // namespace
 
 int doc_main(int argc, char** argv, const DocProgram& program) {
-  const std::string usage = "usage: " + program.name + " [--check] FILE\n" + program.files +
-                            "  --check    change nothing; exit 1 when FILE differs from what would be generated\n"
-                            "  --version  print the program's version and exit\n";
+  const std::string usage =
+      "usage: " + program.name + " [--check] FILE\n" + program.files +
+      "  --check    change nothing; exit 1 when FILE differs from what would be generated\n"
+      "  --version  print the program's version and exit\n";
   bool check = false;
   std::string path;
   for (int i = 1; i < argc; ++i) {

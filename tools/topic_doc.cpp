@@ -38,7 +38,8 @@ std::string access_cell(unsigned role, unsigned dds::TopicInfo::*bits) {
 
 /// One `echo '<KIND><topics>...</topics></KIND>'` line of rules(), or nothing without a topic.
 std::string rule_line(unsigned role, unsigned dds::TopicInfo::*bits, const char* kind) {
-  const std::string topics = topics_of(role, bits, [](const std::string& name) { return "<topic>" + name + "</topic>"; });
+  const std::string topics =
+      topics_of(role, bits, [](const std::string& name) { return "<topic>" + name + "</topic>"; });
   if (topics.empty()) return "";
   return std::string("      echo '<") + kind + "><topics>" + topics + "</topics></" + kind + ">'\n";
 }
@@ -49,8 +50,8 @@ std::string topics_markdown() {
   std::string out = "| topic | type | QoS | publisher | rate |\n|---|---|---|---|---|\n";
   for (const dds::TopicInfo& t : dds::kTopicTable) {
     const std::string key = t.key[0] != '\0' ? " (key " + code(t.key) + ")" : "";
-    out += "| " + code(t.name) + " | " + code(t.message) + key + " | " + qos(t) + " | " + t.publisher_doc + " | " +
-           t.rate_doc + " |\n";
+    out += "| " + code(t.name) + " | " + code(t.message) + key + " | " + qos(t) + " | " + t.publisher_doc +
+           " | " + t.rate_doc + " |\n";
   }
   return out;
 }
@@ -67,19 +68,22 @@ std::string access_markdown() {
 std::string keystore_rules() {
   std::string out = "rules() { # NAME -> the allow rules of its role\n  case \"$1\" in\n";
   for (const dds::RoleInfo& r : dds::kRoles) {
-    out += std::string("    ") + r.enclave_glob + ")\n" + rule_line(r.bit, &dds::TopicInfo::publishers, "publish") +
+    out += std::string("    ") + r.enclave_glob + ")\n" +
+           rule_line(r.bit, &dds::TopicInfo::publishers, "publish") +
            rule_line(r.bit, &dds::TopicInfo::readers, "subscribe") + "      ;;\n";
   }
   return out + "  esac\n}\n";
 }
 
 std::string regenerate_topic_doc(const std::string& text) {
-  return util::regenerate_blocks(text, "BEGIN GENERATED topics: ", "END GENERATED", [](const std::string& section) {
-    if (section == "table") return topics_markdown();
-    if (section == "access") return access_markdown();
-    if (section == "permissions") return keystore_rules();
-    throw std::invalid_argument("unknown section '" + section + "' (expected table, access or permissions)");
-  });
+  return util::regenerate_blocks(text, "BEGIN GENERATED topics: ", "END GENERATED",
+                                 [](const std::string& section) {
+                                   if (section == "table") return topics_markdown();
+                                   if (section == "access") return access_markdown();
+                                   if (section == "permissions") return keystore_rules();
+                                   throw std::invalid_argument("unknown section '" + section +
+                                                               "' (expected table, access or permissions)");
+                                 });
 }
 
 }  // namespace shapeform::tools

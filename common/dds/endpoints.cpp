@@ -66,8 +66,7 @@ class Mailbox final : public fdds::DataReaderListener {
   /// A writer that left (deleted, or its participant gone or lost): every instance it was the last to
   /// publish is handed out as NoWriters. Fast DDS 2.9 sends no such sample itself, so without this a
   /// peer whose dispose was lost (best effort) would stay until the application's timeout.
-  void on_subscription_matched(fdds::DataReader*,
-                               const fdds::SubscriptionMatchedStatus& status) override {
+  void on_subscription_matched(fdds::DataReader*, const fdds::SubscriptionMatchedStatus& status) override {
     if constexpr (MsgTraits<Msg>::keyed) {
       if (status.current_count_change >= 0) return;
       const std::int64_t now = util::steady_ns();
@@ -78,8 +77,8 @@ class Mailbox final : public fdds::DataReaderListener {
           ++overflowed_;
           continue;
         }
-        pending_.push_back(Received<Msg>{Msg{}, now, false, InstanceState::NoWriters, inst.key,
-                                         source_of(inst.writer)});
+        pending_.push_back(
+            Received<Msg>{Msg{}, now, false, InstanceState::NoWriters, inst.key, source_of(inst.writer)});
       }
     }
   }
@@ -145,7 +144,8 @@ bool Writer<Msg>::write(const Msg& m) {
 template <class Msg>
 bool Writer<Msg>::dispose_instance(const Msg& m) {
   const auto e = entities_.lock();
-  return e && get() != nullptr && detail::is_ok(slot_->writer->dispose(const_cast<Msg*>(&m), fdds::HANDLE_NIL));
+  return e && get() != nullptr &&
+         detail::is_ok(slot_->writer->dispose(const_cast<Msg*>(&m), fdds::HANDLE_NIL));
 }
 
 template <class Msg>
@@ -249,7 +249,8 @@ void Reader<Msg>::reset() noexcept {
 template <class Msg>
 Writer<Msg> Node::writer(TopicId id) {
   check_type(id, MsgTraits<Msg>::topic);
-  auto slot = std::make_shared<detail::WriterSlot>(detail::WriterSlot{id, detail::create_writer(*entities_, id)});
+  auto slot =
+      std::make_shared<detail::WriterSlot>(detail::WriterSlot{id, detail::create_writer(*entities_, id)});
   entities_->writers.push_back(slot);
   return Writer<Msg>(entities_, std::move(slot));
 }
@@ -267,10 +268,10 @@ Reader<Msg> Node::reader(TopicId id, std::size_t mailbox_capacity) {
 }
 
 // One of each for every row of the topic table.
-#define SHAPEFORM_INSTANTIATE_ENDPOINTS(Id, name, Type, ...)                            \
-  template class Writer<msg::Type>;                                                     \
-  template class Reader<msg::Type>;                                                     \
-  template Writer<msg::Type> Node::writer<msg::Type>(TopicId);                          \
+#define SHAPEFORM_INSTANTIATE_ENDPOINTS(Id, name, Type, ...)   \
+  template class Writer<msg::Type>;                            \
+  template class Reader<msg::Type>;                            \
+  template Writer<msg::Type> Node::writer<msg::Type>(TopicId); \
   template Reader<msg::Type> Node::reader<msg::Type>(TopicId, std::size_t);
 SHAPEFORM_TOPICS(SHAPEFORM_INSTANTIATE_ENDPOINTS)
 #undef SHAPEFORM_INSTANTIATE_ENDPOINTS

@@ -17,14 +17,12 @@ namespace shapeform::dds {
 template <class Msg>
 struct MsgTraits;
 
-#define SHAPEFORM_MSG_TRAITS(Id, name, Type, reliability, durability, key_column, ...) \
-  template <>                                                                           \
-  struct MsgTraits<msg::Type> {                                                         \
-    static constexpr TopicId topic = TopicId::Id;                                       \
-    static constexpr bool keyed = SHAPEFORM_TOPIC_KEY_NAME(key_column)[0] != '\0';      \
-    static std::int32_t key(const msg::Type& m) {                                       \
-      return SHAPEFORM_TOPIC_KEY_GETTER(key_column)(m);                                 \
-    }                                                                                   \
+#define SHAPEFORM_MSG_TRAITS(Id, name, Type, reliability, durability, key_column, ...)                \
+  template <>                                                                                         \
+  struct MsgTraits<msg::Type> {                                                                       \
+    static constexpr TopicId topic = TopicId::Id;                                                     \
+    static constexpr bool keyed = SHAPEFORM_TOPIC_KEY_NAME(key_column)[0] != '\0';                    \
+    static std::int32_t key(const msg::Type& m) { return SHAPEFORM_TOPIC_KEY_GETTER(key_column)(m); } \
   };
 SHAPEFORM_TOPICS(SHAPEFORM_MSG_TRAITS)
 #undef SHAPEFORM_MSG_TRAITS

@@ -8,7 +8,8 @@ namespace {
 namespace fdds = eprosima::fastdds::dds;
 
 fdds::ReliabilityQosPolicyKind reliability(const TopicInfo& t) {
-  return t.reliability == Reliability::Reliable ? fdds::RELIABLE_RELIABILITY_QOS : fdds::BEST_EFFORT_RELIABILITY_QOS;
+  return t.reliability == Reliability::Reliable ? fdds::RELIABLE_RELIABILITY_QOS
+                                                : fdds::BEST_EFFORT_RELIABILITY_QOS;
 }
 
 fdds::DurabilityQosPolicyKind durability(const TopicInfo& t) {

@@ -49,8 +49,8 @@ struct TopicInfo {
   const char* type;     ///< "shapeform::msg::AgentState": the registered type name
   Reliability reliability;
   Durability durability;
-  const char* key;  ///< the key field ("id"), "" for an unkeyed topic
-  bool multicast;   ///< readers on the data multicast group when transport.multicast_data is set
+  const char* key;      ///< the key field ("id"), "" for an unkeyed topic
+  bool multicast;       ///< readers on the data multicast group when transport.multicast_data is set
   unsigned publishers;  ///< role bits
   unsigned readers;     ///< role bits
   const char* publisher_doc;

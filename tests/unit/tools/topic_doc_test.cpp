@@ -53,7 +53,8 @@ TEST_CASE("every IDL type has a row of the topic table and every row an IDL type
   CHECK(rows.size() == dds::kTopicTable.size());  // one row per type
 }
 
-TEST_CASE("the topic table: ids in row order, names unique, types named after their IDL struct", "[tools][topics]") {
+TEST_CASE("the topic table: ids in row order, names unique, types named after their IDL struct",
+          "[tools][topics]") {
   std::set<std::string> names;
   for (std::size_t k = 0; k < dds::kTopicTable.size(); ++k) {
     const dds::TopicInfo& t = dds::kTopicTable[k];
@@ -62,27 +63,30 @@ TEST_CASE("the topic table: ids in row order, names unique, types named after th
     CHECK(names.insert(t.name).second);
     CHECK(std::string(t.type) == "shapeform::msg::" + std::string(t.message));
     CHECK(dds::find_topic(t.name) == t.id);
-    CHECK(t.publishers != 0);  // somebody may publish it...
+    CHECK(t.publishers != 0);                      // somebody may publish it...
     CHECK((t.readers & dds::role::kViewer) != 0);  // ...and the read-only monitors may read it
   }
 }
 
 TEST_CASE("the generated tables and rules follow the rows", "[tools][topics]") {
   const std::string readme = tools::topics_markdown();
-  CHECK(readme.find("| `shapeform/state` | `AgentState` (key `id`) | best effort, volatile | ") != std::string::npos);
-  CHECK(readme.find("| `shapeform/command` | `ShapeCommand` | reliable, transient-local | ") != std::string::npos);
+  CHECK(readme.find("| `shapeform/state` | `AgentState` (key `id`) | best effort, volatile | ") !=
+        std::string::npos);
+  CHECK(readme.find("| `shapeform/command` | `ShapeCommand` | reliable, transient-local | ") !=
+        std::string::npos);
   const std::string access = tools::access_markdown();
   CHECK(access.find("| `viewer` | nothing | every topic |") != std::string::npos);
   CHECK(access.find("| `supervisor` | `shapeform/command`, `shapeform/target`, `shapeform/metrics` | ") !=
         std::string::npos);
   const std::string rules = tools::keystore_rules();
   CHECK(rules.rfind("rules() {", 0) == 0);
-  CHECK(rules.find("    viewer)\n      echo '<subscribe><topics><topic>shapeform/state</topic>") != std::string::npos);
+  CHECK(rules.find("    viewer)\n      echo '<subscribe><topics><topic>shapeform/state</topic>") !=
+        std::string::npos);
   CHECK(rules.find("<publish><topics><topic>shapeform/state</topic><topic>shapeform/state_batch</topic>"
                    "<topic>shapeform/status</topic></topics></publish>") != std::string::npos);
   const std::string doc = "x\n<!-- BEGIN GENERATED topics: access -->\nold\n<!-- END GENERATED -->\n";
-  CHECK(tools::regenerate_topic_doc(doc) == "x\n<!-- BEGIN GENERATED topics: access -->\n" + access +
-                                                "<!-- END GENERATED -->\n");
+  CHECK(tools::regenerate_topic_doc(doc) ==
+        "x\n<!-- BEGIN GENERATED topics: access -->\n" + access + "<!-- END GENERATED -->\n");
   CHECK_THROWS_AS(tools::regenerate_topic_doc("# BEGIN GENERATED topics: nope\n# END GENERATED\n"),
                   std::invalid_argument);
 }
