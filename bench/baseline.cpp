@@ -35,8 +35,8 @@
 #include <fastdds/dds/topic/qos/TopicQos.hpp>
 
 #include "dds/convert.hpp"
-#include "dds/participant.hpp"
-#include "dds/topics.hpp"
+#include "dds/participant_factory.hpp"
+#include "dds/topic_qos.hpp"
 #include "shapeform/msg/AgentStateBatchPubSubTypes.h"
 #include "shapeform/msg/AgentStatePubSubTypes.h"
 #include "shapeform/msg/AgentStatusPubSubTypes.h"

@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
 """The layering rule of docs/ARCHITECTURE.md, checked on the source: which folder's C++ may include
-which of the project's folders. A new include that crosses a layer fails this test; change the table
-here and in docs/ARCHITECTURE.md together when a layer really moves.
+which of the project's folders, which third-party headers it must not use, that no headers include
+each other in a circle, and that the processes reach no Fast DDS header through the project's headers
+either. A new include that crosses a layer fails this test; change the table here and in
+docs/ARCHITECTURE.md together when a layer really moves.
 
 Usage: layers_test.py SOURCE_DIR
 """
@@ -51,6 +53,13 @@ FORBIDDEN_LINKS = {
     "common/util": ("shapeform_", "yaml-cpp", "fastrtps"),
 }
 INCLUDE = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]', re.M)
+# The processes compile against the project's own API: no header of the project that their code includes
+# may bring in Fast DDS, directly or through other headers (node.hpp, state_input.hpp, convert.hpp,
+# topics.hpp, participant.hpp, ...). The generated messages (shapeform/msg/*.h: plain types on fastcdr)
+# are not followed. bench/baseline.cpp is the raw Fast DDS baseline the benchmark compares with.
+PROJECT_API_ONLY = ("agent", "supervisor", "view", "tools", "bench")
+RAW_FASTDDS = {"bench/baseline.cpp"}
+FASTDDS = re.compile(r"^(fastdds|fastrtps)/")
 
 
 def unit_of(path):
@@ -115,9 +124,62 @@ def include_cycles(source):
     return out
 
 
+def includes_of(path):
+    with open(path, errors="replace") as f:
+        return INCLUDE.findall(f.read())
+
+
+def resolve(source, including, target):
+    """The project file that `#include "target"` in file `including` names, or None (generated code)."""
+    for base in (os.path.dirname(including), os.path.join(source, "common"), source):
+        path = os.path.normpath(os.path.join(base, target))
+        if os.path.isfile(path):
+            return path
+    return None
+
+
+def fastdds_path(source, header, memo):
+    """[header, ..., "<fastdds/...>"]: how a project header brings in Fast DDS, or None."""
+    if header not in memo:
+        memo[header] = None  # an include circle ends here
+        for kind, target in includes_of(header):
+            if kind == "<" and FASTDDS.match(target):
+                memo[header] = [os.path.relpath(header, source), "<%s>" % target]
+                break
+            dep = resolve(source, header, target) if kind == '"' else None
+            rest = fastdds_path(source, dep, memo) if dep else None
+            if rest:
+                memo[header] = [os.path.relpath(header, source)] + rest
+                break
+    return memo[header]
+
+
+def fastdds_leaks(source):
+    """Problems: a file of a process folder that reaches Fast DDS through the project's headers (or,
+    in bench, directly)."""
+    problems, memo = [], {}
+    for folder in PROJECT_API_ONLY:
+        for root, _, files in os.walk(os.path.join(source, folder)):
+            for name in sorted(files):
+                path = os.path.join(root, name)
+                where = os.path.relpath(path, source)
+                if not name.endswith((".cpp", ".hpp", ".h")) or where in RAW_FASTDDS:
+                    continue
+                for kind, target in includes_of(path):
+                    if kind == "<" and FASTDDS.match(target) and folder not in FORBIDDEN_SYSTEM:
+                        problems.append("%s includes <%s>: %s uses the project's API only" % (where, target, folder))
+                    dep = resolve(source, path, target) if kind == '"' else None
+                    chain = fastdds_path(source, dep, memo) if dep else None
+                    if chain:
+                        problems.append("%s includes \"%s\", which brings in Fast DDS: %s" % (
+                            where, target, " -> ".join(chain)))
+    return problems
+
+
 def main(source):
     problems = ["these files include each other's headers (directly or in a circle): %s" % ", ".join(c)
                 for c in include_cycles(source)]
+    problems += fastdds_leaks(source)
     for folder, allowed in ALLOWED.items():
         own = os.path.basename(folder)
         for root, _, files in os.walk(os.path.join(source, folder)):

@@ -37,7 +37,7 @@ int echo(const config::Config& cfg, dds::TopicId id, long long count, double tim
   return 0;
 }
 
-/// The program: arguments, config, then the topic's type.
+/// The program: arguments, config, then echo() of the topic's message type.
 int run(int argc, char** argv) {
   std::string topics;
   for (const dds::TopicId id : dds::kAllTopics) topics += (topics.empty() ? "" : ", ") + std::string(dds::topic_name(id));
@@ -61,15 +61,9 @@ int run(int argc, char** argv) {
   if (!cfg) return app::kExitUsage;
   util::install_stop_signals();
   return app.run([&] {
-    switch (*id) {
-      case dds::TopicId::State: return echo<msg::AgentState>(*cfg, *id, count, timeout_s);
-      case dds::TopicId::StateBatch: return echo<msg::AgentStateBatch>(*cfg, *id, count, timeout_s);
-      case dds::TopicId::Command: return echo<msg::ShapeCommand>(*cfg, *id, count, timeout_s);
-      case dds::TopicId::Target: return echo<msg::TrackingTarget>(*cfg, *id, count, timeout_s);
-      case dds::TopicId::Metrics: return echo<msg::SwarmMetrics>(*cfg, *id, count, timeout_s);
-      case dds::TopicId::Status: return echo<msg::AgentStatus>(*cfg, *id, count, timeout_s);
-    }
-    return 1;
+    return dds::visit_topic(*id, [&](auto type) {
+      return echo<typename decltype(type)::type>(*cfg, *id, count, timeout_s);
+    });
   });
 }
 

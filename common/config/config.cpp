@@ -975,25 +975,8 @@ std::string markdown_table(const std::string& section) {
 }
 
 std::string regenerate_doc(const std::string& text) {
-  static const std::string kBegin = "<!-- BEGIN GENERATED keys: ";
-  static const std::string kEnd = "<!-- END GENERATED -->";
-  std::string out;
-  std::size_t pos = 0;
-  for (;;) {
-    const std::size_t begin = text.find(kBegin, pos);
-    if (begin == std::string::npos) break;
-    const std::size_t close = text.find("-->", begin);
-    const std::size_t line_end = text.find('\n', begin);
-    if (close == std::string::npos || line_end == std::string::npos || close > line_end)
-      throw std::invalid_argument("malformed marker: " + text.substr(begin, 60));
-    std::string section = util::trim(text.substr(begin + kBegin.size(), close - begin - kBegin.size()));
-    const std::size_t end = text.find(kEnd, line_end);
-    if (end == std::string::npos) throw std::invalid_argument("no " + kEnd + " after the block of " + section);
-    out += text.substr(pos, line_end + 1 - pos);
-    out += markdown_table(section == "top" ? "" : section);
-    pos = end;
-  }
-  return out + text.substr(pos);
+  return util::regenerate_blocks(text, "<!-- BEGIN GENERATED keys: ", "<!-- END GENERATED -->",
+                                 [](const std::string& section) { return markdown_table(section == "top" ? "" : section); });
 }
 
 std::string default_yaml() {

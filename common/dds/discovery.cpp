@@ -15,7 +15,7 @@
 #include <fastdds/rtps/writer/WriterDiscoveryInfo.h>
 #include <fastrtps/utils/IPLocator.h>
 
-#include "dds/participant.hpp"
+#include "dds/participant_factory.hpp"
 
 namespace shapeform::dds {
 namespace {

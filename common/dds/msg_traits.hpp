@@ -1,67 +1,50 @@
 #pragma once
-/// Compile-time facts about each generated message type: its PubSubType, its topic, its key.
+/// Compile-time facts about each topic's message type, from the topic table (dds/topic_table.hpp): its
+/// topic and its key; and visit_topic(), which hands a topic's message type to generic code, so no
+/// code of the project switches over topics by hand. No Fast DDS here (the generated message types are
+/// plain types on fastcdr).
 #include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
 
 #include "dds/topics.hpp"
-#include "shapeform/msg/AgentStateBatchPubSubTypes.h"
-#include "shapeform/msg/AgentStatePubSubTypes.h"
-#include "shapeform/msg/AgentStatusPubSubTypes.h"
-#include "shapeform/msg/ShapeCommandPubSubTypes.h"
-#include "shapeform/msg/SwarmMetricsPubSubTypes.h"
-#include "shapeform/msg/TrackingTargetPubSubTypes.h"
+#include "shapeform/msg/all.h"  // every idl/*.idl's type, generated (idl/CMakeLists.txt)
 
 namespace shapeform::dds {
 
-/// Specialised for every message type; using another type with Node is a compile error.
+/// Specialised for every topic's message type; using another type with Node is a compile error.
 template <class Msg>
 struct MsgTraits;
 
-template <>
-struct MsgTraits<msg::AgentState> {
-  using PubSubType = msg::AgentStatePubSubType;
-  static constexpr TopicId topic = TopicId::State;
-  static constexpr bool keyed = true;
-  static std::int32_t key(const msg::AgentState& m) { return m.id(); }
+#define SHAPEFORM_MSG_TRAITS(Id, name, Type, reliability, durability, key_column, ...)                \
+  template <>                                                                                         \
+  struct MsgTraits<msg::Type> {                                                                       \
+    static constexpr TopicId topic = TopicId::Id;                                                     \
+    static constexpr bool keyed = SHAPEFORM_TOPIC_KEY_NAME(key_column)[0] != '\0';                    \
+    static std::int32_t key(const msg::Type& m) { return SHAPEFORM_TOPIC_KEY_GETTER(key_column)(m); } \
+  };
+SHAPEFORM_TOPICS(SHAPEFORM_MSG_TRAITS)
+#undef SHAPEFORM_MSG_TRAITS
+
+/// A message type as a value: visit_topic's argument names the type as `typename decltype(tag)::type`.
+template <class Msg>
+struct MsgType {
+  using type = Msg;
 };
 
-template <>
-struct MsgTraits<msg::AgentStateBatch> {
-  using PubSubType = msg::AgentStateBatchPubSubType;
-  static constexpr TopicId topic = TopicId::StateBatch;
-  static constexpr bool keyed = true;
-  static std::int32_t key(const msg::AgentStateBatch& m) { return m.first_id(); }
-};
-
-template <>
-struct MsgTraits<msg::ShapeCommand> {
-  using PubSubType = msg::ShapeCommandPubSubType;
-  static constexpr TopicId topic = TopicId::Command;
-  static constexpr bool keyed = false;
-  static std::int32_t key(const msg::ShapeCommand&) { return -1; }
-};
-
-template <>
-struct MsgTraits<msg::TrackingTarget> {
-  using PubSubType = msg::TrackingTargetPubSubType;
-  static constexpr TopicId topic = TopicId::Target;
-  static constexpr bool keyed = false;
-  static std::int32_t key(const msg::TrackingTarget&) { return -1; }
-};
-
-template <>
-struct MsgTraits<msg::SwarmMetrics> {
-  using PubSubType = msg::SwarmMetricsPubSubType;
-  static constexpr TopicId topic = TopicId::Metrics;
-  static constexpr bool keyed = false;
-  static std::int32_t key(const msg::SwarmMetrics&) { return -1; }
-};
-
-template <>
-struct MsgTraits<msg::AgentStatus> {
-  using PubSubType = msg::AgentStatusPubSubType;
-  static constexpr TopicId topic = TopicId::Status;
-  static constexpr bool keyed = true;
-  static std::int32_t key(const msg::AgentStatus& m) { return m.id(); }
-};
+/// Calls f(MsgType<Msg>{}) with the message type of topic id and returns what it returns (every
+/// topic's call must return the same type). Throws std::logic_error for a value outside TopicId.
+template <class F>
+auto visit_topic(TopicId id, F&& f) {
+  switch (id) {
+#define SHAPEFORM_VISIT_TOPIC(Id, name, Type, ...) \
+  case TopicId::Id:                                \
+    return f(MsgType<msg::Type>{});
+    SHAPEFORM_TOPICS(SHAPEFORM_VISIT_TOPIC)
+#undef SHAPEFORM_VISIT_TOPIC
+  }
+  throw std::logic_error("dds: unknown TopicId " + std::to_string(static_cast<int>(id)));
+}
 
 }  // namespace shapeform::dds

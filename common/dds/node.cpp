@@ -12,7 +12,10 @@
 #include <fastdds/dds/topic/qos/TopicQos.hpp>
 
 #include "dds/library_log.hpp"
-#include "dds/participant.hpp"
+#include "dds/node_entities.hpp"
+#include "dds/participant_factory.hpp"
+#include "dds/topic_qos.hpp"
+#include "shapeform/msg/all_pubsub_types.h"  // every idl/*.idl's PubSubType, generated
 #include "util/log.hpp"
 
 namespace shapeform::dds {
@@ -68,17 +71,25 @@ std::vector<SourceId> RefusedWatch::take() {
 
 namespace {
 
-template <class Msg>
-void register_type(fdds::DomainParticipant* p, const std::string& node) {
-  fdds::TypeSupport type(new typename MsgTraits<Msg>::PubSubType());
+/// Registers the type of topic id (`pubsub`, taken over) on p; checks its generated name is the table's.
+void register_type(fdds::DomainParticipant* p, fdds::TopicDataType* pubsub, TopicId id, const std::string& node) {
+  fdds::TypeSupport type(pubsub);
   if (!detail::is_ok(type.register_type(p))) {
     throw std::runtime_error("register_type failed for " + type.get_type_name() + " (node " + node + ")");
   }
-  const char* expected = type_name(MsgTraits<Msg>::topic);
+  const char* expected = type_name(id);
   if (type.get_type_name() != expected) {
     throw std::logic_error("dds: generated type name " + type.get_type_name() +
                            " differs from the topic table's " + expected);
   }
+}
+
+/// Every topic's type, registered on p.
+void register_types(fdds::DomainParticipant* p, const std::string& node) {
+#define SHAPEFORM_REGISTER_TYPE(Id, name, Type, ...) \
+  register_type(p, new msg::Type##PubSubType(), TopicId::Id, node);
+  SHAPEFORM_TOPICS(SHAPEFORM_REGISTER_TYPE)
+#undef SHAPEFORM_REGISTER_TYPE
 }
 
 }  // namespace
@@ -97,12 +108,7 @@ void Node::open() {
   const std::string& name = e.name;
   e.participant = create_participant(e.transport, name, e.refused.get());
 
-  register_type<msg::AgentState>(e.participant, name);
-  register_type<msg::AgentStateBatch>(e.participant, name);
-  register_type<msg::ShapeCommand>(e.participant, name);
-  register_type<msg::TrackingTarget>(e.participant, name);
-  register_type<msg::SwarmMetrics>(e.participant, name);
-  register_type<msg::AgentStatus>(e.participant, name);
+  register_types(e.participant, name);
 
   // Constructed QoS (not *_QOS_DEFAULT, which XML profiles could change).
   e.publisher = e.participant->create_publisher(fdds::PublisherQos());
@@ -136,11 +142,11 @@ void Node::rebuild() {
   open();
   for (const auto& w : e.writers) {
     const auto slot = w.lock();
-    slot->writer = create_writer(slot->topic);
+    slot->writer = detail::create_writer(e, slot->topic);
   }
   for (const auto& w : e.readers) {
     const auto slot = w.lock();
-    slot->reader = create_reader(slot->topic, slot->listener);
+    slot->reader = detail::create_reader(e, slot->topic, slot->listener);
   }
 }
 
@@ -193,6 +199,9 @@ std::vector<SourceId> Node::take_refused() {
 
 Node::~Node() = default;
 
+fdds::DomainParticipant* Node::participant() const { return entities_->participant; }
+const std::string& Node::name() const { return entities_->name; }
+
 void Node::exit_without_goodbye(int status) {
   if (entities_->participant != nullptr) entities_->participant->delete_contained_entities();
   std::fflush(nullptr);
@@ -206,23 +215,23 @@ void Node::check_type(TopicId requested, TopicId of_type) {
   }
 }
 
-fdds::Topic* Node::topic(TopicId id) {
-  if (entities_->participant == nullptr) {
+namespace {
+
+fdds::Topic* topic(detail::Entities& e, TopicId id) {
+  if (e.participant == nullptr) {
     throw std::runtime_error(std::string("no participant for topic ") + topic_name(id) + " (node " +
-                             entities_->name + ": its rebuild failed)");
+                             e.name + ": its rebuild failed)");
   }
-  auto& slot = entities_->topics[static_cast<std::size_t>(id)];
+  auto& slot = e.topics[static_cast<std::size_t>(id)];
   if (slot == nullptr) {
-    slot = entities_->participant->create_topic(topic_name(id), type_name(id), fdds::TopicQos());
+    slot = e.participant->create_topic(topic_name(id), type_name(id), fdds::TopicQos());
     if (slot == nullptr) {
       throw std::runtime_error(std::string("create_topic failed for topic ") + topic_name(id) + " (node " +
-                               entities_->name + ")");
+                               e.name + ")");
     }
   }
   return slot;
 }
-
-namespace {
 
 /// The error of an endpoint Fast DDS refused: with security, its likely cause (the enclave's permissions).
 [[noreturn]] void endpoint_failed(const detail::Entities& e, const char* what, TopicId id) {
@@ -238,18 +247,21 @@ namespace {
 
 }  // namespace
 
-fdds::DataWriter* Node::create_writer(TopicId id) {
-  fdds::DataWriter* w = entities_->publisher->create_datawriter(topic(id), writer_qos(id));
-  if (w == nullptr) endpoint_failed(*entities_, "create_datawriter", id);
+namespace detail {
+
+fdds::DataWriter* create_writer(Entities& e, TopicId id) {
+  fdds::DataWriter* w = e.publisher->create_datawriter(topic(e, id), writer_qos(id));
+  if (w == nullptr) endpoint_failed(e, "create_datawriter", id);
   return w;
 }
 
-fdds::DataReader* Node::create_reader(TopicId id, fdds::DataReaderListener* listener) {
-  fdds::DataReader* r = entities_->subscriber->create_datareader(topic(id), reader_qos(id, entities_->transport), listener,
-                                                                 fdds::StatusMask::data_available() <<
-                                                                     fdds::StatusMask::subscription_matched());
-  if (r == nullptr) endpoint_failed(*entities_, "create_datareader", id);
+fdds::DataReader* create_reader(Entities& e, TopicId id, fdds::DataReaderListener* listener) {
+  const fdds::StatusMask mask = fdds::StatusMask::data_available() << fdds::StatusMask::subscription_matched();
+  fdds::DataReader* r = e.subscriber->create_datareader(topic(e, id), reader_qos(id, e.transport), listener, mask);
+  if (r == nullptr) endpoint_failed(e, "create_datareader", id);
   return r;
 }
+
+}  // namespace detail
 
 }  // namespace shapeform::dds

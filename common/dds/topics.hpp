@@ -1,22 +1,82 @@
 #pragma once
-/// The ONE topic table of the project: topic names, their types and their QoS. Writers and readers are
-/// only ever created with writer_qos() / reader_qos() so both sides always match.
+/// The topic table as the program reads it: names, types, keys, QoS kinds and access of the project's
+/// topics, all from their one declaration (dds/topic_table.hpp). No Fast DDS here: the QoS built from
+/// the table is the dds library's own (dds/topic_qos.hpp), so both sides of a topic always match.
 #include <array>
 #include <cstdint>
 #include <optional>
 #include <string_view>
 
-#include <fastdds/dds/publisher/qos/DataWriterQos.hpp>
-#include <fastdds/dds/subscriber/qos/DataReaderQos.hpp>
-
-#include "protocol/transport.hpp"
+#include "dds/topic_table.hpp"
 
 namespace shapeform::dds {
 
-enum class TopicId { State, StateBatch, Command, Target, Metrics, Status };
+/// The roles of DDS Security, as bits (a row of the table names several): every enclave that
+/// scripts/make_keystore.sh makes is of one role, and its permissions are the role's.
+namespace role {
+inline constexpr unsigned kAgent = 1u << 0;       ///< agent processes: enclaves agent_0, agent_1, ...
+inline constexpr unsigned kSupervisor = 1u << 1;  ///< the supervisor (and rival supervisors)
+inline constexpr unsigned kViewer = 1u << 2;      ///< read-only monitors: view, echo, topics, the bench probe
+}  // namespace role
 
-inline constexpr std::array<TopicId, 6> kAllTopics = {TopicId::State,   TopicId::StateBatch, TopicId::Command,
-                                                      TopicId::Target,  TopicId::Metrics,    TopicId::Status};
+/// A role as the keystore names its enclaves.
+struct RoleInfo {
+  unsigned bit;
+  const char* enclave;       ///< for people: "agent_K", "supervisor", "viewer"
+  const char* enclave_glob;  ///< the shell pattern of its enclave names: "agent_*", "supervisor", "viewer"
+};
+inline constexpr RoleInfo kRoles[] = {{role::kAgent, "agent_K", "agent_*"},
+                                      {role::kSupervisor, "supervisor", "supervisor"},
+                                      {role::kViewer, "viewer", "viewer"}};
+
+enum class Reliability { BestEffort, Reliable };
+enum class Durability { Volatile, TransientLocal };
+
+#define SHAPEFORM_TOPIC_ENUMERATOR(Id, ...) Id,
+/// One per row of the table, in its order.
+enum class TopicId { SHAPEFORM_TOPICS(SHAPEFORM_TOPIC_ENUMERATOR) };
+#undef SHAPEFORM_TOPIC_ENUMERATOR
+
+#define SHAPEFORM_TOPIC_ID(Id, ...) TopicId::Id,
+inline constexpr std::array kAllTopics{SHAPEFORM_TOPICS(SHAPEFORM_TOPIC_ID)};
+#undef SHAPEFORM_TOPIC_ID
+
+/// One row of the table (dds/topic_table.hpp says what each column means).
+struct TopicInfo {
+  TopicId id;
+  const char* name;     ///< "shapeform/state"
+  const char* message;  ///< "AgentState": the IDL struct (idl/AgentState.idl)
+  const char* type;     ///< "shapeform::msg::AgentState": the registered type name
+  Reliability reliability;
+  Durability durability;
+  const char* key;      ///< the key field ("id"), "" for an unkeyed topic
+  bool multicast;       ///< readers on the data multicast group when transport.multicast_data is set
+  unsigned publishers;  ///< role bits
+  unsigned readers;     ///< role bits
+  const char* publisher_doc;
+  const char* rate_doc;
+};
+
+#define SHAPEFORM_TOPIC_INFO(Id, name, Type, reliability, durability, key, multicast, publishers, readers, \
+                             publisher_doc, rate_doc)                                                      \
+  TopicInfo{TopicId::Id,                                                                                   \
+            name,                                                                                          \
+            #Type,                                                                                         \
+            "shapeform::msg::" #Type,                                                                      \
+            Reliability::reliability,                                                                      \
+            Durability::durability,                                                                        \
+            SHAPEFORM_TOPIC_KEY_NAME(key),                                                                 \
+            multicast,                                                                                     \
+            publishers,                                                                                    \
+            readers,                                                                                       \
+            publisher_doc,                                                                                 \
+            rate_doc},
+/// The rows, in TopicId order.
+inline constexpr std::array kTopicTable{SHAPEFORM_TOPICS(SHAPEFORM_TOPIC_INFO)};
+#undef SHAPEFORM_TOPIC_INFO
+
+/// The row of a topic (std::logic_error for a value outside the enumeration).
+const TopicInfo& topic_info(TopicId id);
 
 /// DDS topic name: "shapeform/state", "shapeform/state_batch", "shapeform/command", "shapeform/target",
 /// "shapeform/metrics", "shapeform/status".
@@ -36,29 +96,5 @@ bool is_keyed(TopicId id);
 /// the table: writer 2 k + 1, reader 2 k + 2 for row k. Unique over topics and directions, as Fast DDS
 /// 2.9 wants them in one description (it looks a peer's endpoint up by this id alone).
 std::int16_t static_edp_user_id(TopicId id, bool writer);
-
-/// Writer QoS of a topic (data sharing always off; KEEP_LAST 1 everywhere; endpoint user id
-/// static_edp_user_id(id, true), which only static endpoint discovery reads):
-///  - State:   BEST_EFFORT, VOLATILE        (every agent tick)
-///  - StateBatch: BEST_EFFORT, VOLATILE     (every tick of a process hosting several agents)
-///  - Command: RELIABLE, TRANSIENT_LOCAL    (late joiners get the newest command)
-///  - Target:  BEST_EFFORT, VOLATILE
-///  - Metrics: RELIABLE, VOLATILE
-///  - Status:  RELIABLE, VOLATILE
-/// Keyed topics allow unlimited instances (max_instances = max_samples = 0, 1 sample per instance).
-/// Reliable writers send a heartbeat every kHeartbeatPeriod_s so a lost sample is repaired quickly.
-eprosima::fastdds::dds::DataWriterQos writer_qos(TopicId id);
-
-/// Reader QoS of a topic: the same reliability, durability and history as the writer, user id
-/// static_edp_user_id(id, false). Keyed readers
-/// lift max_instances (Fast DDS default 10 would silently hide agents 11 and up).
-eprosima::fastdds::dds::DataReaderQos reader_qos(TopicId id);
-
-/// reader_qos(id), plus, when transport.multicast_data is set and id is State or StateBatch, the State
-/// multicast locator (data_multicast_locator) as the reader's only locator.
-eprosima::fastdds::dds::DataReaderQos reader_qos(TopicId id, const TransportConfig& transport);
-
-/// Heartbeat period of reliable writers, seconds (Fast DDS default 3 s).
-inline constexpr double kHeartbeatPeriod_s = 0.5;
 
 }  // namespace shapeform::dds

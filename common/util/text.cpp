@@ -1,6 +1,7 @@
 #include "util/text.hpp"
 
 #include <sstream>
+#include <stdexcept>
 
 namespace shapeform::util {
 
@@ -62,6 +63,30 @@ std::string excerpt(std::string_view s, std::size_t max) {
 
 std::string bounded_line(std::string_view line, std::size_t max) {
   return line.size() <= max ? std::string(line) : excerpt(line, max);
+}
+
+std::string regenerate_blocks(std::string_view text, std::string_view begin, std::string_view end,
+                              const std::function<std::string(const std::string& section)>& generate) {
+  std::string out;
+  std::size_t pos = 0;
+  for (;;) {
+    const std::size_t at = text.find(begin, pos);
+    if (at == std::string_view::npos) break;
+    const std::size_t line_end = text.find('\n', at);
+    if (line_end == std::string_view::npos) throw std::invalid_argument("no line after the marker " + std::string(begin));
+    std::string section = trim(text.substr(at + begin.size(), line_end - at - begin.size()));
+    if (section.size() >= 3 && section.compare(section.size() - 3, 3, "-->") == 0)
+      section = trim(section.substr(0, section.size() - 3));
+    if (section.empty()) throw std::invalid_argument("no section name after the marker " + std::string(begin));
+    const std::size_t close = text.find(end, line_end);
+    if (close == std::string_view::npos)
+      throw std::invalid_argument("no " + std::string(end) + " after the block of " + section);
+    out += text.substr(pos, line_end + 1 - pos);
+    out += generate(section);
+    pos = text.rfind('\n', close) + 1;  // the end marker's whole line stays
+  }
+  out += text.substr(pos);
+  return out;
 }
 
 }  // namespace shapeform::util

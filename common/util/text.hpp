@@ -1,6 +1,7 @@
 #pragma once
 /// Small text helpers shared by the config loader, the console, the conversions and the simulator.
 #include <cstddef>
+#include <functional>
 #include <string>
 #include <string_view>
 
@@ -28,5 +29,13 @@ std::string excerpt(std::string_view s, std::size_t max = kQuoteMax);
 /// A message line as it is when at most max characters long, else excerpt(line, max): the last guard
 /// where a line that may quote input is printed.
 std::string bounded_line(std::string_view line, std::size_t max = kLineMax);
+
+/// A file with generated blocks (a doc's tables, a script's rules), each regenerated in place: every line
+/// holding `begin` followed by a section name (the rest of the line, a trailing "-->" dropped) opens a
+/// block that ends at the next line holding `end`. Returns text with each block's lines in between
+/// replaced by generate(section); the marker lines and everything outside the blocks stay as they are.
+/// Throws std::invalid_argument when a block has no end or no section name; whatever generate throws.
+std::string regenerate_blocks(std::string_view text, std::string_view begin, std::string_view end,
+                              const std::function<std::string(const std::string& section)>& generate);
 
 }  // namespace shapeform::util

@@ -18,7 +18,7 @@ import harness  # noqa: E402
 
 AGENTS = 3
 SETS = ["--set", "swarm.agents=%d" % AGENTS]
-TOPICS = {  # name: (type, reliability, durability) as common/dds/topics.cpp declares them
+TOPICS = {  # name: (type, reliability, durability), as the rows of common/dds/topic_table.hpp declare them
     "shapeform/state": ("shapeform::msg::AgentState", "best_effort", "volatile"),
     "shapeform/state_batch": ("shapeform::msg::AgentStateBatch", "best_effort", "volatile"),
     "shapeform/command": ("shapeform::msg::ShapeCommand", "reliable", "transient_local"),

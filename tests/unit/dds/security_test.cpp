@@ -16,7 +16,7 @@
 #include "config/config.hpp"
 #include "dds/library_log.hpp"
 #include "dds/node.hpp"
-#include "dds/participant.hpp"
+#include "dds/participant_factory.hpp"
 #include "protocol/security.hpp"
 #include "protocol/transport.hpp"
 

@@ -276,3 +276,23 @@ TEST_CASE("bounded_line keeps a short line as it is and shortens a long one", "[
   CHECK(b.rfind("console: unknown command 'www", 0) == 0);
   CHECK(b.back() == '\'');
 }
+
+TEST_CASE("regenerate_blocks replaces what lies between the markers and keeps the rest", "[util][text]") {
+  const auto gen = [](const std::string& section) { return "[" + section + "]\n"; };
+  const std::string md = "intro\n<!-- BEGIN GENERATED t: a -->\nold\nlines\n<!-- END GENERATED -->\nmid\n"
+                         "<!-- BEGIN GENERATED t: b -->\n<!-- END GENERATED -->\nend\n";
+  const std::string want = "intro\n<!-- BEGIN GENERATED t: a -->\n[a]\n<!-- END GENERATED -->\nmid\n"
+                           "<!-- BEGIN GENERATED t: b -->\n[b]\n<!-- END GENERATED -->\nend\n";
+  CHECK(util::regenerate_blocks(md, "BEGIN GENERATED t: ", "END GENERATED", gen) == want);
+  CHECK(util::regenerate_blocks(want, "BEGIN GENERATED t: ", "END GENERATED", gen) == want);  // a fixed point
+  // A shell comment marker: the end marker's whole line stays, indentation included.
+  const std::string sh = "x\n# BEGIN GENERATED t: rules\nold\n  # END GENERATED\ny\n";
+  CHECK(util::regenerate_blocks(sh, "BEGIN GENERATED t: ", "END GENERATED", gen) ==
+        "x\n# BEGIN GENERATED t: rules\n[rules]\n  # END GENERATED\ny\n");
+  CHECK(util::regenerate_blocks("no markers\n", "BEGIN GENERATED t: ", "END GENERATED", gen) == "no markers\n");
+  CHECK_THROWS_AS(util::regenerate_blocks("# BEGIN GENERATED t: a\nold\n", "BEGIN GENERATED t: ", "END GENERATED", gen),
+                  std::invalid_argument);
+  CHECK_THROWS_AS(util::regenerate_blocks("# BEGIN GENERATED t: -->\n# END GENERATED\n", "BEGIN GENERATED t: ",
+                                          "END GENERATED", gen),
+                  std::invalid_argument);
+}

@@ -1,0 +1,93 @@
+#pragma once
+/// The Fast DDS entities behind a dds::Node and its handles (dds/node.hpp), for the dds library's own
+/// sources (node.cpp, endpoints.cpp) and the tests: processes never include this.
+#include <array>
+#include <memory>
+#include <mutex>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/domain/DomainParticipantListener.hpp>
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/publisher/Publisher.hpp>
+#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/DataReaderListener.hpp>
+#include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <fastdds/dds/topic/Topic.hpp>
+
+#include "dds/topics.hpp"
+#include "protocol/samples.hpp"
+#include "protocol/transport.hpp"
+
+namespace shapeform::dds::detail {
+
+/// What a Writer handle points at: its topic and the DataWriter serving it now. Node::rebuild()
+/// replaces the DataWriter; the handle owns the slot, the Node only watches it (weak_ptr).
+struct WriterSlot {
+  TopicId topic;
+  eprosima::fastdds::dds::DataWriter* writer = nullptr;
+};
+
+/// What a Reader handle points at: its topic, its listener (the mailbox) and the DataReader serving it now.
+struct ReaderSlot {
+  TopicId topic;
+  eprosima::fastdds::dds::DataReaderListener* listener = nullptr;
+  eprosima::fastdds::dds::DataReader* reader = nullptr;
+};
+
+/// The participants that DDS Security refused (failed authentication or join access control), as
+/// the participant's listener hears them on Fast DDS's thread; the loop takes them.
+class RefusedWatch final : public eprosima::fastdds::dds::DomainParticipantListener {
+ public:
+  void onParticipantAuthentication(eprosima::fastdds::dds::DomainParticipant* participant,
+                                   eprosima::fastrtps::rtps::ParticipantAuthenticationInfo&& info) override;
+  /// The participants refused since the last call (at most kRefusedRemembered; repeats possible).
+  std::vector<SourceId> take();
+
+ private:
+  std::mutex mutex_;
+  std::vector<SourceId> pending_;
+};
+
+/// The DDS entities of a Node. Shared with handles through weak_ptr so they can tell whether the
+/// Node still exists.
+struct Entities {
+  eprosima::fastdds::dds::DomainParticipant* participant = nullptr;
+  eprosima::fastdds::dds::Publisher* publisher = nullptr;
+  eprosima::fastdds::dds::Subscriber* subscriber = nullptr;
+  std::array<eprosima::fastdds::dds::Topic*, kAllTopics.size()> topics{};
+  std::string name;
+  TransportConfig transport;  ///< the profile the participant was built from (reader locators)
+  /// Hears refused participants when security is enabled (set before the first participant, which
+  /// it outlives: members go after ~Entities() deleted the participant).
+  std::unique_ptr<RefusedWatch> refused;
+  /// The refused participants reported so far (each once: a refused peer retries its handshake for ever);
+  /// at most kRefusedRemembered, then forgotten and reported again.
+  std::set<SourceId> refused_reported;
+  /// The live handles' endpoints, recreated by Node::rebuild() on the new participant.
+  std::vector<std::weak_ptr<WriterSlot>> writers;
+  std::vector<std::weak_ptr<ReaderSlot>> readers;
+
+  Entities() = default;
+  Entities(const Entities&) = delete;
+  Entities& operator=(const Entities&) = delete;
+  /// delete_contained_entities() + delete_participant().
+  ~Entities();
+};
+
+void delete_writer(Entities& e, eprosima::fastdds::dds::DataWriter* w) noexcept;
+void delete_reader(Entities& e, eprosima::fastdds::dds::DataReader* r) noexcept;
+bool is_ok(const eprosima::fastrtps::types::ReturnCode_t& rc);
+/// The participant part of a writer's instance handle (a handle holds the writer's GUID).
+SourceId source_of(const eprosima::fastdds::dds::InstanceHandle_t& writer);
+
+/// A DataWriter on topic id with writer_qos(id). Throws naming the topic (with security: the
+/// enclave's permissions) when Fast DDS refuses it, or when the Node has no participant.
+eprosima::fastdds::dds::DataWriter* create_writer(Entities& e, TopicId id);
+/// A DataReader on topic id with reader_qos(id, e.transport), `listener` hearing data and matching.
+eprosima::fastdds::dds::DataReader* create_reader(Entities& e, TopicId id,
+                                                  eprosima::fastdds::dds::DataReaderListener* listener);
+
+}  // namespace shapeform::dds::detail

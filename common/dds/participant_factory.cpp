@@ -1,0 +1,279 @@
+#include "dds/participant_factory.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/rtps/attributes/ServerAttributes.h>
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastrtps/utils/IPLocator.h>
+#include <unistd.h>
+
+#include "dds/library_log.hpp"
+#include "dds/locators.hpp"
+#include "dds/topic_qos.hpp"
+#include "util/ipv4.hpp"
+
+namespace shapeform::dds {
+namespace {
+
+namespace fdds = eprosima::fastdds::dds;
+namespace frtps = eprosima::fastrtps::rtps;
+
+[[noreturn]] void fail(const std::string& what) { throw std::runtime_error(what); }
+
+std::string quoted(const std::string& s) { return "\"" + s + "\""; }
+
+template <class T>
+std::string str(const T& v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+/// The UDP ports this process has bound: socket inodes from /proc/self/fd matched against
+/// /proc/self/net/udp. nullopt where /proc cannot tell (not Linux).
+std::optional<std::set<std::uint32_t>> own_udp_ports() {
+  namespace fs = std::filesystem;
+  std::set<unsigned long> inodes;
+  std::error_code ec;
+  for (fs::directory_iterator it("/proc/self/fd", ec), end; !ec && it != end; it.increment(ec)) {
+    std::error_code lec;
+    const std::string target = fs::read_symlink(it->path(), lec).string();
+    if (!lec && target.rfind("socket:[", 0) == 0) inodes.insert(std::strtoul(target.c_str() + 8, nullptr, 10));
+  }
+  std::ifstream udp("/proc/self/net/udp");
+  if (ec || !udp) return std::nullopt;
+  std::set<std::uint32_t> ports;
+  std::string line;
+  std::getline(udp, line);  // header
+  while (std::getline(udp, line)) {
+    // sl local_address rem_address st tx_queue:rx_queue tr:tm->when retrnsmt uid timeout inode ...
+    std::istringstream fields(line);
+    std::string sl, local, remote, st, queues, timer, retransmits, uid, timeout;
+    unsigned long inode = 0;
+    if (!(fields >> sl >> local >> remote >> st >> queues >> timer >> retransmits >> uid >> timeout >> inode)) continue;
+    const auto colon = local.find(':');
+    if (colon != std::string::npos && inodes.count(inode) != 0) {
+      ports.insert(static_cast<std::uint32_t>(std::strtoul(local.c_str() + colon + 1, nullptr, 16)));
+    }
+  }
+  return ports;
+}
+
+/// True when `after` holds a metatraffic and a user unicast port of `domain` (slots 0..249) that
+/// `before` did not: the participant created in between can be reached. The two need not be of the
+/// same slot (processes starting together take them in different orders). Fast DDS 2.9 creates a
+/// participant even when every port slot it tried was taken, and that participant silently hears nothing.
+bool gained_unicast_ports(int domain, const std::set<std::uint32_t>& before, const std::set<std::uint32_t>& after) {
+  const std::uint32_t port0 = metatraffic_unicast_port0(domain);
+  bool metatraffic = false, user = false;
+  for (const std::uint32_t p : after) {
+    if (p < port0 || p >= port0 + 500 || before.count(p) != 0) continue;
+    ((p - port0) % 2 == 0 ? metatraffic : user) = true;
+  }
+  return metatraffic && user;
+}
+
+}  // namespace
+
+fdds::DomainParticipantQos participant_qos(const TransportConfig& cfg, const std::string& name) {
+  validate(cfg);
+
+  // Built by hand: the library's default participant QoS would pick up XML profiles
+  // and builtin transports (UDPv4 on every interface + SHM).
+  fdds::DomainParticipantQos pq;
+  pq.name(name);
+  pq.transport().use_builtin_transports = false;
+
+  auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();
+  udp->maxInitialPeersRange = static_cast<std::uint32_t>(cfg.max_participants);
+  if (cfg.socket_buffer_bytes > 0) {
+    udp->sendBufferSize = static_cast<std::uint32_t>(cfg.socket_buffer_bytes);
+    udp->receiveBufferSize = static_cast<std::uint32_t>(cfg.socket_buffer_bytes);
+  }
+
+  auto& builtin = pq.wire_protocol().builtin;
+  // A participant whose ports are taken moves to the next participant slot, at most mutation_tries
+  // times (Fast DDS default 100: the 102nd participant of a domain on one host got no port at all).
+  // Slots 0..max_participants-1 are the ones the initial peers probe.
+  builtin.mutation_tries = static_cast<std::uint32_t>(cfg.max_participants - 1);
+  builtin.discovery_config.leaseDuration = eprosima::fastrtps::Duration_t(cfg.lease_s);
+  builtin.discovery_config.leaseDuration_announcementperiod =
+      eprosima::fastrtps::Duration_t(cfg.announce_s);
+  builtin.discovery_config.initial_announcements.count = static_cast<std::uint32_t>(cfg.initial_announcements);
+  builtin.discovery_config.initial_announcements.period = eprosima::fastrtps::Duration_t(cfg.initial_announce_s);
+
+  if (cfg.profile == kLoopback) {
+    udp->interfaceWhiteList.push_back("127.0.0.1");
+    // Port 0: expanded to the metatraffic unicast ports of participant ids 0..maxInitialPeersRange-1.
+    builtin.initialPeersList.push_back(loopback_locator(0));
+    // Unicast locators only: with no multicast locator nothing is sent to or joined on multicast.
+    builtin.metatrafficUnicastLocatorList.push_back(loopback_locator(0));
+    pq.wire_protocol().default_unicast_locator_list.push_back(loopback_locator(0));
+  } else if (cfg.profile == kLan) {
+    // validate() checked every address. With a whitelist, Fast DDS 2.9 binds every socket to the listed
+    // addresses, sends multicast from one socket per listed interface (IP_MULTICAST_IF) and joins groups
+    // on the listed interfaces only (UDPv4Transport::OpenInputChannel, OpenOutputChannel).
+    for (const std::string& address : cfg.interfaces) udp->interfaceWhiteList.push_back(address);
+    // 0.0.0.0 port 0: Fast DDS fills in the participant slot's port and expands the address to each
+    // allowed interface's (NormalizeLocators), so peers learn only addresses of those interfaces.
+    builtin.metatrafficUnicastLocatorList.push_back(udp_locator({0, 0, 0, 0}, 0));
+    pq.wire_protocol().default_unicast_locator_list.push_back(udp_locator({0, 0, 0, 0}, 0));
+    if (cfg.peers.empty()) {
+      // Multicast discovery: announcements to and from the domain's discovery group (port filled in:
+      // 7400 + 250 domain), which is also the initial peer (Fast DDS copies it when the list is empty).
+      builtin.metatrafficMulticastLocatorList.push_back(udp_locator(kMulticastGroup, 0));
+    } else {
+      // Unicast only: no multicast metatraffic locator (Fast DDS would add the default group when both
+      // metatraffic lists are empty, and route endpoint discovery to it); each peer probed over the
+      // participant slots 0..max_participants-1 (port 0, maxInitialPeersRange).
+      for (const std::string& peer : cfg.peers) {
+        std::array<std::uint8_t, 4> ip{};
+        util::parse_ipv4(peer, ip);
+        builtin.initialPeersList.push_back(udp_locator(ip, 0));
+      }
+    }
+  } else if (cfg.profile == kDiscoveryServer) {
+    std::array<std::uint8_t, 4> server_ip{};
+    std::uint16_t server_port = 0;
+    parse_host_port(cfg.discovery_server, server_ip, server_port);  // validate() checked it
+    if (server_ip[0] == 127) udp->interfaceWhiteList.push_back("127.0.0.1");
+    builtin.discovery_config.discoveryProtocol = frtps::DiscoveryProtocol_t::CLIENT;
+    builtin.discovery_config.discoveryServer_client_syncperiod =
+        eprosima::fastrtps::Duration_t(kDiscoveryServerSyncPeriod_s);
+    frtps::RemoteServerAttributes remote;
+    if (!remote.ReadguidPrefix(kDiscoveryServerPrefix)) {
+      fail(std::string("discovery server guid prefix does not parse: ") + kDiscoveryServerPrefix);
+    }
+    remote.metatrafficUnicastLocatorList.push_back(udp_locator(server_ip, server_port));
+    builtin.discovery_config.m_DiscoveryServers.push_back(remote);
+  }
+
+  pq.transport().user_transports.push_back(udp);
+
+  if (cfg.static_edp) {
+    // validate() refused it with a discovery server (whose clients keep simple EDP) and with security.
+    builtin.discovery_config.use_SIMPLE_EndpointDiscoveryProtocol = false;
+    builtin.discovery_config.use_STATIC_EndpointDiscoveryProtocol = true;
+    builtin.discovery_config.static_edp_xml_config(("data://" + static_edp_description(cfg)).c_str());
+  }
+
+  // Where this participant runs, announced in discovery so that a tool can tell the operator.
+  char host[256] = {};
+  if (gethostname(host, sizeof host - 1) != 0) host[0] = '\0';
+  auto& props = pq.properties().properties();
+  props.emplace_back(kHostProperty, std::string(host), true);
+  props.emplace_back(kPidProperty, std::to_string(getpid()), true);
+  if (cfg.security.enabled) {
+    for (const auto& [key, value] : security_properties(cfg.security)) props.emplace_back(key, value);
+  }
+  return pq;
+}
+
+std::string static_edp_description(const TransportConfig& cfg) {
+  validate(cfg);
+  const auto reliability = [](fdds::ReliabilityQosPolicyKind k) {
+    return k == fdds::RELIABLE_RELIABILITY_QOS ? "RELIABLE_RELIABILITY_QOS" : "BEST_EFFORT_RELIABILITY_QOS";
+  };
+  const auto durability = [](fdds::DurabilityQosPolicyKind k) {
+    switch (k) {
+      case fdds::TRANSIENT_LOCAL_DURABILITY_QOS: return "TRANSIENT_LOCAL_DURABILITY_QOS";
+      case fdds::TRANSIENT_DURABILITY_QOS: return "TRANSIENT_DURABILITY_QOS";
+      case fdds::PERSISTENT_DURABILITY_QOS: return "PERSISTENT_DURABILITY_QOS";
+      default: return "VOLATILE_DURABILITY_QOS";
+    }
+  };
+  const auto locators = [](std::ostream& os, const char* tag, const frtps::LocatorList_t& list) {
+    for (const frtps::Locator_t& loc : list) {
+      os << "<" << tag << " address=\"" << frtps::IPLocator::ip_to_string(loc) << "\" port=\"" << loc.port
+         << "\"/>";
+    }
+  };
+  // The name is only a label: Fast DDS 2.9 matches a peer's endpoints by user id, whatever its name.
+  std::ostringstream os;
+  os << "<staticdiscovery><participant><name>shapeform</name>";
+  for (const TopicId id : kAllTopics) {
+    const fdds::DataWriterQos w = writer_qos(id);
+    const fdds::DataReaderQos r = reader_qos(id, cfg);
+    const auto common = [&](std::int16_t user_id, fdds::ReliabilityQosPolicyKind rel,
+                            fdds::DurabilityQosPolicyKind dur) {
+      os << "<userId>" << user_id << "</userId><topicName>" << topic_name(id) << "</topicName><topicDataType>"
+         << type_name(id) << "</topicDataType><topicKind>" << (is_keyed(id) ? "WITH_KEY" : "NO_KEY")
+         << "</topicKind><reliabilityQos>" << reliability(rel) << "</reliabilityQos><durabilityQos>"
+         << durability(dur) << "</durabilityQos>";
+    };
+    os << "<writer>";
+    common(w.endpoint().user_defined_id, w.reliability().kind, w.durability().kind);
+    locators(os, "unicastLocator", w.endpoint().unicast_locator_list);
+    locators(os, "multicastLocator", w.endpoint().multicast_locator_list);
+    os << "</writer><reader>";
+    common(r.endpoint().user_defined_id, r.reliability().kind, r.durability().kind);
+    locators(os, "unicastLocator", r.endpoint().unicast_locator_list);
+    locators(os, "multicastLocator", r.endpoint().multicast_locator_list);
+    os << "</reader>";
+  }
+  os << "</participant></staticdiscovery>";
+  return os.str();
+}
+
+fdds::DomainParticipant* create_participant(const TransportConfig& cfg, const std::string& name,
+                                            fdds::DomainParticipantListener* listener) {
+  if (cfg.security.enabled) {
+    if (cfg.security.identity.empty()) {
+      throw SecurityError("security: " + quoted(name) + " has no security.identity (set it to an enclave of " +
+                          cfg.security.keystore + "/enclaves)");
+    }
+    check_enclave(cfg.security);  // the files named in the error, before Fast DDS says less
+  }
+  route_library_log();  // before the first participant: Fast DDS would print its errors on stdout
+  const fdds::DomainParticipantQos pq = participant_qos(cfg, name);
+  // Invariant of the project: never builtin transports (they open every interface and SHM).
+  if (pq.transport().use_builtin_transports || pq.transport().user_transports.empty()) {
+    fail("create_participant: refusing a participant with builtin transports");
+  }
+  auto* factory = fdds::DomainParticipantFactory::get_instance();
+  if (factory == nullptr) fail("create_participant: DomainParticipantFactory unavailable");
+  const auto ports_before = own_udp_ports();
+  fdds::DomainParticipant* participant =
+      // Mask none: the listener hears the participant-level callbacks (discovery, authentication), which
+      // no mask gates; with data_on_readers in its mask it would take every sample from the readers'
+      // own listeners (DataReaderImpl asks the subscriber's, then the participant's, listener first).
+      factory->create_participant(static_cast<fdds::DomainId_t>(cfg.domain), pq, listener, fdds::StatusMask::none());
+  if (participant == nullptr && cfg.security.enabled) {
+    // check_enclave() found the files sound: what is left is the permissions' content.
+    throw SecurityError("security: Fast DDS refused the enclave " + enclave_dir(cfg.security) + " for " +
+                        quoted(name) + " (see its log above): does permissions.xml grant the subject of cert.pem (" +
+                        "CN=" + cfg.security.identity + " from scripts/make_keystore.sh) on domain " + str(cfg.domain) +
+                        ", and is the grant's validity current?");
+  }
+  if (participant == nullptr) {
+    fail("create_participant failed for " + quoted(name) + " on " + describe(cfg) +
+         " (see Fast DDS log above; ports in use or bad interface address?)");
+  }
+  const auto ports_after = own_udp_ports();
+  if (ports_before && ports_after && !gained_unicast_ports(cfg.domain, *ports_before, *ports_after)) {
+    factory->delete_participant(participant);
+    fail("create_participant: " + quoted(name) + " found no free participant port on domain " + str(cfg.domain) +
+         ": this host already runs transport.max_participants (" + str(cfg.max_participants) +
+         ") participants on it; raise transport.max_participants or use another domain");
+  }
+  return participant;
+}
+
+void delete_participant(fdds::DomainParticipant* participant) {
+  if (participant == nullptr) return;
+  // Children first (publishers, subscribers, their endpoints, topics), then the participant itself,
+  // which announces its departure so peers drop it at once.
+  participant->delete_contained_entities();
+  fdds::DomainParticipantFactory::get_instance()->delete_participant(participant);
+}
+
+}  // namespace shapeform::dds

@@ -1,0 +1,94 @@
+// The topic table against the IDL files, and what is generated from it into the docs and the keystore.
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <string>
+
+#include "dds/topics.hpp"
+#include "topic_doc.hpp"
+
+namespace shapeform {
+namespace {
+
+/// The text of an IDL file without its // comments.
+std::string idl_code(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::ostringstream code;
+  for (std::string line; std::getline(in, line);) code << line.substr(0, line.find("//")) << "\n";
+  return code.str();
+}
+
+/// Each struct of an IDL file, and whether it is annotated @final.
+std::map<std::string, bool> idl_structs(const std::filesystem::path& path) {
+  static const std::regex kStruct(R"((@final\s+)?struct\s+(\w+))");
+  std::map<std::string, bool> out;
+  const std::string code = idl_code(path);
+  for (std::sregex_iterator it(code.begin(), code.end(), kStruct), end; it != end; ++it)
+    out[(*it)[2].str()] = (*it)[1].matched;
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("every IDL type has a row of the topic table and every row an IDL type", "[tools][topics]") {
+  std::set<std::string> files, rows;
+  for (const auto& entry : std::filesystem::directory_iterator(std::string(SHAPEFORM_SOURCE_DIR) + "/idl")) {
+    if (entry.path().extension() != ".idl") continue;
+    const std::string name = entry.path().stem().string();
+    files.insert(name);
+    const auto structs = idl_structs(entry.path());
+    INFO("idl/" << name << ".idl declares the struct " << name << ", the type of one topic");
+    CHECK(structs.count(name) == 1);
+    for (const auto& [type, final_] : structs) {
+      INFO("idl/" << name << ".idl: struct " << type << " is @final (the wire contract: XCDR1)");
+      CHECK(final_);
+    }
+  }
+  for (const dds::TopicInfo& t : dds::kTopicTable) rows.insert(t.message);
+  CHECK(files == rows);  // a file without a row, or a row without a file (idl/Type.idl)
+  CHECK(rows.size() == dds::kTopicTable.size());  // one row per type
+}
+
+TEST_CASE("the topic table: ids in row order, names unique, types named after their IDL struct",
+          "[tools][topics]") {
+  std::set<std::string> names;
+  for (std::size_t k = 0; k < dds::kTopicTable.size(); ++k) {
+    const dds::TopicInfo& t = dds::kTopicTable[k];
+    CHECK(static_cast<std::size_t>(t.id) == k);
+    CHECK(dds::kAllTopics[k] == t.id);
+    CHECK(names.insert(t.name).second);
+    CHECK(std::string(t.type) == "shapeform::msg::" + std::string(t.message));
+    CHECK(dds::find_topic(t.name) == t.id);
+    CHECK(t.publishers != 0);                      // somebody may publish it...
+    CHECK((t.readers & dds::role::kViewer) != 0);  // ...and the read-only monitors may read it
+  }
+}
+
+TEST_CASE("the generated tables and rules follow the rows", "[tools][topics]") {
+  const std::string readme = tools::topics_markdown();
+  CHECK(readme.find("| `shapeform/state` | `AgentState` (key `id`) | best effort, volatile | ") !=
+        std::string::npos);
+  CHECK(readme.find("| `shapeform/command` | `ShapeCommand` | reliable, transient-local | ") !=
+        std::string::npos);
+  const std::string access = tools::access_markdown();
+  CHECK(access.find("| `viewer` | nothing | every topic |") != std::string::npos);
+  CHECK(access.find("| `supervisor` | `shapeform/command`, `shapeform/target`, `shapeform/metrics` | ") !=
+        std::string::npos);
+  const std::string rules = tools::keystore_rules();
+  CHECK(rules.rfind("rules() {", 0) == 0);
+  CHECK(rules.find("    viewer)\n      echo '<subscribe><topics><topic>shapeform/state</topic>") !=
+        std::string::npos);
+  CHECK(rules.find("<publish><topics><topic>shapeform/state</topic><topic>shapeform/state_batch</topic>"
+                   "<topic>shapeform/status</topic></topics></publish>") != std::string::npos);
+  const std::string doc = "x\n<!-- BEGIN GENERATED topics: access -->\nold\n<!-- END GENERATED -->\n";
+  CHECK(tools::regenerate_topic_doc(doc) ==
+        "x\n<!-- BEGIN GENERATED topics: access -->\n" + access + "<!-- END GENERATED -->\n");
+  CHECK_THROWS_AS(tools::regenerate_topic_doc("# BEGIN GENERATED topics: nope\n# END GENERATED\n"),
+                  std::invalid_argument);
+}
+
+}  // namespace shapeform
