@@ -33,16 +33,6 @@ P real(std::string key, std::string unit, params::Range range, std::string doc, 
   return param<double>(Type::Real, std::move(key), std::move(unit), range, std::move(doc), field);
 }
 
-template <class E, std::size_t N, class Field>
-P choice(std::string key, std::string doc, const params::Name<E> (&names)[N], Field field) {
-  P p;
-  p.key = std::move(key);
-  p.type = Type::Choice;
-  p.doc = std::move(doc);
-  params::bind_choice(p, names, field);
-  return p;
-}
-
 /// An angle key: written in degrees, stored in radians.
 template <class Field>
 P angle(std::string key, params::Range range, std::string doc, Field field) {
@@ -53,7 +43,7 @@ P angle(std::string key, params::Range range, std::string doc, Field field) {
 
 /// The vehicle section (core/vehicle.hpp, docs/VEHICLES.md): the robot each agent drives.
 void add_vehicle(std::vector<P>& t) {
-  t.push_back(choice(
+  t.push_back(params::make_choice<Config>(
       "vehicle.model",
       "what each agent drives: `integrator` = the point moves as the law steps it (the paper's model); "
       "`double_integrator` = a point mass whose velocity follows the law's, acceleration at most "
@@ -61,7 +51,7 @@ void add_vehicle(std::vector<P>& t) {
       "point `vehicle.offset` ahead of its axle, which is the position it publishes. Not on the wire: the "
       "robot's own",
       params::kVehicleModelNames, [](auto& c) -> auto& { return c.vehicle.model; }));
-  t.push_back(choice(
+  t.push_back(params::make_choice<Config>(
       "vehicle.steering",
       "unicycle: `exact` = the forward speed and yaw rate held over a step whose arc carries the point exactly "
       "along the law's step (cut short along it when a limit binds); `linearised` = the classic feedback "

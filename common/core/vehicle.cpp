@@ -98,7 +98,9 @@ StepResult settle(VehicleState& s, const VehicleState& before, double dt, double
 
 }  // namespace
 
-bool moves_as_law(const VehicleParams& p) { return p.model == VehicleModel::Integrator && p.max_speed <= 0.0; }
+bool moves_as_law(const VehicleParams& p) {
+  return p.model == VehicleModel::Integrator && p.max_speed <= 0.0;
+}
 
 double start_heading(const VehicleParams& p, std::int32_t id, std::uint64_t seed) {
   if (p.heading_spread <= 0.0) return p.initial_heading;
@@ -125,7 +127,9 @@ VehicleState vehicle_start(const Vec2& x, double heading) {
 
 Vec2 heading_vector(double heading) { return {std::cos(heading), std::sin(heading)}; }
 
-Vec2 axle(const VehicleParams& p, const VehicleState& s) { return s.x - p.offset * heading_vector(s.heading); }
+Vec2 axle(const VehicleParams& p, const VehicleState& s) {
+  return s.x - p.offset * heading_vector(s.heading);
+}
 
 void stop(VehicleState& s) {
   s.velocity = Vec2::Zero();
@@ -166,7 +170,8 @@ void unicycle_move(const VehicleParams& p, VehicleState& s, const UnicycleComman
   s.yaw_rate = c.w;
 }
 
-StepResult drive(const VehicleParams& p, VehicleState& s, const StepResult& law, double dt, double workspace) {
+StepResult drive(const VehicleParams& p, VehicleState& s, const StepResult& law, double dt,
+                 double workspace) {
   if (moves_as_law(p)) {
     s.x = law.x;
     s.velocity = law.v / p.seconds_per_model_time;
@@ -175,9 +180,15 @@ StepResult drive(const VehicleParams& p, VehicleState& s, const StepResult& law,
   const double h = dt * p.seconds_per_model_time;
   const VehicleState before = s;
   switch (p.model) {
-    case VehicleModel::Integrator: limit_step(p, s, law.x, h); break;
-    case VehicleModel::DoubleIntegrator: accelerate(p, s, (law.x - s.x) / h, h); break;
-    case VehicleModel::Unicycle: unicycle_move(p, s, unicycle_command(p, s.heading, law.x - s.x, h), h); break;
+    case VehicleModel::Integrator:
+      limit_step(p, s, law.x, h);
+      break;
+    case VehicleModel::DoubleIntegrator:
+      accelerate(p, s, (law.x - s.x) / h, h);
+      break;
+    case VehicleModel::Unicycle:
+      unicycle_move(p, s, unicycle_command(p, s.heading, law.x - s.x, h), h);
+      break;
   }
   return settle(s, before, dt, h, workspace, law.clamped);
 }

@@ -23,14 +23,15 @@ namespace shapeform::core {
 enum class VehicleModel {
   Integrator,        ///< the point moves as the law steps it (without max_speed: bit for bit the law's step)
   DoubleIntegrator,  ///< a point mass: its velocity follows the law's, its acceleration bounded
-  Unicycle           ///< a differential drive (forward speed v, yaw rate w) steered by a point ahead of its axle
+  Unicycle  ///< a differential drive (forward speed v, yaw rate w) steered by a point ahead of its axle
 };
 std::string_view to_string(VehicleModel m);
 bool parse_vehicle_model(std::string_view name, VehicleModel& out);
 
 /// How a unicycle chooses the (v, w) it holds over a step.
 enum class Steering {
-  Exact,      ///< the (v, w) whose arc carries the point exactly along the law's step (sampled-data linearisation)
+  Exact,      ///< the (v, w) whose arc carries the point exactly along the law's step (sampled-data
+              ///< linearisation)
   Linearised  ///< the classic feedback linearisation [v; offset w] = R(-heading) u, u the law's velocity
 };
 std::string_view to_string(Steering s);
@@ -42,12 +43,12 @@ struct VehicleParams {
   Steering steering = Steering::Exact;  ///< unicycle only
   /// m/s: the point's speed (integrator, double integrator), the forward speed |v| (unicycle)
   double max_speed = 0.0;
-  double max_yaw_rate = 0.0;  ///< rad/s, unicycle: |w|
-  double max_accel = 0.0;     ///< m/s^2, double integrator: |dv/dt| (a unicycle is kinematic)
-  double offset = 0.2;        ///< m, unicycle: how far ahead of the axle the controlled point is
+  double max_yaw_rate = 0.0;            ///< rad/s, unicycle: |w|
+  double max_accel = 0.0;               ///< m/s^2, double integrator: |dv/dt| (a unicycle is kinematic)
+  double offset = 0.2;                  ///< m, unicycle: how far ahead of the axle the controlled point is
   double seconds_per_model_time = 1.0;  ///< s of vehicle time per unit of the law's model time
-  double initial_heading = 0.0;  ///< rad, counter-clockwise from the x1 axis
-  double heading_spread = 0.0;   ///< rad: start headings uniform in initial_heading +- this (seeded per agent)
+  double initial_heading = 0.0;         ///< rad, counter-clockwise from the x1 axis
+  double heading_spread = 0.0;  ///< rad: start headings uniform in initial_heading +- this (seeded per agent)
 };
 
 /// One vehicle's state.

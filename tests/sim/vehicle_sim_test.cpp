@@ -23,8 +23,8 @@ sim::SimResult run(const std::string& scenario, std::vector<std::string> sets, l
   opt.converge = cv;
   opt.vehicle = cfg.vehicle;
   opt.heading_seed = cfg.swarm.seed;
-  return sim::run_simulation(cfg.command, core::uniform_start(cfg.swarm.agents, cfg.swarm.seed,
-                                                              cfg.swarm.init_half_width),
+  return sim::run_simulation(cfg.command,
+                             core::uniform_start(cfg.swarm.agents, cfg.swarm.seed, cfg.swarm.init_half_width),
                              cfg.sim.steps, opt);
 }
 
@@ -42,11 +42,13 @@ std::vector<std::string> with(std::vector<std::string> a, const std::vector<std:
 TEST_CASE("arc law: unicycle swarms of 12 and 50 form the exact, evenly spaced circle", "[sim][vehicle]") {
   for (const char* steering : {"exact", "linearised"}) {
     for (int n : {12, 50}) {
-      for (const char* spm : {"1", "0.1"}) {  // a step of 1 s, or of 0.1 s (the limits then bind 10 times longer)
+      for (const char* spm :
+           {"1", "0.1"}) {  // a step of 1 s, or of 0.1 s (the limits then bind 10 times longer)
         INFO(steering << " N=" << n << " seconds_per_model_time=" << spm);
-        const auto r = run("arc_circle",
-                           with(kRobot, {"swarm.agents=" + std::to_string(n), std::string("vehicle.steering=") + steering,
-                                         std::string("vehicle.seconds_per_model_time=") + spm}));
+        const auto r = run(
+            "arc_circle",
+            with(kRobot, {"swarm.agents=" + std::to_string(n), std::string("vehicle.steering=") + steering,
+                          std::string("vehicle.seconds_per_model_time=") + spm}));
         CHECK(r.metrics.curve_error_mean.value() <= 1e-9);  // the spec asks 0.1 m: it is exact
         CHECK(r.metrics.arc_gap_cv.value() <= 1e-9);
         CHECK(r.converged);
@@ -89,7 +91,8 @@ TEST_CASE("the paper's law keeps its circle plateau with every vehicle", "[sim][
   CHECK(lin.converged);
 }
 
-TEST_CASE("saturation that breaks tracking: slower than the centre, or turning it too slowly", "[sim][vehicle]") {
+TEST_CASE("saturation that breaks tracking: slower than the centre, or turning it too slowly",
+          "[sim][vehicle]") {
   // track_circle_ff's centre runs at 2 pi 6 / 200 = 0.19 m/s with a centripetal acceleration of 0.0059 m/s^2.
   const double free = run("track_circle_ff", {}, 1000).metrics.centroid_error.value();
   CHECK(free < 0.25);

@@ -1,13 +1,13 @@
 // Vehicle models (core/vehicle.hpp): limits, kinematics, and the integrator model's bit-identity.
-#include <catch2/catch.hpp>
+#include "core/vehicle.hpp"
 
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <limits>
 #include <random>
 
 #include "core/law.hpp"
 #include "core/swarm.hpp"
-#include "core/vehicle.hpp"
 
 using namespace shapeform::core;
 
@@ -53,7 +53,8 @@ Vec2 chord_in_mean_frame(const VehicleParams& p, const VehicleState& before, con
 TEST_CASE("vehicle: no command ever exceeds a limit (random steps, states and limits)", "[vehicle]") {
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> angle(-kPi, kPi);
-  for (VehicleModel model : {VehicleModel::Integrator, VehicleModel::DoubleIntegrator, VehicleModel::Unicycle}) {
+  for (VehicleModel model :
+       {VehicleModel::Integrator, VehicleModel::DoubleIntegrator, VehicleModel::Unicycle}) {
     for (int trial = 0; trial < 20000; ++trial) {
       const VehicleParams p = random_params(model, rng);
       VehicleState s = vehicle_start(random_vec(rng, 10.0), angle(rng));
@@ -194,8 +195,10 @@ TEST_CASE("vehicle: the integrator model returns the law's step bit for bit", "[
         for (int i = 0; i < 7; ++i) {
           std::vector<Neighbour> nbrs;
           for (int j = 0; j < 7; ++j)
-            if (j != i) nbrs.push_back({j, x[j], law == Law::Arc ? closest_point(shape_at(cmd, k), cmd.curve(), x[j]).s
-                                                                 : std::numeric_limits<double>::quiet_NaN()});
+            if (j != i)
+              nbrs.push_back({j, x[j],
+                              law == Law::Arc ? closest_point(shape_at(cmd, k), cmd.curve(), x[j]).s
+                                              : std::numeric_limits<double>::quiet_NaN()});
           next[i] = agent_step(cmd, i, x[i], nbrs, k * cmd.dt).x;
         }
         x = next;
