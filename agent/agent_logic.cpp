@@ -95,7 +95,18 @@ AgentLogic::AgentLogic(std::int32_t id, core::Vec2 start, std::int64_t timeout_n
 
 AgentLogic::AgentLogic(std::int32_t id, core::Vec2 start, std::shared_ptr<NeighbourTable> table, bool lockstep,
                        int max_wait_ticks)
-    : id_(id), x_(start), x_prev_(start), lockstep_(lockstep), max_wait_ticks_(max_wait_ticks), table_(std::move(table)) {}
+    : id_(id),
+      x_(start),
+      vehicle_state_(core::vehicle_start(start, 0.0)),
+      x_prev_(start),
+      lockstep_(lockstep),
+      max_wait_ticks_(max_wait_ticks),
+      table_(std::move(table)) {}
+
+void AgentLogic::set_vehicle(const core::VehicleParams& p, double heading) {
+  vehicle_ = p;
+  vehicle_state_ = core::vehicle_start(x_, heading);
+}
 
 AgentCounters AgentLogic::counters() const {
   AgentCounters c = table_->counters_for(id_);
@@ -192,6 +203,7 @@ bool AgentLogic::step() {
     // Before any command, and while held: stay put, and model time (with the tracked centre and
     // the lockstep step count) stands still.
     v_ = core::Vec2::Zero();
+    core::stop(vehicle_state_);
     return false;
   }
   const bool arc_law = cmd_.law == core::Law::Arc;
@@ -229,7 +241,9 @@ bool AgentLogic::step() {
   return true;
 }
 
-void AgentLogic::take_step(const core::StepResult& r) {
+void AgentLogic::take_step(const core::StepResult& law) {
+  // The integrator without a speed limit returns the law's step bit for bit.
+  const core::StepResult r = core::drive(vehicle_, vehicle_state_, law, cmd_.dt, cmd_.workspace);
   if (r.clamped) ++clamped_;
   arc_prev_ = cmd_.law == core::Law::Arc ? arc() : std::nullopt;
   x_prev_ = x_;

@@ -1,7 +1,8 @@
 #pragma once
 /// The agent's behaviour without DDS or clocks: a latest-per-agent neighbour table (shared by the
 /// agents one process hosts), the command and tracking target in force, and one core::agent_step per
-/// tick (one core::agent_steps for the hosted agents together when they can share it).
+/// tick (one core::agent_steps for the hosted agents together when they can share it), whose step the
+/// agent's vehicle then drives (core::drive).
 /// agent_node.cpp only wires DDS to it.
 #include <algorithm>
 #include <cstdint>
@@ -12,6 +13,7 @@
 
 #include "core/compiled_command.hpp"
 #include "core/law.hpp"
+#include "core/vehicle.hpp"
 #include "protocol/command_arbiter.hpp"
 #include "protocol/samples.hpp"
 
@@ -137,9 +139,10 @@ class AgentLogic {
   static constexpr std::int64_t kTargetTimeout_ns = 1'000'000'000;
   /// Whether a tracking target from the supervisor is in use (false: none yet, lost, or lockstep).
   bool following_target() const { return cmd_.tracking.enabled && target_ && !lockstep_; }
-  /// One control step: the law for the command and target in force, integrated over cmd.dt.
-  /// Before the first command, and while the command is held (Command::hold), the agent keeps its
-  /// position with velocity 0 and its model time does not advance; returns false.
+  /// One control step: the law for the command and target in force, integrated over cmd.dt, and the
+  /// vehicle driven by that step. Before the first command, and while the command is held
+  /// (Command::hold), the agent keeps its position with velocity 0 (its vehicle stopped) and its model
+  /// time does not advance; returns false.
   /// Lockstep (agent.sync: lockstep): step k -> k+1 is taken only once every neighbour has published
   /// its state of step k for the same command, and uses exactly those states; the tracked centre is
   /// then the command's path at the agent's own model time. This is the simulator's synchronous
@@ -154,6 +157,11 @@ class AgentLogic {
   /// for all (the heard agents not hosted here plus the hosted ones at their positions now), then each
   /// agent's own step, as step() would book it. agents: the process's hosted agents, one table.
   static void step_shared(const std::vector<AgentLogic*>& agents);
+
+  /// The vehicle this agent drives (the robot's own: agent config), from its start position with this
+  /// heading (rad). Call before the first step; without it the agent moves as the law steps it.
+  void set_vehicle(const core::VehicleParams& p, double heading);
+  const core::VehicleState& vehicle() const { return vehicle_state_; }
 
   std::int32_t id() const { return id_; }
   const core::Vec2& position() const { return x_; }
@@ -181,11 +189,14 @@ class AgentLogic {
   long step_of(double model_time) const { return std::lround(model_time / cmd_.dt); }
   /// The command actually integrated now: tracking follows the latest target from its last position.
   core::CompiledCommand effective_command() const;
-  /// Books a step's result r (position, velocity, model time, counters).
+  /// Drives the vehicle by the law's step r and books the result (position, velocity, model time,
+  /// counters).
   void take_step(const core::StepResult& r);
   std::int32_t id_;
-  core::Vec2 x_;
+  core::Vec2 x_;  ///< the vehicle's controlled point (vehicle_state_.x)
   core::Vec2 v_ = core::Vec2::Zero();
+  core::VehicleParams vehicle_;
+  core::VehicleState vehicle_state_;
   core::Vec2 x_prev_;
   std::optional<double> arc_prev_;
   bool lockstep_;

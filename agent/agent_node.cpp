@@ -236,8 +236,10 @@ AgentNode::AgentNode(const std::vector<std::int32_t>& ids, const std::vector<cor
       idle_every_(ticks_per(cfg.agent.rate_hz, cfg.agent.idle_state_rate_hz())),
       identity_(node_.source(), util::steady_ns() + static_cast<std::int64_t>(cfg.agent.identity_grace_s * 1e9)) {
   const int max_wait_ticks = static_cast<int>(std::lround(5.0 * cfg.agent.rate_hz));
-  for (std::size_t k = 0; k < ids.size(); ++k)
+  for (std::size_t k = 0; k < ids.size(); ++k) {
     logics_.push_back(std::make_unique<AgentLogic>(ids[k], starts[k], table_, cfg.agent.lockstep, max_wait_ticks));
+    logics_.back()->set_vehicle(cfg.vehicle, core::start_heading(cfg.vehicle, ids[k], cfg.swarm.seed));
+  }
   ages_us_.reserve(kAgeCapacity);
 }
 

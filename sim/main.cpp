@@ -55,8 +55,9 @@ void add_options(app::App& app, Args& a) {
       ->check(app::writable_file());
   cli.add_flag("--verbose", a.verbose, "print the effective configuration on stderr");
   cli.add_option("--kernel", a.kernel,
-                 "auto | agent (each agent through agent_step, as agent processes) | batch (paper law + Euler: "
-                 "each pair once, vectorised for this CPU); auto = batch from 64 agents")
+                 "auto | agent (each agent through agent_step, as agent processes) | batch (paper law + Euler, "
+                 "vehicle.model integrator: each pair once, vectorised for this CPU); auto = batch from 64 agents "
+                 "where it applies")
       ->check(CLI::IsMember({"auto", "agent", "batch"}));
   cli.add_option("--threads", a.threads,
                  "threads of the batched kernel's pair pass (each takes an equal share of the pairs; the sums' "
@@ -132,7 +133,13 @@ sim::SimOptions sim_options(const Args& a, const config::Config& cfg, int agents
   opt.converge = cv;
   opt.kernel = a.kernel == "agent"   ? core::Kernel::Agent
                : a.kernel == "batch" ? core::Kernel::Batch
-                                     : sim::auto_kernel(agents);
+                                     : sim::auto_kernel(agents, cfg.vehicle);
+  if (a.kernel == "batch" && cfg.vehicle.model != core::VehicleModel::Integrator)
+    throw std::runtime_error("--kernel batch: the batched kernel moves agents as the integrator model only, and "
+                             "vehicle.model is " + std::string(core::to_string(cfg.vehicle.model)) +
+                             ": use --kernel agent or auto");
+  opt.vehicle = cfg.vehicle;
+  opt.heading_seed = cfg.swarm.seed;
   opt.batch.threads = a.threads;
   return opt;
 }
@@ -172,8 +179,8 @@ nlohmann::json result_json(const Args& a, const config::Config& cfg, const sim::
   j["model_time"] = r.model_time;
   j["integrator"] = std::string(core::to_string(cmd.integrator));
   j["law"] = std::string(core::to_string(cmd.law));
-  j["kernel"] = opt.kernel == core::Kernel::Batch && cmd.law == core::Law::Paper && cmd.integrator == core::Integrator::Euler
-                    ? "batch" : "agent";
+  j["kernel"] = opt.kernel == core::Kernel::Batch && core::batch_applies(cmd, opt.vehicle) ? "batch" : "agent";
+  j["vehicle"] = std::string(core::to_string(opt.vehicle.model));
   j["max_step"] = r.max_step;
   j["seed"] = a.init_path.empty() ? nlohmann::json(cfg.swarm.seed) : nlohmann::json(nullptr);
   j["init"] = a.init_path.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.init_path);
@@ -188,6 +195,10 @@ nlohmann::json result_json(const Args& a, const config::Config& cfg, const sim::
     j["outline"] = outline_json(cmd, a.outline_time >= 0 ? a.outline_time : r.model_time, a.outline, r.final_positions);
   auto& fp = j["final_positions"] = nlohmann::json::array();
   for (const auto& p : r.final_positions) fp.push_back({p.x(), p.y()});
+  if (opt.vehicle.model == core::VehicleModel::Unicycle) {
+    auto& fh = j["final_headings"] = nlohmann::json::array();  // rad, of each agent's vehicle
+    for (const auto& v : r.final_vehicles) fh.push_back(v.heading);
+  }
   return j;
 }
 

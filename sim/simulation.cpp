@@ -39,13 +39,17 @@ void record_step(record::Recorder& rec, double wall, long k, std::uint64_t epoch
 }
 }  // namespace
 
-core::Kernel auto_kernel(int agents) { return agents >= 64 ? core::Kernel::Batch : core::Kernel::Agent; }
+core::Kernel auto_kernel(int agents, const core::VehicleParams& vehicle) {
+  return agents >= 64 && vehicle.model == core::VehicleModel::Integrator ? core::Kernel::Batch : core::Kernel::Agent;
+}
 
 SimResult run_simulation(const core::CompiledCommand& cmd, std::vector<core::Vec2> start, long steps,
                          const SimOptions& opt) {
   core::Swarm swarm(cmd, std::move(start));
   swarm.set_kernel(opt.kernel);
   swarm.set_batch(opt.batch);
+  swarm.set_vehicle(opt.vehicle, core::start_headings(opt.vehicle, static_cast<int>(swarm.positions().size()),
+                                                      opt.heading_seed));
   std::vector<core::Vec2> last = swarm.positions();
   core::ConvergenceDetector verdict(opt.converge);
   verdict.set_command(cmd);
@@ -83,6 +87,7 @@ SimResult run_simulation(const core::CompiledCommand& cmd, std::vector<core::Vec
   r.metrics = core::compute_metrics(cmd, swarm.positions(), swarm.time());
   r.settle_step = core::settle_index(err, gap, opt.settle);
   r.final_positions = swarm.positions();
+  r.final_vehicles = swarm.vehicles();
   for (std::size_t i = 0; i < last.size() && steps > 0; ++i)
     r.max_step = std::max(r.max_step, (r.final_positions[i] - last[i]).norm());
   r.converged = verdict.converged();

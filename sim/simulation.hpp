@@ -1,5 +1,6 @@
 #pragma once
-/// The headless simulator: N agents in one process, each stepped with core::agent_step.
+/// The headless simulator: N agents in one process, each stepped with core::agent_step and driving its
+/// vehicle (core::drive).
 #include <cstdint>
 #include <iosfwd>
 #include <optional>
@@ -27,17 +28,22 @@ struct SimOptions {
   std::uint64_t epoch = 1;  ///< the command's epoch in the recording
   core::SettleParams settle;
   core::ConvergenceParams converge;  ///< the verdict (core::ConvergenceDetector), as the supervisor's
-  core::Kernel kernel = core::Kernel::Agent;  ///< see core::Kernel (Batch applies to paper law + Euler)
+  core::Kernel kernel = core::Kernel::Agent;  ///< see core::Kernel (Batch where core::batch_applies)
   core::BatchOptions batch;                   ///< how the batched kernel runs (instruction set, threads)
+  core::VehicleParams vehicle;                ///< what every agent drives (default: the integrator)
+  std::uint64_t heading_seed = 1;             ///< seeds the start headings (core::start_heading)
 };
 
-/// The kernel "auto" picks: the batched one from 64 agents on, where it pays; the agent path below.
-core::Kernel auto_kernel(int agents);
+/// The kernel "auto" picks: the batched one from 64 agents on, where it pays and applies (agents
+/// driving the integrator model); the agent path otherwise.
+core::Kernel auto_kernel(int agents, const core::VehicleParams& vehicle = {});
 
 struct SimResult {
   core::Metrics metrics;               ///< at the final step
   std::optional<int> settle_step;      ///< see core::settle_index
   std::vector<core::Vec2> final_positions;
+  /// every agent's vehicle at the final step; empty when they move exactly as the law (core::moves_as_law)
+  std::vector<core::VehicleState> final_vehicles;
   long steps = 0;
   double model_time = 0.0;
   double max_step = 0.0;  ///< largest displacement of any agent in the last step (chatter)

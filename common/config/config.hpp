@@ -12,6 +12,7 @@
 #include "core/compiled_command.hpp"
 #include "core/metrics.hpp"
 #include "core/params.hpp"
+#include "core/vehicle.hpp"
 #include "protocol/transport.hpp"
 
 namespace shapeform::config {
@@ -75,6 +76,9 @@ struct Config {
   core::CompiledCommand command;  ///< shape, tracking, dynamics, integration; compiled by load
   SimConfig sim;
   AgentConfig agent;
+  /// What each agent drives: the robot's own property, read by the agent process and the simulator,
+  /// never part of the command (the wire does not carry it).
+  core::VehicleParams vehicle;
   SupervisorConfig supervisor;
   dds::TransportConfig transport;  ///< filled and checked by dds::transport_problems
 };

@@ -5,6 +5,7 @@
 #include "config/config.hpp"
 
 #include "core/command_table.hpp"
+#include "core/enum_names.hpp"
 
 namespace shapeform::config {
 namespace {
@@ -30,6 +31,64 @@ P param(Type type, std::string key, std::string unit, params::Range range, std::
 template <class Field>
 P real(std::string key, std::string unit, params::Range range, std::string doc, Field field) {
   return param<double>(Type::Real, std::move(key), std::move(unit), range, std::move(doc), field);
+}
+
+/// An angle key: written in degrees, stored in radians.
+template <class Field>
+P angle(std::string key, params::Range range, std::string doc, Field field) {
+  P p = real(std::move(key), "degrees", range, std::move(doc), field);
+  p.degrees = true;
+  return p;
+}
+
+/// The vehicle section (core/vehicle.hpp, docs/VEHICLES.md): the robot each agent drives.
+void add_vehicle(std::vector<P>& t) {
+  t.push_back(params::make_choice<Config>(
+      "vehicle.model",
+      "what each agent drives: `integrator` = the point moves as the law steps it (the paper's model); "
+      "`double_integrator` = a point mass whose velocity follows the law's, acceleration at most "
+      "`vehicle.max_accel`; `unicycle` = a differential drive (forward speed, yaw rate) steered through the "
+      "point `vehicle.offset` ahead of its axle, which is the position it publishes. Not on the wire: the "
+      "robot's own",
+      params::kVehicleModelNames, [](auto& c) -> auto& { return c.vehicle.model; }));
+  t.push_back(params::make_choice<Config>(
+      "vehicle.steering",
+      "unicycle: `exact` = the forward speed and yaw rate held over a step whose arc carries the point exactly "
+      "along the law's step (cut short along it when a limit binds); `linearised` = the classic feedback "
+      "linearisation `[v; offset w] = R(-heading) u`, both scaled by one factor when a limit binds",
+      params::kSteeringNames, [](auto& c) -> auto& { return c.vehicle.steering; }));
+  t.push_back(real(
+      "vehicle.max_speed", "m/s", params::at_least(0),
+      "speed limit (0 = none): the point's speed (integrator, double integrator), the forward speed of the "
+      "axle (unicycle)",
+      [](auto& c) -> auto& { return c.vehicle.max_speed; }));
+  t.push_back(real(
+      "vehicle.max_yaw_rate", "rad/s", params::at_least(0), "unicycle: yaw rate limit (0 = none)",
+      [](auto& c) -> auto& { return c.vehicle.max_yaw_rate; }));
+  t.push_back(real(
+      "vehicle.max_accel", "m/s^2", params::at_least(0),
+      "double integrator: acceleration limit (0 = none; the unicycle is kinematic)",
+      [](auto& c) -> auto& { return c.vehicle.max_accel; }));
+  t.push_back(real(
+      "vehicle.offset", "m", params::above(0),
+      "unicycle: distance of the controlled (published) point ahead of the axle; the axle stays this far "
+      "from where the law puts the point",
+      [](auto& c) -> auto& { return c.vehicle.offset; }));
+  t.push_back(real(
+      "vehicle.seconds_per_model_time", "s", params::above(0),
+      "seconds of the vehicle's time per unit of the law's model time: a step of `integration.dt` lasts "
+      "`dt` times this, the law's velocity in shape units (m) per model time is this many times the "
+      "vehicle's in m/s, and the limits apply to the latter",
+      [](auto& c) -> auto& { return c.vehicle.seconds_per_model_time; }));
+  t.push_back(angle(
+      "vehicle.initial_heading_deg", params::any(),
+      "every vehicle's heading at the start, counter-clockwise from the x1 axis (before the spread)",
+      [](auto& c) -> auto& { return c.vehicle.initial_heading; }));
+  t.push_back(angle(
+      "vehicle.heading_spread_deg", params::Range{0, false, 180, false, false},
+      "start headings uniform in `initial_heading_deg` +- this, drawn per agent from (`swarm.seed`, id) "
+      "alone (180: any heading; the positions' draw is unchanged)",
+      [](auto& c) -> auto& { return c.vehicle.heading_spread; }));
 }
 
 std::vector<P> build() {
@@ -124,6 +183,7 @@ std::vector<P> build() {
       "fires (an assert in PDP.cpp), which a large swarm stopping at once makes likely (docs/BENCHMARKS.md, "
       "lever 11). The launcher sets it from `config/large_swarm.sets`' size on",
       [](auto& c) -> auto& { return c.agent.leave_by_lease; }));
+  add_vehicle(t);
   t.push_back(real(
       "supervisor.metrics_rate_hz", "Hz", params::above_up_to(0, kMaxRateHz),
       "metrics computation / publication / recording rate (computed every round(target_rate_hz / "

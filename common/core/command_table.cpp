@@ -43,12 +43,8 @@ P text(std::string key, std::string wire, std::string unit, std::string doc, std
 
 template <class E, std::size_t N, class Field>
 P choice(std::string key, std::string wire, std::string doc, const Name<E> (&table)[N], Field field) {
-  P p;
-  p.key = std::move(key);
-  p.type = Type::Choice;
-  p.doc = std::move(doc);
+  P p = make_choice<Command>(std::move(key), std::move(doc), table, field);
   p.wire = {std::move(wire)};
-  bind_choice(p, table, field);
   return p;
 }
 

@@ -25,4 +25,14 @@ bool parse_integrator(std::string_view name, Integrator& out) {
   return params::parse_name(params::kIntegratorNames, name, out);
 }
 
+std::string_view to_string(VehicleModel m) { return params::name_of(params::kVehicleModelNames, m); }
+
+bool parse_vehicle_model(std::string_view name, VehicleModel& out) {
+  return params::parse_name(params::kVehicleModelNames, name, out);
+}
+
+std::string_view to_string(Steering s) { return params::name_of(params::kSteeringNames, s); }
+
+bool parse_steering(std::string_view name, Steering& out) { return params::parse_name(params::kSteeringNames, name, out); }
+
 }  // namespace shapeform::core

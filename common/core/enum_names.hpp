@@ -3,6 +3,7 @@
 /// commands, JSON and on the wire. core's to_string / parse_* and the parameter tables use them.
 #include "command.hpp"
 #include "params.hpp"
+#include "vehicle.hpp"
 
 namespace shapeform::core::params {
 
@@ -17,5 +18,9 @@ inline constexpr Name<CentrePath::Kind> kPathKindNames[] = {{CentrePath::Kind::F
 inline constexpr Name<Integrator> kIntegratorNames[] = {{Integrator::Euler, "euler"},
                                                         {Integrator::RK4, "rk4"}};
 inline constexpr Name<Law> kLawNames[] = {{Law::Paper, "paper"}, {Law::Arc, "arc"}};
+inline constexpr Name<VehicleModel> kVehicleModelNames[] = {{VehicleModel::Integrator, "integrator"},
+                                                            {VehicleModel::DoubleIntegrator, "double_integrator"},
+                                                            {VehicleModel::Unicycle, "unicycle"}};
+inline constexpr Name<Steering> kSteeringNames[] = {{Steering::Exact, "exact"}, {Steering::Linearised, "linearised"}};
 
 }  // namespace shapeform::core::params

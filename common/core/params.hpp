@@ -203,4 +203,15 @@ void bind_choice(Param<T>& p, const Name<E> (&table)[N], Field field) {
   p.set = [&table, field](T& t, const Value& v) { parse_name(table, std::get<std::string>(v), field(t)); };
 }
 
+/// A Choice parameter of T, the enumeration field `field(t)` spelled by its name table.
+template <class T, class E, std::size_t N, class Field>
+Param<T> make_choice(std::string key, std::string doc, const Name<E> (&table)[N], Field field) {
+  Param<T> p;
+  p.key = std::move(key);
+  p.type = Type::Choice;
+  p.doc = std::move(doc);
+  bind_choice(p, table, field);
+  return p;
+}
+
 }  // namespace shapeform::core::params

@@ -1,10 +1,12 @@
 #pragma once
-/// An in-process swarm: N agents stepped synchronously with agent_step (the headless simulator).
+/// An in-process swarm: N agents stepped synchronously with agent_step, each driving its vehicle
+/// (core::drive) (the headless simulator).
 #include <cstdint>
 #include <vector>
 
 #include "batch.hpp"
 #include "law.hpp"
+#include "vehicle.hpp"
 
 namespace shapeform::core {
 
@@ -17,18 +19,29 @@ enum class Kernel {
   Batch   ///< paper law + Euler only: paper_velocities_batch (each pair once, vectorised, O(N) memory)
 };
 
+/// Whether the batched kernel applies: the paper's law, Euler, and agents that drive the integrator
+/// model (the other vehicle models step each agent on its own).
+bool batch_applies(const CompiledCommand& cmd, const VehicleParams& vehicle);
+
 class Swarm {
  public:
   Swarm(CompiledCommand cmd, std::vector<Vec2> start);
   /// Advances every agent by one step from the same snapshot (synchronous update).
   void step();
-  /// Batch is used only where it applies (paper law, Euler); elsewhere Agent.
+  /// Batch is used only where it applies (batch_applies); elsewhere Agent.
   void set_kernel(Kernel k) { kernel_ = k; }
   Kernel kernel() const { return kernel_; }
   /// How the batched kernel runs (instruction set, threads).
   void set_batch(const BatchOptions& b) { batch_ = b; }
   void set_command(const CompiledCommand& cmd) { cmd_ = cmd; }
   const CompiledCommand& command() const { return cmd_; }
+  /// The vehicle every agent drives (default: the integrator, positions exactly as the law steps them),
+  /// agent i starting with headings[i] (empty: p.initial_heading). Call before the first step; throws
+  /// std::invalid_argument when headings has another size than the swarm.
+  void set_vehicle(const VehicleParams& p, const std::vector<double>& headings = {});
+  const VehicleParams& vehicle() const { return vehicle_; }
+  /// Every agent's vehicle state; empty while they move exactly as the law steps them (moves_as_law).
+  const std::vector<VehicleState>& vehicles() const { return vehicles_; }
   const std::vector<Vec2>& positions() const { return x_; }
   double time() const { return t_; }
   long steps() const { return steps_; }
@@ -44,6 +57,11 @@ class Swarm {
   Kernel kernel_ = Kernel::Agent;
   BatchOptions batch_;
   std::vector<Vec2> v_;
+  VehicleParams vehicle_;
+  std::vector<VehicleState> vehicles_;
+  /// Where agent i's vehicle takes it on the law's step r (r.x itself when it moves as the law).
+  Vec2 move(int i, const StepResult& r);
+  void step_batch();
 };
 
 }  // namespace shapeform::core

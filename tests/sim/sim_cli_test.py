@@ -81,6 +81,22 @@ class SimOutput(unittest.TestCase):
             self.assertEqual(len(prow), 1 + 11 * 3)
             self.assertEqual(prow[1].split(",")[:2], ["0", "0"])
 
+    def test_vehicle_model_and_headings(self):
+        j = json.loads(sim("--config", scenario("circle"), "--steps", "5").stdout)
+        self.assertEqual(j["vehicle"], "integrator")
+        self.assertNotIn("final_headings", j)
+        j = json.loads(sim("--config", scenario("arc_circle"), "--steps", "5", "--set", "vehicle.model=unicycle",
+                           "--set", "vehicle.heading_spread_deg=180").stdout)
+        self.assertEqual((j["vehicle"], j["kernel"]), ("unicycle", "agent"))
+        self.assertEqual(len(j["final_headings"]), 12)
+        self.assertTrue(all(-3.15 < h < 3.15 for h in j["final_headings"]))
+        # From 64 agents auto batches the integrator model only.
+        j = json.loads(sim("--config", scenario("circle"), "--agents", "64", "--steps", "1").stdout)
+        self.assertEqual(j["kernel"], "batch")
+        j = json.loads(sim("--config", scenario("circle"), "--agents", "64", "--steps", "1",
+                           "--set", "vehicle.model=double_integrator").stdout)
+        self.assertEqual(j["kernel"], "agent")
+
 
 class BadInput(unittest.TestCase):
     def assert_rejected(self, args, *needles):
@@ -110,6 +126,9 @@ class BadInput(unittest.TestCase):
         self.assert_rejected(["--set", "nonsense"], "nonsense")
         self.assert_rejected(["--config", "/nonexistent/x.yaml"], "/nonexistent/x.yaml")
         self.assert_rejected(["--init", "/nonexistent/start.csv"], "/nonexistent/start.csv")
+        self.assert_rejected(["--kernel", "batch", "--set", "vehicle.model=unicycle"], "--kernel batch",
+                             "integrator model only", "vehicle.model is unicycle")
+        self.assert_rejected(["--set", "vehicle.model=car"], "vehicle.model", "car", "unicycle")
 
     def test_bad_init_and_yaml_files(self):
         with tempfile.TemporaryDirectory() as d:

@@ -71,6 +71,68 @@ TEST_CASE("a tick of the agent is exactly the simulator's step", "[agent]") {
   for (int i = 0; i < 3; ++i) CHECK(agents[i].position() == swarm.positions()[i]);
 }
 
+TEST_CASE("an agent driving a vehicle is exactly the simulator's agent driving it", "[agent][vehicle]") {
+  // Every model, the arc law (arc lengths exchanged as processes do) and the paper's: AgentLogic and
+  // core::Swarm call the same core::drive on the same law step.
+  for (auto model : {core::VehicleModel::DoubleIntegrator, core::VehicleModel::Unicycle}) {
+    for (auto law : {core::Law::Paper, core::Law::Arc}) {
+      core::CompiledCommand cmd = circle();
+      cmd.law = law;
+      core::VehicleParams v;
+      v.model = model;
+      v.max_speed = 0.3;
+      v.max_yaw_rate = 0.8;
+      v.max_accel = 0.2;
+      v.heading_spread = 3.0;
+      const auto start = core::uniform_start(4, 9);
+      const auto headings = core::start_headings(v, 4, 9);
+      core::Swarm swarm(cmd, start);
+      swarm.set_vehicle(v, headings);
+      std::vector<AgentLogic> agents;
+      for (int i = 0; i < 4; ++i) {
+        agents.emplace_back(i, start[i], 60 * kMs);
+        agents.back().set_vehicle(v, core::start_heading(v, i, 9));
+        adopt(agents.back(), cmd, 1);
+      }
+      for (std::uint64_t seq = 1; seq <= 60; ++seq) {
+        for (auto& a : agents)
+          for (const auto& b : agents) a.on_state(b.id(), b.position(), seq, 0, b.command_id(), b.arc());
+        for (auto& a : agents) a.step();
+        swarm.step();
+      }
+      INFO(core::to_string(model) << " " << core::to_string(law));
+      for (int i = 0; i < 4; ++i) {
+        CHECK(agents[i].position() == swarm.positions()[i]);
+        CHECK(agents[i].vehicle().heading == swarm.vehicles()[i].heading);
+        CHECK(agents[i].vehicle().x == agents[i].position());
+      }
+    }
+  }
+}
+
+TEST_CASE("a held agent's vehicle stops; with the default vehicle it moves as the law", "[agent][vehicle]") {
+  AgentLogic a(0, Vec2(6, 0), 60 * kMs);
+  core::VehicleParams v;
+  v.model = core::VehicleModel::DoubleIntegrator;
+  v.max_accel = 0.1;
+  a.set_vehicle(v, 0.0);
+  REQUIRE(adopt(a, circle(), 1));
+  for (int k = 0; k < 5; ++k) a.step();
+  CHECK(a.vehicle().velocity.norm() > 0.0);
+  core::CompiledCommand held = circle();
+  held.hold = true;
+  REQUIRE(adopt(a, held, 2));
+  const Vec2 at = a.position();
+  CHECK_FALSE(a.step());
+  CHECK(a.vehicle().velocity == Vec2::Zero());
+  CHECK(a.position() == at);
+  // No vehicle set: the integrator, whose step is the law's, bit for bit.
+  AgentLogic plain(0, Vec2(6, 0), 60 * kMs);
+  REQUIRE(adopt(plain, circle(), 1));
+  plain.step();
+  CHECK(plain.position() == core::agent_step(circle(), 0, Vec2(6, 0), {}, 0.0).x);
+}
+
 TEST_CASE("neighbour table: latest per agent, losses counted, stale and departed dropped", "[agent]") {
   AgentLogic a(0, Vec2(0, 0), 60 * kMs);
   a.on_state(0, Vec2(9, 9), 1, 0);  // own sample: ignored

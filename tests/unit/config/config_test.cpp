@@ -1230,3 +1230,43 @@ TEST_CASE("command_settings round-trips held commands, rotations, expressions an
   CHECK(std::find(settings.begin(), settings.end(), std::make_pair(std::string("dynamics.hold"), std::string("true"))) !=
         settings.end());
 }
+
+TEST_CASE("vehicle keys: the robot's own, read from the file, checked at the key", "[config][vehicle]") {
+  const Config d;
+  CHECK(d.vehicle.model == core::VehicleModel::Integrator);
+  CHECK(core::moves_as_law(d.vehicle));  // the default moves agents as before
+  const Config c = load_string(
+      "schema_version: 1\nvehicle:\n  model: unicycle\n  steering: linearised\n  max_speed: 0.5\n"
+      "  max_yaw_rate: 1.5\n  max_accel: 2\n  offset: 0.3\n  seconds_per_model_time: 0.02\n"
+      "  initial_heading_deg: 90\n  heading_spread_deg: 180\n");
+  CHECK(c.vehicle.model == core::VehicleModel::Unicycle);
+  CHECK(c.vehicle.steering == core::Steering::Linearised);
+  CHECK(c.vehicle.max_speed == 0.5);
+  CHECK(c.vehicle.max_yaw_rate == 1.5);
+  CHECK(c.vehicle.max_accel == 2.0);
+  CHECK(c.vehicle.offset == 0.3);
+  CHECK(c.vehicle.seconds_per_model_time == 0.02);
+  CHECK(c.vehicle.initial_heading == 90 * kRadPerDeg);
+  CHECK(c.vehicle.heading_spread == 180 * kRadPerDeg);
+  // Not the command's: a vehicle leaves the command (and so the wire) as it was.
+  CHECK(shapeform::config::command_settings(c.command) == shapeform::config::command_settings(d.command));
+  // to_yaml writes what loads back.
+  const Config back = load_string(to_yaml(c));
+  CHECK(back.vehicle.initial_heading == c.vehicle.initial_heading);
+  CHECK(back.vehicle.model == c.vehicle.model);
+
+  const auto one = [](const std::string& key, const std::string& v) {
+    return problem_of("schema_version: 1\nvehicle:\n  " + key + ": " + v + "\n");
+  };
+  CHECK(one("model", "car") == "vehicle.model: must be one of integrator, double_integrator, unicycle, got \"car\" (line 3)");
+  CHECK(one("steering", "pid") == "vehicle.steering: must be one of exact, linearised, got \"pid\" (line 3)");
+  CHECK(one("offset", "0") == "vehicle.offset: must be > 0, got 0 (line 3)");
+  CHECK(one("max_speed", "-1") == "vehicle.max_speed: must be >= 0, got -1 (line 3)");
+  CHECK(one("max_yaw_rate", ".inf") == "vehicle.max_yaw_rate: must be finite, got .inf (line 3)");
+  CHECK(one("max_accel", "-0.1") == "vehicle.max_accel: must be >= 0, got -0.1 (line 3)");
+  CHECK(one("seconds_per_model_time", "0") == "vehicle.seconds_per_model_time: must be > 0, got 0 (line 3)");
+  CHECK(one("heading_spread_deg", "200") == "vehicle.heading_spread_deg: must be in [0, 180], got 200 (line 3)");
+  CHECK(one("wheels", "2") == "vehicle.wheels: unknown key (line 3)");
+  CHECK(problem_of("schema_version: 1\n", {"vehicle.model=Unicycle"}) ==
+        "vehicle.model: must be one of integrator, double_integrator, unicycle, got \"Unicycle\" (--set)");
+}
