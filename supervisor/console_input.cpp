@@ -72,6 +72,7 @@ void set_cloexec(int fd) { ::fcntl(fd, F_SETFD, FD_CLOEXEC); }
 void set_nonblocking(int fd) { ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) | O_NONBLOCK); }
 
 EditLine* editline(void* p) { return static_cast<EditLine*>(p); }
+History* history_of(void* p) { return static_cast<History*>(p); }
 
 }  // namespace
 
@@ -338,11 +339,22 @@ void ConsoleInput::run_editline() {
   // All libedit calls happen on this thread. libedit reads one key per el_gets() (unbuffered mode),
   // only when poll() says a key is there, so the thread never blocks in libedit and can print the
   // process's output (from out_pipe_) above the line at any time.
-  FILE* term = ::fdopen(::dup(term_fd_), "w");
-  if (term == nullptr) {
+  if (!open_editline()) {
     run_plain();
     return;
   }
+  while (true) {
+    drain_output();
+    if (stop_.load() && !out_open_) break;
+    take_sigints();
+    if (!wait_for_input()) break;
+  }
+  close_editline();
+}
+
+bool ConsoleInput::open_editline() {
+  FILE* term = ::fdopen(::dup(term_fd_), "w");
+  if (term == nullptr) return false;
   term_file_ = term;
   EditLine* el = el_init("shapeform", stdin, term, term);
   History* hist = history_init();
@@ -351,8 +363,7 @@ void ConsoleInput::run_editline() {
     if (hist != nullptr) history_end(hist);
     std::fclose(term);
     term_file_ = nullptr;
-    run_plain();
-    return;
+    return false;
   }
   el_ = el;
   hist_ = hist;
@@ -367,103 +378,15 @@ void ConsoleInput::run_editline() {
   el_set(el, EL_HIST, history, hist);
   el_set(el, EL_ADDFN, "shapeform-complete", "complete a command, shape or parameter name", tab_fn);
   el_set(el, EL_BIND, "^I", "shapeform-complete", static_cast<const char*>(nullptr));
-  el_source(el, nullptr);         // ~/.editrc, as every libedit program
-  el_set(el, EL_UNBUFFERED, 1);   // raw terminal, one key per el_gets(); the prompt is still empty
+  el_source(el, nullptr);        // ~/.editrc, as every libedit program
+  el_set(el, EL_UNBUFFERED, 1);  // raw terminal, one key per el_gets(); the prompt is still empty
+  out_open_ = true;
+  return true;
+}
 
-  const auto new_line = [&] {  // an empty line buffer, terminal still raw, nothing drawn
-    el_reset(el);
-    el_set(el, EL_PREP_TERM, 1);
-    prompt_shown_ = false;
-    g_prompt.clear();
-    at_line_start_ = true;
-  };
-  bool out_open = true;
-  std::chrono::steady_clock::time_point partial_since{};
-  const auto drain_output = [&] {
-    char buf[4096];
-    std::string got;
-    for (;;) {
-      const ssize_t n = ::read(out_pipe_[0], buf, sizeof buf);
-      if (n > 0) {
-        got.append(buf, static_cast<std::size_t>(n));
-        continue;
-      }
-      if (n == 0) out_open = false;  // every writer closed: the destructor restored stdout
-      if (n < 0 && errno == EINTR) continue;
-      break;
-    }
-    if (!got.empty()) {
-      if (partial_.empty()) partial_since = std::chrono::steady_clock::now();
-      partial_ += got;
-    }
-    // Whole lines at once; a line without its newline waits a little for the rest.
-    const std::size_t nl = partial_.rfind('\n');
-    const bool flush_all = !out_open || !prompt_shown_ ||
-                           std::chrono::steady_clock::now() - partial_since >= kPartialFlush;
-    const std::size_t n = flush_all ? partial_.size() : (nl == std::string::npos ? 0 : nl + 1);
-    if (n > 0) {
-      print_above(std::string_view(partial_).substr(0, n));
-      partial_.erase(0, n);
-      partial_since = std::chrono::steady_clock::now();
-    }
-  };
-
-  while (true) {
-    drain_output();
-    if (stop_.load() && !out_open) break;
-    for (int n = g_sigint_count.exchange(0); n > 0; --n) {
-      const LineInfo* li = el_line(el);
-      if (prompt_shown_ && li->lastchar != li->buffer) {  // a line being typed: clear it, go on
-        write_term(std::string(li->cursor, li->lastchar) + "^C\n");
-        new_line();
-        continue;
-      }
-      write_term(prompt_shown_ || at_line_start_ ? "^C\n" : "\n^C\n");
-      new_line();
-      const std::lock_guard<std::mutex> lock(mutex_);
-      ++interrupts_for_loop_;
-    }
-    bool want = false;
-    {
-      const std::lock_guard<std::mutex> lock(mutex_);
-      want = !busy_ && lines_.empty() && interrupts_for_loop_ == 0 && !ended_ && !stop_.load();
-    }
-    if (want != prompt_shown_) show_prompt(want);
-
-    pollfd fds[3] = {{out_open ? out_pipe_[0] : -1, POLLIN, 0}, {wake_pipe_[0], POLLIN, 0}, {STDIN_FILENO, POLLIN, 0}};
-    const nfds_t nfds = prompt_shown_ ? 3 : 2;
-    const int timeout = partial_.empty() ? kPollTimeoutMs : 20;
-    if (::poll(fds, nfds, timeout) < 0 && errno != EINTR) break;
-    if ((fds[1].revents & POLLIN) != 0) {
-      char wake[64];
-      while (::read(wake_pipe_[0], wake, sizeof wake) > 0) {
-      }
-    }
-    if (!prompt_shown_ || (fds[2].revents & (POLLIN | POLLHUP | POLLERR)) == 0) continue;
-    int pending = 0;
-    if ((fds[2].revents & POLLIN) == 0 || ::ioctl(STDIN_FILENO, FIONREAD, &pending) != 0 || pending == 0) {
-      write_term("\n");  // the terminal hung up: end of input
-      new_line();
-      set_ended();
-      continue;
-    }
-    int count = 0;
-    const char* buf = el_gets(el, &count);
-    if (buf == nullptr || count <= 0) continue;  // an empty line after this key
-    if (count == 1 && buf[0] == '\x04') {  // Ctrl-D on an empty line
-      write_term("\n");
-      new_line();
-      set_ended();
-      continue;
-    }
-    if (buf[count - 1] != '\n') continue;  // still editing
-    std::string text(buf, static_cast<std::size_t>(count - 1));
-    bool blank = true;
-    for (const char ch : text) blank = blank && (ch == ' ' || ch == '\t');
-    if (!blank) history(hist, &ev, H_ENTER, text.c_str());
-    new_line();  // libedit has moved to the next row already
-    push_line(std::move(text));
-  }
+void ConsoleInput::close_editline() {
+  EditLine* el = editline(el_);
+  History* hist = history_of(hist_);
   if (prompt_shown_) erase_edit_area();
   el_set(el, EL_PREP_TERM, 0);  // cooked again
   el_end(el);
@@ -471,12 +394,114 @@ void ConsoleInput::run_editline() {
   if (!options_.history_file.empty()) {
     std::error_code ec;
     std::filesystem::create_directories(std::filesystem::path(options_.history_file).parent_path(), ec);
+    HistEvent ev;
     history(hist, &ev, H_SAVE, options_.history_file.c_str());
   }
   history_end(hist);
   hist_ = nullptr;
-  std::fclose(term);
+  std::fclose(static_cast<FILE*>(term_file_));
   term_file_ = nullptr;
+}
+
+void ConsoleInput::new_line() {
+  el_reset(editline(el_));
+  el_set(editline(el_), EL_PREP_TERM, 1);
+  prompt_shown_ = false;
+  g_prompt.clear();
+  at_line_start_ = true;
+}
+
+void ConsoleInput::drain_output() {
+  char buf[4096];
+  std::string got;
+  for (;;) {
+    const ssize_t n = ::read(out_pipe_[0], buf, sizeof buf);
+    if (n > 0) {
+      got.append(buf, static_cast<std::size_t>(n));
+      continue;
+    }
+    if (n == 0) out_open_ = false;  // every writer closed: the destructor restored stdout
+    if (n < 0 && errno == EINTR) continue;
+    break;
+  }
+  if (!got.empty()) {
+    if (partial_.empty()) partial_since_ = std::chrono::steady_clock::now();
+    partial_ += got;
+  }
+  // Whole lines at once; a line without its newline waits a little for the rest.
+  const std::size_t nl = partial_.rfind('\n');
+  const bool flush_all =
+      !out_open_ || !prompt_shown_ || std::chrono::steady_clock::now() - partial_since_ >= kPartialFlush;
+  const std::size_t n = flush_all ? partial_.size() : (nl == std::string::npos ? 0 : nl + 1);
+  if (n > 0) {
+    print_above(std::string_view(partial_).substr(0, n));
+    partial_.erase(0, n);
+    partial_since_ = std::chrono::steady_clock::now();
+  }
+}
+
+void ConsoleInput::take_sigints() {
+  for (int n = g_sigint_count.exchange(0); n > 0; --n) {
+    const LineInfo* li = el_line(editline(el_));
+    if (prompt_shown_ && li->lastchar != li->buffer) {  // a line being typed: clear it, go on
+      write_term(std::string(li->cursor, li->lastchar) + "^C\n");
+      new_line();
+      continue;
+    }
+    write_term(prompt_shown_ || at_line_start_ ? "^C\n" : "\n^C\n");
+    new_line();
+    const std::lock_guard<std::mutex> lock(mutex_);
+    ++interrupts_for_loop_;
+  }
+}
+
+bool ConsoleInput::wait_for_input() {
+  bool want = false;
+  {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    want = !busy_ && lines_.empty() && interrupts_for_loop_ == 0 && !ended_ && !stop_.load();
+  }
+  if (want != prompt_shown_) show_prompt(want);
+
+  pollfd fds[3] = {
+      {out_open_ ? out_pipe_[0] : -1, POLLIN, 0}, {wake_pipe_[0], POLLIN, 0}, {STDIN_FILENO, POLLIN, 0}};
+  const nfds_t nfds = prompt_shown_ ? 3 : 2;
+  const int timeout = partial_.empty() ? kPollTimeoutMs : 20;
+  if (::poll(fds, nfds, timeout) < 0 && errno != EINTR) return false;
+  if ((fds[1].revents & POLLIN) != 0) {
+    char wake[64];
+    while (::read(wake_pipe_[0], wake, sizeof wake) > 0) {
+    }
+  }
+  if (prompt_shown_ && (fds[2].revents & (POLLIN | POLLHUP | POLLERR)) != 0) read_key(fds[2].revents);
+  return true;
+}
+
+void ConsoleInput::read_key(short revents) {
+  int pending = 0;
+  if ((revents & POLLIN) == 0 || ::ioctl(STDIN_FILENO, FIONREAD, &pending) != 0 || pending == 0) {
+    write_term("\n");  // the terminal hung up: end of input
+    new_line();
+    set_ended();
+    return;
+  }
+  int count = 0;
+  const char* buf = el_gets(editline(el_), &count);
+  if (buf == nullptr || count <= 0) return;  // an empty line after this key
+  if (count == 1 && buf[0] == '\x04') {      // Ctrl-D on an empty line
+    write_term("\n");
+    new_line();
+    set_ended();
+    return;
+  }
+  if (buf[count - 1] != '\n') return;  // still editing
+  std::string text(buf, static_cast<std::size_t>(count - 1));
+  bool blank = true;
+  for (const char ch : text) blank = blank && (ch == ' ' || ch == '\t');
+  HistEvent ev;
+  if (!blank) history(history_of(hist_), &ev, H_ENTER, text.c_str());
+  new_line();  // libedit has moved to the next row already
+  push_line(std::move(text));
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -2,6 +2,7 @@
 /// Line sources for the supervisor's command loop: the console (stdin, line-edited with libedit
 /// when it is a terminal) and script files. The loop polls one of them each tick; neither blocks.
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <deque>
 #include <filesystem>
@@ -93,6 +94,22 @@ class ConsoleInput : public LineSource {
   void run();
   void run_plain();
   void run_editline();
+  /// libedit on the terminal, history loaded; false when it cannot be set up.
+  bool open_editline();
+  /// The terminal cooked again, history saved, libedit gone.
+  void close_editline();
+  /// An empty line buffer, terminal still raw, nothing drawn.
+  void new_line();
+  /// What the process wrote (out_pipe_), printed above the line: whole lines at once, a line without
+  /// its newline after kPartialFlush.
+  void drain_output();
+  /// Ctrl-C presses: clear a line being typed, or count for the loop.
+  void take_sigints();
+  /// Shows or hides the prompt, waits for output, a wake-up or a key, reads the key; false when
+  /// polling failed.
+  bool wait_for_input();
+  /// One key into libedit (`revents`: stdin's poll events); a finished line is queued.
+  void read_key(short revents);
   void capture_output();
   void restore_output();
   /// Reader thread: prints `text` above the prompt (or plainly while it is hidden).
@@ -121,7 +138,9 @@ class ConsoleInput : public LineSource {
   void* hist_ = nullptr;      ///< History*
   bool prompt_shown_ = false;  ///< the prompt and the line being edited are on the screen
   bool at_line_start_ = true;  ///< the terminal's cursor is at a line start (prompt hidden)
+  bool out_open_ = true;       ///< the output pipe still has writers
   std::string partial_;        ///< output without its newline yet
+  std::chrono::steady_clock::time_point partial_since_{};  ///< when partial_ began
 };
 
 /// Lines of a script file, one per poll() (a script never waits for input). Comments and blank

@@ -1,4 +1,5 @@
 #include "console_parser.hpp"
+#include "console_commands.hpp"
 
 #include <catch2/catch.hpp>
 #include <algorithm>
@@ -760,12 +761,12 @@ TEST_CASE("help text", "[supervisor][parser][help]") {
                              "shape implicit f=\"EXPR\"",
                              "shape polygon points=\"x,y;x,y;...\" [closed=on|off]",
                              "[rot=DEG] [scale=S]",
-                             "law paper | law arc [k_normal=] [k_tangent=] [spacing=]",
+                             "law paper | law arc [k_normal=K] [k_tangent=T] [spacing=S]",
                              "track line from=X,Y vel=VX,VY r=R",
                              "track circle radius=RP period=T",
                              "track point at=X,Y r=R",
                              "track stop",
-                             "gains [k1=]",
+                             "gains [k1=K1] [k2=K2] [sigma=S] [beta=B] [r=R]",
                              "integrator euler|rk4 [dt=DT]",
                              "max_speed V",
                              "start",
@@ -885,24 +886,28 @@ TEST_CASE("help states each wait's unit, and the new commands", "[supervisor][pa
   for (const char* word : {"show", "progress"}) CHECK(has_help(word));
 }
 
-TEST_CASE("the syntax table is what the parser accepts", "[supervisor][parser][complete]") {
-  // Every shape kind has its entry, and every entry's keys are exactly those the parser names when
-  // it refuses an unknown one.
-  for (const auto& kind : core::params::names(core::params::kShapeKindNames)) {
-    bool found = false;
-    for (const Syntax& s : syntax_table()) found = found || s.words == "shape " + kind;
-    INFO(kind);
-    CHECK(found);
-  }
-  for (const Syntax& s : syntax_table()) {
-    INFO(s.words);
-    const ParseResult r = parse_command(s.words + " zzz=1", current_command());
-    REQUIRE_FALSE(r.ok());
-    if (s.keys.empty()) {
-      CHECK(r.error.find("takes no key=value parameters") != std::string::npos);
-    } else {
-      CHECK(r.error.find("unknown parameter 'zzz' (expected " + core::params::join(s.keys, ", ") + ")") !=
-            std::string::npos);
+TEST_CASE("the registry's parameters are what the parser accepts", "[supervisor][parser][complete]") {
+  // Every shape kind has its form, in the order of the kind names, and every form's keys are exactly
+  // those the parser names when it refuses an unknown one.
+  const CommandSpec* shape = find_command("shape");
+  REQUIRE(shape != nullptr);
+  std::vector<std::string> kinds;
+  for (const FormSpec& f : shape->forms) kinds.push_back(f.sub);
+  CHECK(kinds == core::params::names(core::params::kShapeKindNames));
+  for (const CommandSpec& c : command_specs()) {
+    for (const FormSpec& f : c.forms) {
+      const std::string words = c.words(f);
+      INFO(words);
+      std::vector<std::string> keys;
+      for (const ParamSpec& p : c.params(f)) keys.push_back(p.key);
+      const ParseResult r = parse_command(words + " zzz=1", current_command());
+      REQUIRE_FALSE(r.ok());
+      if (keys.empty()) {
+        CHECK(r.error.find("takes no key=value parameters") != std::string::npos);
+      } else {
+        CHECK(r.error.find("unknown parameter 'zzz' (expected " + core::params::join(keys, ", ") + ")") !=
+              std::string::npos);
+      }
     }
   }
 }
@@ -941,6 +946,7 @@ TEST_CASE("Tab completion: commands, second words, values, parameter names", "[s
   CHECK(cands("integrator ") == V{"dt=", "euler", "rk4"});
   CHECK(cands("gains k") == V{"k1=", "k2="});
   CHECK(cands("metrics ") == V{"json"});
+  CHECK(cands("start ") == V{"replace"});
   CHECK(cands("progress ") == V{"every", "off", "on"});
   CHECK(cands("help sh") == V{"shape", "show"});
   CHECK(cands("bogus ") == V{});

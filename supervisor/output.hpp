@@ -1,0 +1,48 @@
+#pragma once
+/// Where the supervisor's output goes. Without --json: human text on stdout. With --json: the same text
+/// on stderr, and on stdout only JSON lines, one event each. Errors about input go to stderr; logs
+/// (util/log.hpp) go to stderr, repeated ones throttled.
+#include <cstdint>
+#include <iosfwd>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "swarm_monitor.hpp"
+#include "util/log.hpp"
+
+namespace shapeform::supervisor {
+
+class Output {
+ public:
+  /// The standard streams.
+  explicit Output(bool json);
+  /// Given streams (tests): human text, JSON events, errors.
+  Output(bool json, std::ostream& human, std::ostream& events, std::ostream& errors);
+
+  bool json() const { return json_; }
+  std::ostream& human() { return *human_; }
+  std::ostream& errors() { return *errors_; }
+  /// With --json, `j` with "event": name as one line on the events stream.
+  void event(const char* name, nlohmann::json j);
+  /// Warnings and errors that may repeat in the loop: at most one per key every 5 s.
+  util::ThrottledLog& throttled() { return throttled_; }
+
+ private:
+  bool json_;
+  std::ostream* human_;
+  std::ostream* events_;
+  std::ostream* errors_;
+  util::ThrottledLog throttled_{5.0};
+};
+
+/// --json: an "agent" event for every agent that became alive ("joined") or stopped being alive
+/// ("left": it disposed its instance, a clean exit; "lost": it fell silent).
+class MembershipReport {
+ public:
+  void update(const SwarmMonitor& monitor, std::int64_t now_ns, Output& out);
+
+ private:
+  std::set<std::int32_t> alive_;  ///< the agents reported alive
+};
+
+}  // namespace shapeform::supervisor
