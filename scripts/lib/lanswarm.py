@@ -43,7 +43,8 @@ def supervisor_argv(bins, lab, host, config, domain, record=None, extra=()):
 
 class LanSwarm:
     """A supervisor (console on a pipe) and agents on the hosts of a NetLab, every process with --json.
-    `procs` lists every process ever started (stopped ones too), for the exit-status check at the end."""
+    `procs` lists every process ever started (stopped ones too), for the exit-status check at the end;
+    a caller may add its own (stop() stops them too)."""
 
     def __init__(self, lab, bins, config, domain, run_dir, sets=()):
         self.lab, self.bins, self.config, self.domain, self.run_dir = lab, bins, config, domain, run_dir
@@ -100,9 +101,11 @@ class LanSwarm:
         return self.ask(line, "epoch")["epoch"]
 
     def stop(self):
-        """Stops every running process (supervisor first); their exit codes by name."""
-        running = ([self.sup] if self.sup else []) + list(self.agents.values())
-        procs.stop_all([p for p in running if p.running()], grace=10.0, spacing=0.02)
+        """Stops every running process of `procs` (the supervisor first, then the agents, then any other a
+        caller added, such as a measuring tool); their exit codes by name."""
+        first = ([self.sup] if self.sup else []) + list(self.agents.values())
+        ordered = first + [p for p in self.procs if p not in first]
+        procs.stop_all([p for p in ordered if p.running()], grace=10.0, spacing=0.02)
         return {p.name: p.returncode for p in self.procs}
 
 

@@ -5,6 +5,8 @@
   (participant name, host, pid) and their QoS as the topic table declares it.
 - `shapeform_echo shapeform/state --count 5` prints 5 JSON lines, one sample each, and exits 0; the
   command topic gives the command in force at once (transient-local); metrics come through too.
+- A shapeform_echo listed among a LAN swarm's processes (scripts/lib/lanswarm.py) is stopped with it
+  and exits 0.
 - Bad arguments (an unknown topic, a negative count, a missing topic, a negative wait): a message
   and exit status 2, without joining any domain.
 """
@@ -106,6 +108,21 @@ class ToolsTest(harness.SwarmTestCase):
         self.assert_all_alive(agents + [sup])
         sup.send("quit")
         self.assertEqual(sup.wait(20), 0)
+
+    def test_echo_stops_with_a_lan_swarm(self):
+        # scripts/lib/lanswarm.py's stop() on a swarm whose processes include a measuring shapeform_echo
+        # (as scripts/reliability.py adds one): every process it lists gets its SIGTERM, together, and
+        # exits 0 within the grace period; none is left running. Loopback stands in for the test hosts.
+        import lanswarm  # scripts/lib, on the path through harness
+        sup, agents = self.start_commanded_swarm(AGENTS, harness.scenario("circle"), SETS)
+        echo = self.start("echo_status", [harness.bin_path("shapeform_echo"), "shapeform/status", "--domain",
+                                          self.domain])
+        harness.poll(lambda: harness.procs.json_lines(echo.out()), 60, "shapeform_echo to print a status sample")
+        swarm = lanswarm.LanSwarm(None, harness.CONFIG["bin"], None, self.domain, self.run_dir)
+        swarm.sup, swarm.agents = sup, dict(enumerate(agents))
+        swarm.procs = [sup] + agents + [echo]
+        codes = swarm.stop()
+        self.assertEqual(codes, {p.name: 0 for p in swarm.procs}, "exit statuses (None: still running)")
 
     def test_bad_arguments(self):
         bad = [
