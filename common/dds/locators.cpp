@@ -6,6 +6,10 @@ namespace shapeform::dds {
 
 namespace frtps = eprosima::fastrtps::rtps;
 
+std::string lan_address(const std::string& address) {
+  return address.rfind("127.", 0) == 0 ? std::string("127.0.0.1") : address;
+}
+
 frtps::Locator_t udp_locator(const std::array<std::uint8_t, 4>& ip, std::uint32_t port) {
   frtps::Locator_t loc;
   loc.kind = LOCATOR_KIND_UDPv4;

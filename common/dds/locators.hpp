@@ -3,6 +3,7 @@
 /// participant factory (its locator lists) and the topic table (the State readers' multicast group).
 #include <array>
 #include <cstdint>
+#include <string>
 
 #include <fastdds/rtps/common/Locator.h>
 
@@ -14,6 +15,13 @@ namespace shapeform::dds {
 /// discovery on port 7400 + 250 domain, State samples on port 7400 + 250 domain + 1 when
 /// transport.multicast_data is on. Joined and sent on the profile's interfaces only.
 inline constexpr std::array<std::uint8_t, 4> kMulticastGroup = {239, 255, 0, 1};
+
+/// The address the lan profile gives Fast DDS for a configured address (an interface or a peer): the
+/// address itself, but 127.0.0.1 for any 127.x. Fast DDS 2.9 keeps only whitelist entries that are
+/// addresses assigned to an interface (UDPv4Transport's constructor; with none left it binds
+/// 192.0.2.0 and the participant gets no port), and `lo` carries 127.0.0.1 alone, though the kernel
+/// delivers all of 127.0.0.0/8 on it: 127.0.0.2 is the loopback interface, reached as 127.0.0.1.
+std::string lan_address(const std::string& address);
 
 /// A UDPv4 locator of ip:port.
 eprosima::fastrtps::rtps::Locator_t udp_locator(const std::array<std::uint8_t, 4>& ip, std::uint32_t port);

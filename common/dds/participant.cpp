@@ -17,7 +17,10 @@ std::string describe(const TransportConfig& cfg) {
     if (cfg.interfaces.empty()) {
       os << "all interfaces";
     } else {
-      for (std::size_t i = 0; i < cfg.interfaces.size(); ++i) os << (i ? "," : "") << cfg.interfaces[i];
+      for (std::size_t i = 0; i < cfg.interfaces.size(); ++i) {
+        const std::string bound = lan_address(cfg.interfaces[i]);
+        os << (i ? "," : "") << cfg.interfaces[i] << (bound != cfg.interfaces[i] ? " (lo, as " + bound + ")" : "");
+      }
     }
     if (cfg.peers.empty()) {
       os << ", multicast discovery on 239.255.0.1:" << metatraffic_multicast_port(cfg.domain) << ")";

@@ -1,5 +1,6 @@
 #include "dds/participant_factory.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -9,6 +10,7 @@
 #include <set>
 #include <sstream>
 #include <stdexcept>
+#include <vector>
 
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/rtps/attributes/ServerAttributes.h>
@@ -82,6 +84,48 @@ bool gained_unicast_ports(int domain, const std::set<std::uint32_t>& before, con
   return metatraffic && user;
 }
 
+/// lan_address() of each address, each once, in their order.
+std::vector<std::string> unique_lan_addresses(const std::vector<std::string>& addresses) {
+  std::vector<std::string> out;
+  for (const std::string& a : addresses) {
+    const std::string bound = lan_address(a);
+    if (std::find(out.begin(), out.end(), bound) == out.end()) out.push_back(bound);
+  }
+  return out;
+}
+
+/// The lan profile's whitelist and locators.
+void set_lan(const TransportConfig& cfg, eprosima::fastdds::rtps::UDPv4TransportDescriptor& udp,
+             fdds::DomainParticipantQos& pq) {
+  auto& builtin = pq.wire_protocol().builtin;
+  // validate() checked every address. With a whitelist, Fast DDS 2.9 binds every socket to the listed
+  // addresses, sends multicast from one socket per listed interface (IP_MULTICAST_IF) and joins groups
+  // on the listed interfaces only (UDPv4Transport::OpenInputChannel, OpenOutputChannel). A 127.x
+  // address is the loopback interface, whitelisted as 127.0.0.1 (lan_address).
+  for (const std::string& address : unique_lan_addresses(cfg.interfaces)) {
+    udp.interfaceWhiteList.push_back(address);
+  }
+  // 0.0.0.0 port 0: Fast DDS fills in the participant slot's port and expands the address to each
+  // allowed interface's (NormalizeLocators), so peers learn only addresses of those interfaces (lo
+  // alone, which NormalizeLocators never lists, gives its fallback 127.0.0.1).
+  builtin.metatrafficUnicastLocatorList.push_back(udp_locator({0, 0, 0, 0}, 0));
+  pq.wire_protocol().default_unicast_locator_list.push_back(udp_locator({0, 0, 0, 0}, 0));
+  if (cfg.peers.empty()) {
+    // Multicast discovery: announcements to and from the domain's discovery group (port filled in:
+    // 7400 + 250 domain), which is also the initial peer (Fast DDS copies it when the list is empty).
+    builtin.metatrafficMulticastLocatorList.push_back(udp_locator(kMulticastGroup, 0));
+  } else {
+    // Unicast only: no multicast metatraffic locator (Fast DDS would add the default group when both
+    // metatraffic lists are empty, and route endpoint discovery to it); each peer probed over the
+    // participant slots 0..max_participants-1 (port 0, maxInitialPeersRange).
+    for (const std::string& peer : unique_lan_addresses(cfg.peers)) {
+      std::array<std::uint8_t, 4> ip{};
+      util::parse_ipv4(peer, ip);
+      builtin.initialPeersList.push_back(udp_locator(ip, 0));
+    }
+  }
+}
+
 }  // namespace
 
 fdds::DomainParticipantQos participant_qos(const TransportConfig& cfg, const std::string& name) {
@@ -119,28 +163,7 @@ fdds::DomainParticipantQos participant_qos(const TransportConfig& cfg, const std
     builtin.metatrafficUnicastLocatorList.push_back(loopback_locator(0));
     pq.wire_protocol().default_unicast_locator_list.push_back(loopback_locator(0));
   } else if (cfg.profile == kLan) {
-    // validate() checked every address. With a whitelist, Fast DDS 2.9 binds every socket to the listed
-    // addresses, sends multicast from one socket per listed interface (IP_MULTICAST_IF) and joins groups
-    // on the listed interfaces only (UDPv4Transport::OpenInputChannel, OpenOutputChannel).
-    for (const std::string& address : cfg.interfaces) udp->interfaceWhiteList.push_back(address);
-    // 0.0.0.0 port 0: Fast DDS fills in the participant slot's port and expands the address to each
-    // allowed interface's (NormalizeLocators), so peers learn only addresses of those interfaces.
-    builtin.metatrafficUnicastLocatorList.push_back(udp_locator({0, 0, 0, 0}, 0));
-    pq.wire_protocol().default_unicast_locator_list.push_back(udp_locator({0, 0, 0, 0}, 0));
-    if (cfg.peers.empty()) {
-      // Multicast discovery: announcements to and from the domain's discovery group (port filled in:
-      // 7400 + 250 domain), which is also the initial peer (Fast DDS copies it when the list is empty).
-      builtin.metatrafficMulticastLocatorList.push_back(udp_locator(kMulticastGroup, 0));
-    } else {
-      // Unicast only: no multicast metatraffic locator (Fast DDS would add the default group when both
-      // metatraffic lists are empty, and route endpoint discovery to it); each peer probed over the
-      // participant slots 0..max_participants-1 (port 0, maxInitialPeersRange).
-      for (const std::string& peer : cfg.peers) {
-        std::array<std::uint8_t, 4> ip{};
-        util::parse_ipv4(peer, ip);
-        builtin.initialPeersList.push_back(udp_locator(ip, 0));
-      }
-    }
+    set_lan(cfg, *udp, pq);
   } else if (cfg.profile == kDiscoveryServer) {
     std::array<std::uint8_t, 4> server_ip{};
     std::uint16_t server_port = 0;
@@ -263,7 +286,9 @@ fdds::DomainParticipant* create_participant(const TransportConfig& cfg, const st
     factory->delete_participant(participant);
     fail("create_participant: " + quoted(name) + " found no free participant port on domain " + str(cfg.domain) +
          ": this host already runs transport.max_participants (" + str(cfg.max_participants) +
-         ") participants on it; raise transport.max_participants or use another domain");
+         ") participants on it; raise transport.max_participants or use another domain" +
+         (cfg.profile == kLan ? std::string(" (or transport.interfaces names no address of this host's interfaces)")
+                              : std::string()));
   }
   return participant;
 }

@@ -60,7 +60,9 @@ std::vector<P> build_table() {
   t.push_back(param<std::vector<std::string>>(
       Type::TextList, "transport.interfaces", "", {},
       "lan: addresses of this host's interfaces to use (empty = all): every datagram, unicast or multicast, is "
-      "sent from and received on these only, multicast groups are joined on these only",
+      "sent from and received on these only, multicast groups are joined on these only; a 127.x address (in "
+      "peers too) is the loopback interface, bound as 127.0.0.1 (Fast DDS binds only addresses an interface "
+      "carries)",
       ipv4_list, [](auto& c) -> auto& { return c.interfaces; }));
   t.push_back(param<std::vector<std::string>>(
       Type::TextList, "transport.peers", "", {},

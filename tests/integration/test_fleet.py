@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """scripts/launch_swarm.sh --fleet: the example fleet (config/fleets/lab4.yaml: 12 agents on three test
-hosts, the supervisor on a fourth, hosts the launcher makes and removes) runs to convergence; Ctrl-C
+hosts, the supervisor on a fourth, hosts the launcher makes and removes) runs to convergence, and so
+does a fleet of `run: local` hosts on loopback addresses (127.0.0.2, 127.0.0.3); Ctrl-C
 mid-run on a secured fleet (--keystore) with an ssh host leaves nothing behind; bad fleet files are
 refused naming the key.
 
@@ -36,6 +37,16 @@ done
 host=${1#*@}
 shift
 ip netns exec "sf-%(lab)s-$host" sh -c "$*"
+"""
+
+
+# Two hosts of this machine on loopback addresses; %s: the discovery.
+LOCAL_FLEET = """schema_version: 1
+hosts:
+  - {name: a, address: 127.0.0.2, run: local, agents: 0-2}
+  - {name: b, address: 127.0.0.3, run: local, agents: 3-5}
+supervisor: b
+transport: {discovery: %s}
 """
 
 
@@ -78,10 +89,12 @@ class FleetTest(harness.SwarmTestCase):
         harness.netlab.NetLab(name, 1, "10.0.0").down()
         self.labs.append(name)
 
-    def assert_nothing_left(self, proc, lab):
+    def assert_nothing_left(self, proc, lab=None):
         self.assertEqual(harness.processes_in_group(proc.pid), [], "processes left in the launcher's group")
         self.assertEqual(harness.shapeform_processes_on_domain(self.domain), [], "shapeform processes left")
         self.assertEqual(sorted(harness.shm_files() - self.shm_before), [], "new Fast DDS shm files")
+        if lab is None:
+            return
         netns = subprocess.run(["ip", "netns", "list"], stdout=subprocess.PIPE, text=True).stdout
         self.assertEqual([line for line in netns.splitlines() if line.startswith("sf-%s-" % lab)], [],
                          "namespaces of the lab left")
@@ -128,6 +141,26 @@ class FleetTest(harness.SwarmTestCase):
         self.assertNotIn("exited with status", p.log())
         self.assertIn("lab lab4 down", p.log())
         self.assert_nothing_left(p, "lab4")
+
+    def test_local_hosts_on_loopback_addresses(self):
+        # Two `run: local` hosts on 127.0.0.2 and 127.0.0.3: both are this machine's lo (no namespace, no
+        # root), which carries 127.0.0.1 alone. With either discovery the six agents meet across the two
+        # hosts and the swarm converges.
+        for discovery in ("multicast", "unicast"):
+            with self.subTest(discovery=discovery):
+                fleet = self.write("local_%s.yaml" % discovery, LOCAL_FLEET % discovery)
+                p = self.launch(fleet, ["--scenario", "arc_circle", "--json"], "launcher_" + discovery)
+                self.assertEqual(p.wait(120), 0, "launcher exit status (0: converged)")
+                run = json.loads(p.out().splitlines()[0])["dir"]
+                summary = harness.summary(p.out())
+                self.assertEqual((summary["converged"], summary["agents_seen"]), (True, 6))
+                for i in range(6):
+                    transport = self.agent_events(run, i, "start")[0]["config"]["transport"]
+                    self.assertEqual(transport["interfaces"], ["127.0.0.%d" % (2 + i // 3)], "agent %d" % i)
+                    heard = [e["neighbours_heard"] for e in self.agent_events(run, i, "status")]
+                    self.assertIn(5, heard, "agent %d hears the 5 others" % i)
+                self.assertNotIn("exited with status", p.log())
+                self.assert_nothing_left(p)
 
     def test_ctrl_c_with_an_ssh_host(self):
         # Two test hosts, unicast discovery: h1 a namespace running agents 0..2; h2 an ssh host (the

@@ -1037,6 +1037,19 @@ TEST_CASE("lan profile: multicast discovery, or unicast peers and no multicast a
     CHECK(dds::describe(cfg).find("lan (UDPv4 on 192.168.1.10, unicast peers 192.168.1.10,192.168.1.11 ids 0..29, "
                                   "no multicast)") == 0);
   }
+  SECTION("loopback addresses: the loopback interface, whitelisted and probed as 127.0.0.1") {
+    // Fast DDS 2.9 whitelists only addresses assigned to an interface; lo carries 127.0.0.1 alone.
+    cfg.interfaces = {"127.0.0.2"};
+    cfg.peers = {"127.0.0.2", "127.0.0.3", "10.0.0.1"};
+    const auto q = dds::participant_qos(cfg, "sup");
+    CHECK(only_udp(q)->interfaceWhiteList == std::vector<std::string>{"127.0.0.1"});
+    std::vector<std::string> peers;
+    for (const auto& loc : q.wire_protocol().builtin.initialPeersList) {
+      peers.push_back(frtps::IPLocator::toIPv4string(loc));
+    }
+    CHECK(peers == std::vector<std::string>{"127.0.0.1", "10.0.0.1"});
+    CHECK(dds::describe(cfg).find("lan (UDPv4 on 127.0.0.2 (lo, as 127.0.0.1), unicast peers") == 0);
+  }
 }
 
 TEST_CASE("discovery-server profile: client of server id 0", "[dds][qos]") {
