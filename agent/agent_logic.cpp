@@ -247,13 +247,15 @@ bool AgentLogic::step() {
 AgentLogic::CentreFrame AgentLogic::centre_frame(const core::CompiledCommand& local, double t) {
   const core::CentrePath& p = local.tracking.path;
   CentreFrame f;
-  if (!local.tracking.enabled || !local.tracking.feedforward || p.kind == core::CentrePath::Kind::Fixed) return f;
+  if (!local.tracking.enabled || !local.tracking.feedforward || p.kind == core::CentrePath::Kind::Fixed)
+    return f;
   f.velocity = core::centre_velocity(p, t);
   f.moving = f.velocity != core::Vec2::Zero();
   return f;
 }
 
-core::Vec2 AgentLogic::seen_now(const CentreFrame& f, const Snapshot& s, const dds::CommandId& followed) const {
+core::Vec2 AgentLogic::seen_now(const CentreFrame& f, const Snapshot& s,
+                                const dds::CommandId& followed) const {
   if (!f.moving || s.command != followed) return s.x;
   // With feed-forward every agent's step carries the centre's motion dC/dt dt, so a state `behind`
   // steps older than this agent's is that much of the centre's motion behind (ahead when negative):

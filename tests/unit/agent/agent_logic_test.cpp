@@ -643,8 +643,9 @@ Vec2 law_step(const core::CompiledCommand& cmd, const Heard& h, const Vec2& seen
 }
 }  // namespace
 
-TEST_CASE("free running, tracking with feed-forward: a neighbour of another step is seen at the agent's model time",
-          "[agent][tracking]") {
+TEST_CASE(
+    "free running, tracking with feed-forward: a neighbour of another step is seen at the agent's model time",
+    "[agent][tracking]") {
   const core::CompiledCommand c = tracking_ff();
   const Vec2 x1(-11, -9.5), v = c.tracking.path.velocity;
   SECTION("a neighbour one step ahead is moved back by the centre's motion over a step") {
@@ -673,7 +674,9 @@ TEST_CASE("free running, tracking with feed-forward: a neighbour of another step
     local.tracking.path.velocity = vt;
     CHECK(a.position() == law_step(local, {Vec2(-9, -10), Vec2::Zero(), 0.0}, x1 - vt));
   }
-  SECTION("taken as heard: the same step, farther than a step, another command, no feed-forward, a fixed centre") {
+  SECTION(
+      "taken as heard: the same step, farther than a step, another command, no feed-forward, a fixed "
+      "centre") {
     const Heard same = step_hearing(c, 2, x1, 2.0);
     CHECK(same.after == law_step(c, same, x1));
     const Heard far = step_hearing(c, 0, x1, 2.0);  // a clock that started apart, not a stale state
@@ -691,7 +694,8 @@ TEST_CASE("free running, tracking with feed-forward: a neighbour of another step
   }
 }
 
-TEST_CASE("tracking with feed-forward: neighbours of the agent's own step are taken bit for bit", "[agent][tracking]") {
+TEST_CASE("tracking with feed-forward: neighbours of the agent's own step are taken bit for bit",
+          "[agent][tracking]") {
   for (const auto path : {core::CentrePath::Kind::Line, core::CentrePath::Kind::Circle}) {
     const core::CompiledCommand c = tracking_ff(path);
     std::vector<Vec2> start = core::uniform_start(6, 5);
@@ -706,7 +710,8 @@ TEST_CASE("tracking with feed-forward: neighbours of the agent's own step are ta
     for (auto& a : agents) REQUIRE(adopt(a, c, 1));
     for (std::uint64_t seq = 1; seq <= 40; ++seq) {
       for (auto& a : agents)
-        for (const auto& b : agents) a.on_state(b.id(), b.position(), seq, 0, b.command_id(), std::nullopt, b.model_time());
+        for (const auto& b : agents)
+          a.on_state(b.id(), b.position(), seq, 0, b.command_id(), std::nullopt, b.model_time());
       for (auto& a : agents) a.step();
     }
     for (int i = 0; i < 6; ++i) {
