@@ -209,6 +209,10 @@ bool AgentLogic::step() {
   const bool arc_law = cmd_.law == core::Law::Arc;
   const dds::CommandId followed = arbiter_.id();
   const long k = step_of(t_);
+  const bool follow_target = following_target();
+  const core::CompiledCommand local = follow_target ? effective_command() : cmd_;
+  const double t_local = follow_target ? 0.0 : t_;
+  const CentreFrame frame = centre_frame(local, t_local);
   nbrs_.clear();
   bool ready = true;
   for (const auto& e : table_->entries()) {
@@ -221,7 +225,7 @@ bool AgentLogic::step() {
       if (e.cur.command != followed || cur < k) ready = false;
       else if (cur > k && e.prev.command == followed && step_of(e.prev.model_time) == k) use = &e.prev;
     }
-    core::Neighbour n{e.id, use->x};
+    core::Neighbour n{e.id, seen_now(frame, *use, followed)};
     if (arc_law && use->command == followed && use->arc) n.s = *use->arc;
     nbrs_.push_back(n);
   }
@@ -236,9 +240,29 @@ bool AgentLogic::step() {
     waited_ = 0;
   }
   // The table keeps ids ascending: a deterministic neighbour order, whatever the arrival order.
-  const bool follow_target = following_target();
-  take_step(core::agent_step(follow_target ? effective_command() : cmd_, id_, x_, nbrs_, follow_target ? 0.0 : t_));
+  take_step(core::agent_step(local, id_, x_, nbrs_, t_local));
   return true;
+}
+
+AgentLogic::CentreFrame AgentLogic::centre_frame(const core::CompiledCommand& local, double t) {
+  const core::CentrePath& p = local.tracking.path;
+  CentreFrame f;
+  if (!local.tracking.enabled || !local.tracking.feedforward || p.kind == core::CentrePath::Kind::Fixed)
+    return f;
+  f.velocity = core::centre_velocity(p, t);
+  f.moving = f.velocity != core::Vec2::Zero();
+  return f;
+}
+
+core::Vec2 AgentLogic::seen_now(const CentreFrame& f, const Snapshot& s,
+                                const dds::CommandId& followed) const {
+  if (!f.moving || s.command != followed) return s.x;
+  // With feed-forward every agent's step carries the centre's motion dC/dt dt, so a state `behind`
+  // steps older than this agent's is that much of the centre's motion behind (ahead when negative):
+  // the static problem in the centre's frame needs it where it would be now.
+  const long behind = step_of(t_) - step_of(s.model_time);
+  if (behind == 0 || std::labs(behind) > kMaxCentreFrameSteps) return s.x;
+  return s.x + (static_cast<double>(behind) * cmd_.dt) * f.velocity;
 }
 
 void AgentLogic::take_step(const core::StepResult& law) {
@@ -273,16 +297,19 @@ void AgentLogic::step_shared(const std::vector<AgentLogic*>& agents) {
   hosted.clear();
   others.clear();
   for (const AgentLogic* a : agents) hosted.push_back({a->id_, a->x_});
-  // The agents hosted here are taken as they are now (hosted), the others as last heard.
+  const bool follow_target = first.following_target();
+  const core::CompiledCommand local = follow_target ? first.effective_command() : first.cmd_;
+  const double t_local = follow_target ? 0.0 : first.t_;
+  const CentreFrame frame = centre_frame(local, t_local);
+  // The agents hosted here are taken as they are now (hosted), the others as last heard (moved into
+  // the hosted agents' model time as step() moves them).
   for (const auto& e : first.table_->entries()) {
     if (e.hosted >= 0) continue;
-    core::Neighbour n{e.id, e.cur.x};
+    core::Neighbour n{e.id, first.seen_now(frame, e.cur, followed)};
     if (e.cur.command == followed && e.cur.arc) n.s = *e.cur.arc;
     others.push_back(n);
   }
-  const bool follow_target = first.following_target();
-  core::agent_steps(follow_target ? first.effective_command() : first.cmd_, hosted, others,
-                    follow_target ? 0.0 : first.t_, steps);
+  core::agent_steps(local, hosted, others, t_local, steps);
   for (std::size_t k = 0; k < agents.size(); ++k) agents[k]->take_step(steps[k]);
 }
 

@@ -147,7 +147,16 @@ class AgentLogic {
   /// its state of step k for the same command, and uses exactly those states; the tracked centre is
   /// then the command's path at the agent's own model time. This is the simulator's synchronous
   /// update, so processes and simulator compute the same numbers. Returns whether it stepped.
+  /// Tracking a moving centre with feed-forward, a neighbour's state of another step (free running:
+  /// one that already stepped in this period, or one not heard since its last step) is seen where it
+  /// would be at this agent's model time: moved with the centre, x_j + dC/dt (t - t_j), at most
+  /// kMaxCentreFrameSteps steps apart (see centre_frame()). In lockstep every state used is of the
+  /// agent's own step, so nothing moves.
   bool step();
+  /// Neighbour states more steps than this from the agent's own are taken as heard, not moved with the
+  /// centre: the difference is then not the age of a state (free running, a state is at most one step
+  /// old) but clocks that started apart (a late joiner counts its model time from its own adoption).
+  static constexpr long kMaxCentreFrameSteps = 1;
 
   /// Whether this agent's step may be taken together with `first`'s in one core::agent_steps: both
   /// free running, on the same command (core::shares_steps) at the same model time with the same
@@ -189,6 +198,15 @@ class AgentLogic {
   long step_of(double model_time) const { return std::lround(model_time / cmd_.dt); }
   /// The command actually integrated now: tracking follows the latest target from its last position.
   core::CompiledCommand effective_command() const;
+  /// How a step at time t of the integrated command `local` sees neighbour states of other steps.
+  struct CentreFrame {
+    bool moving = false;  ///< feed-forward tracking of a moving centre: states of other steps move with it
+    core::Vec2 velocity = core::Vec2::Zero();  ///< dC/dt at the step's time, the feed-forward it adds
+  };
+  static CentreFrame centre_frame(const core::CompiledCommand& local, double t);
+  /// Neighbour state s as this agent's step sees it: moved into its model time when f.moving, s is of
+  /// the followed command and at most kMaxCentreFrameSteps steps (but not 0) from this agent's step.
+  core::Vec2 seen_now(const CentreFrame& f, const Snapshot& s, const dds::CommandId& followed) const;
   /// Drives the vehicle by the law's step r and books the result (position, velocity, model time,
   /// counters).
   void take_step(const core::StepResult& r);

@@ -152,7 +152,9 @@ std::vector<P> build() {
         "on the "
         "agent's clock); in lockstep every agent computes C(t) from the command's path at its own step, as "
         "the "
-        "simulator does";
+        "simulator does. With feed-forward (`tracking.feedforward`) and a moving centre, a neighbour's state "
+        "one step older or newer than the agent's own is seen where it would be at the agent's model time "
+        "(moved by dC/dt per step), so the formation is the static one in the centre's frame";
     params::bind_choice(
         sync, kSyncNames, [](auto& c) -> auto& { return c.agent.lockstep; });
     t.push_back(std::move(sync));

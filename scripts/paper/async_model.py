@@ -150,8 +150,9 @@ def run(start, shape, steps, schedule="sync", phases=None, g=GAINS, dt=1.0, trac
     track: None (static shape) or a centre path dict (path fixed|line|circle, ...) for a circle
     shape around C(t); ff adds dC/dt to every agent's velocity (tracking.feedforward).
     compensate (async, ff): an agent moves the neighbours that already stepped in this period back by
-    dC/dt*dt, i.e. it sees every neighbour in the centre's frame of its own step (x_j + v_C (t_i - t_j)
-    with the neighbours' model times): a proposed fix for the agent, not what it does now."""
+    dC/dt*dt, i.e. it sees every neighbour in the centre's frame of its own step (x_j + v_C(t_i) (t_i -
+    t_j) with the neighbours' model times, dC/dt at the agent's own time): what free-running agent
+    processes do (agent::AgentLogic::step); without it, the agents before that rule."""
     x = np.array(start, dtype=float)
     n = len(x)
     cen = (lambda t: centre_at(track, t)) if track else (lambda t: (None, np.zeros(2)))

@@ -371,7 +371,7 @@ def write_ff_vs_fixed(o):
               f"of phasings | " + async_pairs(ff["async"]["async"], fx["async"]["async"]))
             if ff["async"].get("async_compensated"):
                 w(f"{case} async model, feed-forward with stale neighbours moved into the "
-                  f"centre's frame (proposed agent fix) vs fixed centre | "
+                  f"centre's frame (what free-running agents do) vs fixed centre | "
                   + async_pairs(ff["async"]["async_compensated"], fx["async"]["async"]))
             w(f"{case} async model: fixed centre vs fixed centre (run-to-run spread of the "
               f"static problem itself) | " + async_pairs(fx["async"]["async"], fx["async"]["async"]))

@@ -13,11 +13,13 @@ and a supervisor on loopback; fixed seeds; each test's runs one after another on
   The issue's bound, centroid and ring errors within 0.1 of the fixed-centre run, is a property of the
   law, checked in the simulator (on the line path the two runs are identical) and on processes in
   lockstep (agent.sync=lockstep: every process uses the same neighbour snapshot per iteration). Free-
-  running processes tick at their own phases, so every agent sees some neighbours one step older than
-  others, and the resting ring settles off-centre by an amount that depends on the phases (fixed-centre
-  runs alone spread over about 0.05..0.25, feed-forward runs over 0.1..0.4): the bound does not hold
-  there run by run, and docs/RESULTS.md has the numbers and the asynchronous model that reproduces
-  them. Without feed-forward the centroid error is about 4.
+  running processes (the default) tick at their own phases, so every agent sees some neighbours one step
+  ahead of its own; each moves those into its own model time with the centre (AgentLogic::step). The
+  arc law then meets the bound in every run. The paper's law does not, run by run: the resting ring
+  settles off-centre by an amount that depends on the tick order, and two fixed-centre runs alone
+  differ by more than 0.1 in 3 to 7 of 10 pairs (scripts/paper/free_running.py; docs/RESULTS.md has
+  the numbers), so the free-running test holds the paper's law to that spread. Without feed-forward the
+  centroid error is about 4.
 
   On the line path the swarm starts around C(0) (the seeded start shifted by C(0) = (-10, -10)): from
   the paper's start, 14 units away, agents that fall behind on the approach escape for ever under the
@@ -133,27 +135,49 @@ class PaperClaimsTest(harness.SwarmTestCase):
                     self.assertLess(self.window(ff, "centroid_error", t0, t1), 0.5, path)
                     self.assertGreater(self.window(pa, "centroid_error", t0, t1), 2.0, path)  # without: trails
 
+    def ff_against_fixed(self, tag, path, steps, sets):
+        """One run with feed-forward and one around the fixed centre C(0), from the same start; checks
+        that the first surrounds the moving centre like the second, and returns the differences of the
+        medians over model time [200, steps] of their centroid and ring errors."""
+        start = self.start_csv(f"track_{path}", C0[path] if path == "line" else (0.0, 0.0))
+        _, ff = self.launch(f"{tag}_{path}_ff", f"track_{path}_ff", 10, steps, start, sets)
+        _, fx = self.launch(f"{tag}_{path}_fixed", f"track_{path}", 10, steps, start,
+                            sets + ["tracking.path=fixed", f"tracking.point=[{C0[path][0]:g},{C0[path][1]:g}]"])
+        c_ff, c_fx = self.window(ff, "centroid_error", 200, steps), self.window(fx, "centroid_error", 200, steps)
+        r_ff, r_fx = self.window(ff, "ring_error", 200, steps), self.window(fx, "ring_error", 200, steps)
+        msg = (f"{tag} {path}: feed-forward centroid {c_ff:.3f} ring {r_ff:.3f}; fixed centre centroid {c_fx:.3f} "
+               f"ring {r_fx:.3f}")
+        sys.stderr.write(msg + "\n")
+        self.assertLess(c_ff, 0.5, msg)  # surrounds the moving centre
+        self.assertLess(r_ff, 0.7, msg)  # on a ring of radius about r0 around it
+        return abs(c_ff - c_fx), abs(r_ff - r_fx), msg
+
     def test_feedforward_processes_match_a_fixed_centre(self):
-        T = 300
         # Lockstep: every process takes the same neighbour snapshot per iteration (the simulator's
-        # numbers), so the issue's bound holds as it does in the simulator instead of depending on
-        # the tick phases of free-running processes.
-        sync = ["agent.sync=lockstep"]
+        # numbers), so the issue's bound holds as it does in the simulator.
         for path in ("line", "circle"):
             with self.subTest(path=path):
-                start = self.start_csv(f"track_{path}", C0[path] if path == "line" else (0.0, 0.0))
-                _, ff = self.launch(f"{path}_ff", f"track_{path}", 10, T, start, sync + ["tracking.feedforward=true"])
-                _, fx = self.launch(f"{path}_fixed", f"track_{path}", 10, T, start,
-                                    sync + ["tracking.path=fixed", f"tracking.point=[{C0[path][0]:g},{C0[path][1]:g}]"])
-                c_ff, c_fx = self.window(ff, "centroid_error", 200, T), self.window(fx, "centroid_error", 200, T)
-                r_ff, r_fx = self.window(ff, "ring_error", 200, T), self.window(fx, "ring_error", 200, T)
-                msg = (f"{path}: feed-forward centroid {c_ff:.3f} ring {r_ff:.3f}; fixed centre centroid {c_fx:.3f} "
-                       f"ring {r_fx:.3f}")
-                sys.stderr.write(msg + "\n")
-                self.assertLess(c_ff, 0.5, msg)  # surrounds the moving centre
-                self.assertLess(r_ff, 0.7, msg)  # on a ring of radius about r0 around it
-                self.assertLessEqual(abs(r_ff - r_fx), 0.1, msg)
-                self.assertLessEqual(abs(c_ff - c_fx), 0.1, msg)
+                dc, dr, msg = self.ff_against_fixed("lockstep", path, 300, ["agent.sync=lockstep"])
+                self.assertLessEqual(dr, 0.1, msg)
+                self.assertLessEqual(dc, 0.1, msg)
+
+    def test_feedforward_free_running_matches_a_fixed_centre(self):
+        # The default mode: free-running processes, each ticking at its own phase (one run of each per
+        # path and law: a fresh draw of tick orders every time). Each agent sees a neighbour's state of
+        # another step where it would be at its own model time (moved with the centre, AgentLogic::step).
+        # The arc law's neighbours publish their arc lengths, measured on the shape at their own time:
+        # it meets the bound (0.1) in every run. The paper's law does not, run by run: two free-running
+        # runs of the static problem itself (fixed centre against fixed centre) differ by more than 0.1
+        # in 3 to 7 of 10 pairs, and on the circle path the ring error with feed-forward rests about 0.1
+        # below the fixed centre's (scripts/paper/free_running.py, docs/RESULTS.md). So the paper's law
+        # is held to the spread measured there: centroid 0.3, ring 0.2.
+        bound = {"paper": (0.3, 0.2), "arc": (0.1, 0.1)}
+        for law in ("paper", "arc"):
+            for path in ("line", "circle"):
+                with self.subTest(law=law, path=path):
+                    dc, dr, msg = self.ff_against_fixed(f"free_{law}", path, 300, [f"dynamics.law={law}"])
+                    self.assertLessEqual(dc, bound[law][0], msg)
+                    self.assertLessEqual(dr, bound[law][1], msg)
 
 
 if __name__ == "__main__":

@@ -605,3 +605,135 @@ TEST_CASE("identity: after its participant is recreated, samples of the old and 
   // A real duplicate is still one, ordered against the participant in use now.
   CHECK(g.on_sample(3, participant(3)) == agent::IdentityGuard::Action::Keep);
 }
+
+namespace {
+/// The paper's tracking experiment: a ring of radius 2 around a centre moving on the line path
+/// C(t) = (-10, -10) + t (0.1, 0.1), with feed-forward.
+core::CompiledCommand tracking_ff(core::CentrePath::Kind path = core::CentrePath::Kind::Line) {
+  core::CompiledCommand c = circle();
+  c.shape.r0 = 2;
+  c = core::compile(c);
+  c.tracking.enabled = true;
+  c.tracking.feedforward = true;
+  c.tracking.path.kind = path;
+  c.tracking.path.point = Vec2(-10, -10);
+  c.tracking.path.velocity = Vec2(0.1, 0.1);
+  return c;
+}
+struct Heard {
+  Vec2 before, after;  ///< agent 0's position before and after the step that heard agent 1
+  double t;            ///< agent 0's model time at that step
+};
+/// Agent 0 (free running) takes `alone` steps of cmd without neighbours, then one hearing agent 1 at
+/// x1, model time t1, on the command followed (or on `other`, when given).
+Heard step_hearing(const core::CompiledCommand& cmd, int alone, const Vec2& x1, double t1,
+                   std::optional<dds::CommandId> other = std::nullopt) {
+  AgentLogic a(0, Vec2(-9, -10), 60 * kMs);
+  REQUIRE(adopt(a, cmd, 1));
+  for (int k = 0; k < alone; ++k) a.step();
+  const Vec2 before = a.position();
+  const double t = a.model_time();
+  a.on_state(1, x1, 1, 0, other.value_or(a.command_id()), std::nullopt, t1);
+  a.step();
+  return {before, a.position(), t};
+}
+/// Where the law's step from h.before goes when agent 1 is seen at `seen`.
+Vec2 law_step(const core::CompiledCommand& cmd, const Heard& h, const Vec2& seen) {
+  return core::agent_step(cmd, 0, h.before, {core::Neighbour{1, seen}}, h.t).x;
+}
+}  // namespace
+
+TEST_CASE(
+    "free running, tracking with feed-forward: a neighbour of another step is seen at the agent's model time",
+    "[agent][tracking]") {
+  const core::CompiledCommand c = tracking_ff();
+  const Vec2 x1(-11, -9.5), v = c.tracking.path.velocity;
+  SECTION("a neighbour one step ahead is moved back by the centre's motion over a step") {
+    const Heard h = step_hearing(c, 0, x1, 1.0);
+    CHECK(h.after == law_step(c, h, x1 + (-1.0 * c.dt) * v));
+    CHECK(h.after != law_step(c, h, x1));
+  }
+  SECTION("a neighbour one step behind is moved on") {
+    const Heard h = step_hearing(c, 3, x1, 2.0);
+    CHECK(h.after == law_step(c, h, x1 + (1.0 * c.dt) * v));
+  }
+  SECTION("on the circle path, with dC/dt at the agent's own model time") {
+    const core::CompiledCommand cc = tracking_ff(core::CentrePath::Kind::Circle);
+    const Heard h = step_hearing(cc, 3, x1, 4.0);
+    CHECK(h.after == law_step(cc, h, x1 + (-1.0 * cc.dt) * core::centre_velocity(cc.tracking.path, 3.0)));
+  }
+  SECTION("following the supervisor's target: moved with the target's velocity") {
+    AgentLogic a(0, Vec2(-9, -10), 60 * kMs);
+    REQUIRE(adopt(a, c, 1));
+    const Vec2 centre(-8, -8), vt(0.2, 0.0);
+    a.on_target({1, 20.0, centre, vt}, 0);
+    a.on_state(1, x1, 1, 0, a.command_id(), std::nullopt, 1.0);
+    a.step();
+    core::CompiledCommand local = c;
+    local.tracking.path.point = centre;
+    local.tracking.path.velocity = vt;
+    CHECK(a.position() == law_step(local, {Vec2(-9, -10), Vec2::Zero(), 0.0}, x1 - vt));
+  }
+  SECTION(
+      "taken as heard: the same step, farther than a step, another command, no feed-forward, a fixed "
+      "centre") {
+    const Heard same = step_hearing(c, 2, x1, 2.0);
+    CHECK(same.after == law_step(c, same, x1));
+    const Heard far = step_hearing(c, 0, x1, 2.0);  // a clock that started apart, not a stale state
+    CHECK(far.after == law_step(c, far, x1));
+    const Heard other = step_hearing(c, 0, x1, 1.0, dds::CommandId{7, {}});
+    CHECK(other.after == law_step(c, other, x1));
+    core::CompiledCommand no_ff = c;
+    no_ff.tracking.feedforward = false;
+    const Heard plain = step_hearing(no_ff, 0, x1, 1.0);
+    CHECK(plain.after == law_step(no_ff, plain, x1));
+    core::CompiledCommand fixed = c;
+    fixed.tracking.path.kind = core::CentrePath::Kind::Fixed;
+    const Heard still = step_hearing(fixed, 0, x1, 1.0);
+    CHECK(still.after == law_step(fixed, still, x1));
+  }
+}
+
+TEST_CASE("tracking with feed-forward: neighbours of the agent's own step are taken bit for bit",
+          "[agent][tracking]") {
+  for (const auto path : {core::CentrePath::Kind::Line, core::CentrePath::Kind::Circle}) {
+    const core::CompiledCommand c = tracking_ff(path);
+    std::vector<Vec2> start = core::uniform_start(6, 5);
+    for (auto& x : start) x += Vec2(-10, -10);
+    // Lockstep in any tick order is the simulator's update, bit for bit.
+    core::Swarm swarm(c, start);
+    for (int k = 0; k < 40; ++k) swarm.step();
+    const auto lock = run_shuffled(c, start, true, 40);
+    // Free running, every agent hearing the others' states of its own step: the simulator too.
+    std::vector<AgentLogic> agents;
+    for (int i = 0; i < 6; ++i) agents.emplace_back(i, start[i], 60 * kMs);
+    for (auto& a : agents) REQUIRE(adopt(a, c, 1));
+    for (std::uint64_t seq = 1; seq <= 40; ++seq) {
+      for (auto& a : agents)
+        for (const auto& b : agents)
+          a.on_state(b.id(), b.position(), seq, 0, b.command_id(), std::nullopt, b.model_time());
+      for (auto& a : agents) a.step();
+    }
+    for (int i = 0; i < 6; ++i) {
+      CHECK(lock[i] == swarm.positions()[i]);
+      CHECK(agents[i].position() == swarm.positions()[i]);
+    }
+  }
+}
+
+TEST_CASE("free running on the line path with feed-forward is the fixed-centre swarm in the centre's frame",
+          "[agent][tracking]") {
+  // The same tick orders, around a centre moving at constant velocity and around it held at C(0):
+  // seen in the centre's frame the two are one problem, once every neighbour is seen at the agent's
+  // own model time (without that, a neighbour that already stepped is 0.14 ahead of its place).
+  const core::CompiledCommand moving = tracking_ff();
+  core::CompiledCommand fixed = moving;
+  fixed.tracking.path.kind = core::CentrePath::Kind::Fixed;
+  std::vector<Vec2> start = core::uniform_start(8, 3);
+  for (auto& x : start) x += Vec2(-10, -10);
+  const long steps = 60;
+  const auto ff = run_shuffled(moving, start, false, steps);
+  const auto fx = run_shuffled(fixed, start, false, steps);
+  const Vec2 moved = core::centre_at(moving.tracking.path, static_cast<double>(steps)) - Vec2(-10, -10);
+  for (int i = 0; i < 8; ++i) CHECK((ff[i] - moved - fx[i]).norm() < 1e-9);
+}
