@@ -22,8 +22,7 @@
 #   --seed S        seeded starts: agent i starts where shapeform_sim --seed S puts agent i
 #                   (default: the scenario's swarm.seed)
 #   --steps K       run exactly K iterations of model time (`wait time K*dt`) instead of waiting
-#                   for convergence, then take the verdict (`wait converged timeout=0`): exit
-#                   status 0 when converged then, 3 when not
+#                   for convergence
 #   --timeout S     seconds to wait for convergence (default 60), or for the K iterations
 #   --set key=value config override passed to every process (repeatable)
 #   --json          machine output on stdout (progress stays on stderr): first the line
@@ -48,8 +47,7 @@
 # back through ssh into these files). Progress goes to stderr. On exit, error or Ctrl-C only this
 # launcher's own children are stopped (SIGTERM, then SIGKILL after 5 s; on an ssh host the process
 # group it started there), and test hosts it made are removed. Exit status: the supervisor's (0 ok,
-# 1 runtime failure, 2 bad input, 3 not converged: a wait timed out, or with --steps not converged
-# after the K iterations); 2 for bad launcher arguments or fleet file;
+# 1 runtime failure, 2 bad input, 3 a wait timed out); 2 for bad launcher arguments or fleet file;
 # 130/143 when interrupted.
 set -uo pipefail
 
@@ -347,7 +345,6 @@ agents_timeout=$((30 + n / 2))
     model_t=$(awk -v k="$steps" -v dt="$dt" 'BEGIN{printf "%.10g", k * dt}')
     wt=${timeout:-$(awk -v k="$steps" -v r="$rate_eff" 'BEGIN{printf "%d", 2 * k / r + 30}')}
     echo "wait time $model_t timeout=$wt"
-    echo "wait converged timeout=0" # the verdict after the K iterations: exit status 3 when not converged
   else
     echo "wait converged timeout=${timeout:-60}"
   fi
