@@ -21,7 +21,7 @@
 # the permissions authority issues no certificate at all (docs/SECURITY.md).
 # Enclaves made: `supervisor` and `viewer` (read-only monitors: shapeform_view, shapeform_echo,
 # shapeform_topics, the benchmark probe), or instead only the ones named with --enclave (supervisor,
-# viewer or agent_K); and `agent_0` .. `agent_{N-1}` (a group process uses the enclave of its first
+# viewer, vehicle: a robot driver such as shapeform_vehicle, or agent_K); and `agent_0` .. `agent_{N-1}` (a group process uses the enclave of its first
 # agent id).
 # Permissions (the policy): each topic's row of the topic table (common/dds/topic_table.hpp) names the
 # roles that may publish and subscribe to it; rules() below is generated from it, and docs/SECURITY.md
@@ -47,7 +47,7 @@ while [ $# -gt 0 ]; do
       agents=$2; shift 2 ;;
     --days) [[ ${2-} =~ ^[0-9]+$ ]] && [ "${2}" -ge 1 ] && [ "${2}" -le 36500 ] || die "--days: expected 1..36500, got '${2-}'"
       days=$2; shift 2 ;;
-    --enclave) [[ ${2-} =~ ^(supervisor|viewer|agent_[0-9]+)$ ]] || die "--enclave: expected supervisor, viewer or agent_K, got '${2-}'"
+    --enclave) [[ ${2-} =~ ^(supervisor|viewer|vehicle|agent_[0-9]+)$ ]] || die "--enclave: expected supervisor, viewer, vehicle or agent_K, got '${2-}'"
       extra+=("$2"); shift 2 ;;
     *) die "unknown argument '${1:0:40}' (see --help)" ;;
   esac
@@ -118,15 +118,19 @@ fi
 rules() { # NAME -> the allow rules of its role
   case "$1" in
     agent_*)
-      echo '<publish><topics><topic>shapeform/state</topic><topic>shapeform/state_batch</topic><topic>shapeform/status</topic></topics></publish>'
-      echo '<subscribe><topics><topic>shapeform/state</topic><topic>shapeform/state_batch</topic><topic>shapeform/command</topic><topic>shapeform/target</topic></topics></subscribe>'
+      echo '<publish><topics><topic>shapeform/state</topic><topic>shapeform/state_batch</topic><topic>shapeform/status</topic><topic>rt/*/cmd_vel</topic></topics></publish>'
+      echo '<subscribe><topics><topic>shapeform/state</topic><topic>shapeform/state_batch</topic><topic>shapeform/command</topic><topic>shapeform/target</topic><topic>rt/*/odom</topic><topic>rt/*/pose</topic></topics></subscribe>'
       ;;
     supervisor)
       echo '<publish><topics><topic>shapeform/command</topic><topic>shapeform/target</topic><topic>shapeform/metrics</topic></topics></publish>'
       echo '<subscribe><topics><topic>shapeform/state</topic><topic>shapeform/state_batch</topic><topic>shapeform/command</topic><topic>shapeform/status</topic></topics></subscribe>'
       ;;
     viewer)
-      echo '<subscribe><topics><topic>shapeform/state</topic><topic>shapeform/state_batch</topic><topic>shapeform/command</topic><topic>shapeform/target</topic><topic>shapeform/metrics</topic><topic>shapeform/status</topic></topics></subscribe>'
+      echo '<subscribe><topics><topic>shapeform/state</topic><topic>shapeform/state_batch</topic><topic>shapeform/command</topic><topic>shapeform/target</topic><topic>shapeform/metrics</topic><topic>shapeform/status</topic><topic>rt/*/cmd_vel</topic><topic>rt/*/odom</topic><topic>rt/*/pose</topic></topics></subscribe>'
+      ;;
+    vehicle)
+      echo '<publish><topics><topic>rt/*/odom</topic><topic>rt/*/pose</topic></topics></publish>'
+      echo '<subscribe><topics><topic>rt/*/cmd_vel</topic></topics></subscribe>'
       ;;
   esac
 }

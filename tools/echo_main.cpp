@@ -15,20 +15,21 @@ namespace {
 /// Prints every sample of topic `id` (type Msg) until `count` lines (0: no limit), SIGINT/SIGTERM,
 /// or `timeout_s` seconds (0: none) without reaching count (exit status 1).
 template <class Msg>
-int echo(const config::Config& cfg, dds::TopicId id, long long count, double timeout_s) {
+int echo(const config::Config& cfg, dds::TopicId id, const std::string& topic, long long count, double timeout_s) {
   dds::Node node(dds::with_identity(cfg.transport, "viewer"), "shapeform_echo");
-  dds::Reader<Msg> reader = node.reader<Msg>(id);
+  dds::Reader<Msg> reader =
+      node.reader<Msg>(id, dds::kDefaultMailboxCapacity, dds::is_vehicle_topic(id) ? topic : std::string());
   std::vector<dds::Received<Msg>> got;
   long long printed = 0;
   const std::int64_t start = util::steady_ns();
   while (!util::stop_flag()) {
     reader.drain(got);
     for (const auto& r : got) {
-      std::cout << tools::echo_line(dds::topic_name(id), r).dump() << std::endl;
+      std::cout << tools::echo_line(topic.c_str(), r).dump() << std::endl;
       if (count > 0 && ++printed >= count) return 0;
     }
     if (timeout_s > 0 && static_cast<double>(util::steady_ns() - start) * 1e-9 >= timeout_s) {
-      std::cerr << "shapeform_echo: " << printed << " of " << count << " samples of " << dds::topic_name(id)
+      std::cerr << "shapeform_echo: " << printed << " of " << count << " samples of " << topic
                 << " in " << timeout_s << " s" << std::endl;
       return 1;
     }
@@ -49,7 +50,11 @@ int run(int argc, char** argv) {
   std::string topic;
   long long count = 0;
   double timeout_s = 0.0;
-  app.cli().add_option("topic", topic, "the topic: " + topics)->required();
+  app.cli()
+      .add_option("topic", topic,
+                  "the topic: " + topics +
+                      " (a vehicle's: its name, e.g. rt/robot_0/odom; rt/NS/cmd_vel reads geometry_msgs/Twist)")
+      ->required();
   app.cli().add_option("--count", count, "exit 0 after K lines (default 0: until Ctrl-C)")->check(CLI::NonNegativeNumber);
   app.cli()
       .add_option("--timeout", timeout_s, "exit 1 after S seconds without --count lines (default 0: never)")
@@ -62,7 +67,7 @@ int run(int argc, char** argv) {
   util::install_stop_signals();
   return app.run([&] {
     return dds::visit_topic(*id, [&](auto type) {
-      return echo<typename decltype(type)::type>(*cfg, *id, count, timeout_s);
+      return echo<typename decltype(type)::type>(*cfg, *id, topic, count, timeout_s);
     });
   });
 }

@@ -1,6 +1,8 @@
 #include "topic_doc.hpp"
 
+#include <algorithm>
 #include <stdexcept>
+#include <vector>
 
 #include "dds/topics.hpp"
 #include "util/text.hpp"
@@ -15,14 +17,25 @@ std::string qos(const dds::TopicInfo& t) {
          (t.durability == dds::Durability::TransientLocal ? "transient-local" : "volatile");
 }
 
+/// The topic's name as DDS Security's permissions match it: a vehicle's pattern with {ns} as `*`.
+std::string permission_name(const dds::TopicInfo& t) {
+  std::string name = t.name;
+  if (const auto at = name.find("{ns}"); at != std::string::npos) name.replace(at, 4, "*");
+  return name;
+}
+
 /// The names of the topics whose role bits (`publishers` or `readers`) hold `role`, in table order,
 /// each through `item`, joined by `separator`.
 template <class Item>
 std::string topics_of(unsigned role, unsigned dds::TopicInfo::*bits, Item item, const char* separator = "") {
   std::string out;
+  std::vector<std::string> seen;  // rows that share a name (cmd_vel's two types) are one topic here
   for (const dds::TopicInfo& t : dds::kTopicTable) {
     if ((t.*bits & role) == 0) continue;
-    out += (out.empty() ? "" : separator) + item(std::string(t.name));
+    const std::string name = permission_name(t);
+    if (std::find(seen.begin(), seen.end(), name) != seen.end()) continue;
+    seen.push_back(name);
+    out += (out.empty() ? "" : separator) + item(name);
   }
   return out;
 }
@@ -50,7 +63,7 @@ std::string topics_markdown() {
   std::string out = "| topic | type | QoS | publisher | rate |\n|---|---|---|---|---|\n";
   for (const dds::TopicInfo& t : dds::kTopicTable) {
     const std::string key = t.key[0] != '\0' ? " (key " + code(t.key) + ")" : "";
-    out += "| " + code(t.name) + " | " + code(t.message) + key + " | " + qos(t) + " | " + t.publisher_doc +
+    out += "| " + code(t.name) + " | " + code(dds::message_name(t.id)) + key + " | " + qos(t) + " | " + t.publisher_doc +
            " | " + t.rate_doc + " |\n";
   }
   return out;

@@ -147,4 +147,47 @@ bool sample_json(const msg::AgentStatus& m, nlohmann::json& out, std::string& wh
   return true;
 }
 
+namespace {
+nlohmann::json velocity_json(const dds::VelocitySample& v) { return {{"vx", v.vx}, {"vy", v.vy}, {"wz", v.wz}}; }
+
+nlohmann::json pose_json(const dds::PoseSample& p) {
+  nlohmann::json j = {{"x", vec(p.x)}, {"yaw", p.yaw}, {"frame_id", p.frame_id}, {"stamp_ns", p.stamp_ns}};
+  if (p.has_twist) {
+    j["v"] = {p.vx, p.vy};
+    j["wz"] = p.wz;
+    j["child_frame_id"] = p.child_frame_id;
+  }
+  return j;
+}
+
+template <class Msg, class Sample>
+bool through(const Msg& m, nlohmann::json& out, std::string& why, nlohmann::json (*json)(const Sample&)) {
+  Sample s;
+  if (!dds::from_msg(m, s, why)) return false;
+  out = json(s);
+  return true;
+}
+}  // namespace
+
+bool sample_json(const dds::ros2::Twist& m, nlohmann::json& out, std::string& why) {
+  return through(m, out, why, velocity_json);
+}
+
+bool sample_json(const dds::ros2::TwistStamped& m, nlohmann::json& out, std::string& why) {
+  dds::VelocitySample v;
+  if (!dds::from_msg(m, v, why)) return false;
+  out = velocity_json(v);
+  out["stamp_ns"] = v.stamp_ns;
+  out["frame_id"] = v.frame_id;
+  return true;
+}
+
+bool sample_json(const dds::ros2::Odometry& m, nlohmann::json& out, std::string& why) {
+  return through(m, out, why, pose_json);
+}
+
+bool sample_json(const dds::ros2::PoseStamped& m, nlohmann::json& out, std::string& why) {
+  return through(m, out, why, pose_json);
+}
+
 }  // namespace shapeform::tools

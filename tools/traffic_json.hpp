@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "dds/convert.hpp"
+#include "dds/convert_ros2.hpp"
 #include "dds/discovery.hpp"
 #include "dds/node.hpp"
 
@@ -35,6 +36,13 @@ bool sample_json(const msg::ShapeCommand& m, nlohmann::json& out, std::string& w
 bool sample_json(const msg::TrackingTarget& m, nlohmann::json& out, std::string& why);
 bool sample_json(const msg::SwarmMetrics& m, nlohmann::json& out, std::string& why);
 bool sample_json(const msg::AgentStatus& m, nlohmann::json& out, std::string& why);
+/// A vehicle's topics (ROS 2's types): {"vx", "vy", "wz"} (+ "stamp_ns", "frame_id" when stamped);
+/// a pose {"x": [x, y], "yaw", "frame_id", "stamp_ns"} (+ "v": [vx, vy], "wz", "child_frame_id" for
+/// Odometry).
+bool sample_json(const dds::ros2::Twist& m, nlohmann::json& out, std::string& why);
+bool sample_json(const dds::ros2::TwistStamped& m, nlohmann::json& out, std::string& why);
+bool sample_json(const dds::ros2::Odometry& m, nlohmann::json& out, std::string& why);
+bool sample_json(const dds::ros2::PoseStamped& m, nlohmann::json& out, std::string& why);
 
 /// One line of shapeform_echo for a sample taken from `topic`:
 ///  {"event": "sample", "topic", "data": sample_json} for valid data;

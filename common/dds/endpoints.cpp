@@ -247,32 +247,32 @@ void Reader<Msg>::reset() noexcept {
 // Node's factories of handles
 
 template <class Msg>
-Writer<Msg> Node::writer(TopicId id) {
-  check_type(id, MsgTraits<Msg>::topic);
-  auto slot =
-      std::make_shared<detail::WriterSlot>(detail::WriterSlot{id, detail::create_writer(*entities_, id)});
+Writer<Msg> Node::writer(TopicId id, const std::string& name) {
+  std::string topic = endpoint_topic(id, MsgTraits<Msg>::topic, name);
+  fdds::DataWriter* w = detail::create_writer(*entities_, id, topic);
+  auto slot = std::make_shared<detail::WriterSlot>(detail::WriterSlot{id, std::move(topic), w});
   entities_->writers.push_back(slot);
   return Writer<Msg>(entities_, std::move(slot));
 }
 
 template <class Msg>
-Reader<Msg> Node::reader(TopicId id, std::size_t mailbox_capacity) {
-  check_type(id, MsgTraits<Msg>::topic);
+Reader<Msg> Node::reader(TopicId id, std::size_t mailbox_capacity, const std::string& name) {
+  std::string topic = endpoint_topic(id, MsgTraits<Msg>::topic, name);
   Reader<Msg> r;
   r.mailbox_ = std::make_unique<detail::Mailbox<Msg>>(mailbox_capacity);
-  r.slot_ = std::make_shared<detail::ReaderSlot>(detail::ReaderSlot{id, r.mailbox_.get(), nullptr});
-  r.slot_->reader = detail::create_reader(*entities_, id, r.mailbox_.get());
+  r.slot_ = std::make_shared<detail::ReaderSlot>(detail::ReaderSlot{id, std::move(topic), r.mailbox_.get(), nullptr});
+  r.slot_->reader = detail::create_reader(*entities_, id, r.slot_->name, r.mailbox_.get());
   r.entities_ = entities_;
   entities_->readers.push_back(r.slot_);
   return r;
 }
 
 // One of each for every row of the topic table.
-#define SHAPEFORM_INSTANTIATE_ENDPOINTS(Id, name, Type, ...)   \
-  template class Writer<msg::Type>;                            \
-  template class Reader<msg::Type>;                            \
-  template Writer<msg::Type> Node::writer<msg::Type>(TopicId); \
-  template Reader<msg::Type> Node::reader<msg::Type>(TopicId, std::size_t);
+#define SHAPEFORM_INSTANTIATE_ENDPOINTS(Id, name, Type, ...)                 \
+  template class Writer<Type>;                                               \
+  template class Reader<Type>;                                               \
+  template Writer<Type> Node::writer<Type>(TopicId, const std::string&); \
+  template Reader<Type> Node::reader<Type>(TopicId, std::size_t, const std::string&);
 SHAPEFORM_TOPICS(SHAPEFORM_INSTANTIATE_ENDPOINTS)
 #undef SHAPEFORM_INSTANTIATE_ENDPOINTS
 

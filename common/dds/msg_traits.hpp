@@ -19,10 +19,10 @@ struct MsgTraits;
 
 #define SHAPEFORM_MSG_TRAITS(Id, name, Type, reliability, durability, key_column, ...)                \
   template <>                                                                                         \
-  struct MsgTraits<msg::Type> {                                                                       \
+  struct MsgTraits<Type> {                                                                               \
     static constexpr TopicId topic = TopicId::Id;                                                     \
     static constexpr bool keyed = SHAPEFORM_TOPIC_KEY_NAME(key_column)[0] != '\0';                    \
-    static std::int32_t key(const msg::Type& m) { return SHAPEFORM_TOPIC_KEY_GETTER(key_column)(m); } \
+    static std::int32_t key(const Type& m)      { return SHAPEFORM_TOPIC_KEY_GETTER(key_column)(m); } \
   };
 SHAPEFORM_TOPICS(SHAPEFORM_MSG_TRAITS)
 #undef SHAPEFORM_MSG_TRAITS
@@ -40,7 +40,7 @@ auto visit_topic(TopicId id, F&& f) {
   switch (id) {
 #define SHAPEFORM_VISIT_TOPIC(Id, name, Type, ...) \
   case TopicId::Id:                                \
-    return f(MsgType<msg::Type>{});
+    return f(MsgType<Type>{});
     SHAPEFORM_TOPICS(SHAPEFORM_VISIT_TOPIC)
 #undef SHAPEFORM_VISIT_TOPIC
   }

@@ -87,7 +87,7 @@ void register_type(fdds::DomainParticipant* p, fdds::TopicDataType* pubsub, Topi
 /// Every topic's type, registered on p.
 void register_types(fdds::DomainParticipant* p, const std::string& node) {
 #define SHAPEFORM_REGISTER_TYPE(Id, name, Type, ...) \
-  register_type(p, new msg::Type##PubSubType(), TopicId::Id, node);
+  register_type(p, new Type##PubSubType(), TopicId::Id, node);
   SHAPEFORM_TOPICS(SHAPEFORM_REGISTER_TYPE)
 #undef SHAPEFORM_REGISTER_TYPE
 }
@@ -135,18 +135,18 @@ void Node::rebuild() {
   e.participant = nullptr;
   e.publisher = nullptr;
   e.subscriber = nullptr;
-  e.topics.fill(nullptr);
+  e.topics.clear();
   for (const auto& w : e.writers) w.lock()->writer = nullptr;
   for (const auto& w : e.readers) w.lock()->reader = nullptr;
 
   open();
   for (const auto& w : e.writers) {
     const auto slot = w.lock();
-    slot->writer = detail::create_writer(e, slot->topic);
+    slot->writer = detail::create_writer(e, slot->topic, slot->name);
   }
   for (const auto& w : e.readers) {
     const auto slot = w.lock();
-    slot->reader = detail::create_reader(e, slot->topic, slot->listener);
+    slot->reader = detail::create_reader(e, slot->topic, slot->name, slot->listener);
   }
 }
 
@@ -208,39 +208,47 @@ void Node::exit_without_goodbye(int status) {
   std::_Exit(status);
 }  // entities_ (the last owner) deletes everything; handles only hold weak_ptrs
 
-void Node::check_type(TopicId requested, TopicId of_type) {
+std::string Node::endpoint_topic(TopicId requested, TopicId of_type, const std::string& name) {
   if (requested != of_type) {
     throw std::logic_error(std::string("dds: topic ") + topic_name(requested) + " carries " +
                            type_name(requested) + ", not " + type_name(of_type));
   }
+  if (is_vehicle_topic(requested) == name.empty()) {
+    throw std::logic_error(std::string("dds: topic ") + topic_name(requested) +
+                           (name.empty() ? " is a vehicle's: name it (dds::vehicle_topic_name)"
+                                         : " has a fixed name: do not name it"));
+  }
+  return name.empty() ? topic_name(requested) : name;
 }
 
 namespace {
 
-fdds::Topic* topic(detail::Entities& e, TopicId id) {
+fdds::Topic* topic(detail::Entities& e, TopicId id, const std::string& name) {
   if (e.participant == nullptr) {
-    throw std::runtime_error(std::string("no participant for topic ") + topic_name(id) + " (node " +
-                             e.name + ": its rebuild failed)");
+    throw std::runtime_error("no participant for topic " + name + " (node " + e.name + ": its rebuild failed)");
   }
-  auto& slot = e.topics[static_cast<std::size_t>(id)];
+  fdds::Topic*& slot = e.topics[name];
   if (slot == nullptr) {
-    slot = e.participant->create_topic(topic_name(id), type_name(id), fdds::TopicQos());
+    slot = e.participant->create_topic(name, type_name(id), fdds::TopicQos());
     if (slot == nullptr) {
-      throw std::runtime_error(std::string("create_topic failed for topic ") + topic_name(id) + " (node " +
-                               e.name + ")");
+      e.topics.erase(name);
+      throw std::runtime_error("create_topic failed for topic " + name + " (node " + e.name + ")");
     }
+  } else if (slot->get_type_name() != type_name(id)) {
+    throw std::runtime_error("topic " + name + " carries " + slot->get_type_name() + " in node " + e.name +
+                             ", not " + type_name(id) + ": give the two their own names");
   }
   return slot;
 }
 
 /// The error of an endpoint Fast DDS refused: with security, its likely cause (the enclave's permissions).
-[[noreturn]] void endpoint_failed(const detail::Entities& e, const char* what, TopicId id) {
-  const std::string line = std::string(what) + " failed for topic " + topic_name(id) + " (node " + e.name + ")";
+[[noreturn]] void endpoint_failed(const detail::Entities& e, const char* what, const std::string& name) {
+  const std::string line = std::string(what) + " failed for topic " + name + " (node " + e.name + ")";
   if (e.transport.security.enabled) {
     throw SecurityError("security: " + line + ": the permissions of enclave " + e.transport.security.identity +
                         " (" + enclave_dir(e.transport.security) + "/permissions.xml) do not allow " +
                         (std::string(what) == "create_datawriter" ? "publishing" : "subscribing to") + " " +
-                        topic_name(id) + "; run this program with its own role's identity (security.identity)");
+                        name + "; run this program with its own role's identity (security.identity)");
   }
   throw std::runtime_error(line);
 }
@@ -249,16 +257,18 @@ fdds::Topic* topic(detail::Entities& e, TopicId id) {
 
 namespace detail {
 
-fdds::DataWriter* create_writer(Entities& e, TopicId id) {
-  fdds::DataWriter* w = e.publisher->create_datawriter(topic(e, id), writer_qos(id));
-  if (w == nullptr) endpoint_failed(e, "create_datawriter", id);
+fdds::DataWriter* create_writer(Entities& e, TopicId id, const std::string& name) {
+  fdds::DataWriter* w = e.publisher->create_datawriter(topic(e, id, name), writer_qos(id));
+  if (w == nullptr) endpoint_failed(e, "create_datawriter", name);
   return w;
 }
 
-fdds::DataReader* create_reader(Entities& e, TopicId id, fdds::DataReaderListener* listener) {
+fdds::DataReader* create_reader(Entities& e, TopicId id, const std::string& name,
+                                fdds::DataReaderListener* listener) {
   const fdds::StatusMask mask = fdds::StatusMask::data_available() << fdds::StatusMask::subscription_matched();
-  fdds::DataReader* r = e.subscriber->create_datareader(topic(e, id), reader_qos(id, e.transport), listener, mask);
-  if (r == nullptr) endpoint_failed(e, "create_datareader", id);
+  fdds::DataReader* r =
+      e.subscriber->create_datareader(topic(e, id, name), reader_qos(id, e.transport), listener, mask);
+  if (r == nullptr) endpoint_failed(e, "create_datareader", name);
   return r;
 }
 

@@ -157,13 +157,14 @@ class Node {
   Node& operator=(const Node&) = delete;
 
   /// A writer on topic id with writer_qos(id). Msg must be the topic's type (else std::logic_error).
+  /// name: the DDS topic's name for a vehicle's topic (dds::vehicle_topic_name), and only for one.
   template <class Msg>
-  Writer<Msg> writer(TopicId id);
+  Writer<Msg> writer(TopicId id, const std::string& name = {});
 
   /// A reader on topic id with reader_qos(id, transport), its listener filling a mailbox of at most
-  /// mailbox_capacity samples. Msg must be the topic's type (else std::logic_error).
+  /// mailbox_capacity samples. Msg must be the topic's type (else std::logic_error). name: as writer's.
   template <class Msg>
-  Reader<Msg> reader(TopicId id, std::size_t mailbox_capacity = kDefaultMailboxCapacity);
+  Reader<Msg> reader(TopicId id, std::size_t mailbox_capacity = kDefaultMailboxCapacity, const std::string& name = {});
 
   eprosima::fastdds::dds::DomainParticipant* participant() const;
   const std::string& name() const;
@@ -201,7 +202,9 @@ class Node {
 
  private:
   void open();  ///< creates participant, types, publisher and subscriber into entities_
-  static void check_type(TopicId requested, TopicId of_type);
+  /// The DDS name of an endpoint on row `requested` with Msg's row `of_type` and the caller's `name`;
+  /// std::logic_error when the type is not the row's, or a name is missing (vehicle topic) or extra.
+  static std::string endpoint_topic(TopicId requested, TopicId of_type, const std::string& name);
 
   std::shared_ptr<detail::Entities> entities_;
   StallWatch stall_;
@@ -211,8 +214,8 @@ class Node {
 
 // Compiled once, in the dds library (dds/endpoints.cpp), for each topic's message type.
 #define SHAPEFORM_EXTERN_ENDPOINTS(Id, name, Type, ...) \
-  extern template class Writer<msg::Type>;              \
-  extern template class Reader<msg::Type>;
+  extern template class Writer<Type>;                   \
+  extern template class Reader<Type>;
 SHAPEFORM_TOPICS(SHAPEFORM_EXTERN_ENDPOINTS)
 #undef SHAPEFORM_EXTERN_ENDPOINTS
 

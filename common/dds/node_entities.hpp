@@ -1,7 +1,7 @@
 #pragma once
 /// The Fast DDS entities behind a dds::Node and its handles (dds/node.hpp), for the dds library's own
 /// sources (node.cpp, endpoints.cpp) and the tests: processes never include this.
-#include <array>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <set>
@@ -27,12 +27,14 @@ namespace shapeform::dds::detail {
 /// replaces the DataWriter; the handle owns the slot, the Node only watches it (weak_ptr).
 struct WriterSlot {
   TopicId topic;
+  std::string name;  ///< the DDS topic's name: the row's, or a vehicle's (dds::vehicle_topic_name)
   eprosima::fastdds::dds::DataWriter* writer = nullptr;
 };
 
 /// What a Reader handle points at: its topic, its listener (the mailbox) and the DataReader serving it now.
 struct ReaderSlot {
   TopicId topic;
+  std::string name;  ///< the DDS topic's name
   eprosima::fastdds::dds::DataReaderListener* listener = nullptr;
   eprosima::fastdds::dds::DataReader* reader = nullptr;
 };
@@ -57,7 +59,7 @@ struct Entities {
   eprosima::fastdds::dds::DomainParticipant* participant = nullptr;
   eprosima::fastdds::dds::Publisher* publisher = nullptr;
   eprosima::fastdds::dds::Subscriber* subscriber = nullptr;
-  std::array<eprosima::fastdds::dds::Topic*, kAllTopics.size()> topics{};
+  std::map<std::string, eprosima::fastdds::dds::Topic*> topics;  ///< by name, created on first use
   std::string name;
   TransportConfig transport;  ///< the profile the participant was built from (reader locators)
   /// Hears refused participants when security is enabled (set before the first participant, which
@@ -83,11 +85,12 @@ bool is_ok(const eprosima::fastrtps::types::ReturnCode_t& rc);
 /// The participant part of a writer's instance handle (a handle holds the writer's GUID).
 SourceId source_of(const eprosima::fastdds::dds::InstanceHandle_t& writer);
 
-/// A DataWriter on topic id with writer_qos(id). Throws naming the topic (with security: the
-/// enclave's permissions) when Fast DDS refuses it, or when the Node has no participant.
-eprosima::fastdds::dds::DataWriter* create_writer(Entities& e, TopicId id);
-/// A DataReader on topic id with reader_qos(id, e.transport), `listener` hearing data and matching.
-eprosima::fastdds::dds::DataReader* create_reader(Entities& e, TopicId id,
+/// A DataWriter on the topic `name` of row id, with writer_qos(id). Throws naming the topic (with
+/// security: the enclave's permissions) when Fast DDS refuses it, or when the Node has no participant.
+eprosima::fastdds::dds::DataWriter* create_writer(Entities& e, TopicId id, const std::string& name);
+/// A DataReader on the topic `name` of row id with reader_qos(id, e.transport), `listener` hearing data
+/// and matching.
+eprosima::fastdds::dds::DataReader* create_reader(Entities& e, TopicId id, const std::string& name,
                                                   eprosima::fastdds::dds::DataReaderListener* listener);
 
 }  // namespace shapeform::dds::detail

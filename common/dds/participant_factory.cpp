@@ -224,6 +224,9 @@ std::string static_edp_description(const TransportConfig& cfg) {
   std::ostringstream os;
   os << "<staticdiscovery><participant><name>shapeform</name>";
   for (const TopicId id : kAllTopics) {
+    // A vehicle's topics are ROS 2's, whose robots announce them by simple discovery (transport.static_edp
+    // is refused with vehicle.interface: ros2).
+    if (is_vehicle_topic(id)) continue;
     const fdds::DataWriterQos w = writer_qos(id);
     const fdds::DataReaderQos r = reader_qos(id, cfg);
     const auto common = [&](std::int16_t user_id, fdds::ReliabilityQosPolicyKind rel,

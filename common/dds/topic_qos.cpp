@@ -40,7 +40,7 @@ fdds::DataWriterQos writer_qos(TopicId id) {
     q.reliable_writer_qos().times.heartbeatPeriod = eprosima::fastrtps::Duration_t(kHeartbeatPeriod_s);
   }
   q.data_sharing().off();  // AUTO by default in 2.9: would use shared memory for bounded unkeyed types
-  q.endpoint().user_defined_id = static_edp_user_id(id, true);
+  if (!is_vehicle_topic(id)) q.endpoint().user_defined_id = static_edp_user_id(id, true);
   return q;
 }
 
@@ -51,7 +51,7 @@ fdds::DataReaderQos reader_qos(TopicId id) {
   q.durability().kind = durability(t);
   set_history(id, q.history(), q.resource_limits());
   q.data_sharing().off();
-  q.endpoint().user_defined_id = static_edp_user_id(id, false);
+  if (!is_vehicle_topic(id)) q.endpoint().user_defined_id = static_edp_user_id(id, false);
   return q;
 }
 

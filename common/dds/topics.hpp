@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <string_view>
 
 #include "dds/topic_table.hpp"
@@ -17,6 +18,7 @@ namespace role {
 inline constexpr unsigned kAgent = 1u << 0;       ///< agent processes: enclaves agent_0, agent_1, ...
 inline constexpr unsigned kSupervisor = 1u << 1;  ///< the supervisor (and rival supervisors)
 inline constexpr unsigned kViewer = 1u << 2;      ///< read-only monitors: view, echo, topics, the bench probe
+inline constexpr unsigned kVehicle = 1u << 3;     ///< robot drivers: shapeform_vehicle (enclave vehicle)
 }  // namespace role
 
 /// A role as the keystore names its enclaves.
@@ -27,7 +29,8 @@ struct RoleInfo {
 };
 inline constexpr RoleInfo kRoles[] = {{role::kAgent, "agent_K", "agent_*"},
                                       {role::kSupervisor, "supervisor", "supervisor"},
-                                      {role::kViewer, "viewer", "viewer"}};
+                                      {role::kViewer, "viewer", "viewer"},
+                                      {role::kVehicle, "vehicle", "vehicle"}};
 
 enum class Reliability { BestEffort, Reliable };
 enum class Durability { Volatile, TransientLocal };
@@ -44,8 +47,7 @@ inline constexpr std::array kAllTopics{SHAPEFORM_TOPICS(SHAPEFORM_TOPIC_ID)};
 /// One row of the table (dds/topic_table.hpp says what each column means).
 struct TopicInfo {
   TopicId id;
-  const char* name;     ///< "shapeform/state"
-  const char* message;  ///< "AgentState": the IDL struct (idl/AgentState.idl)
+  const char* name;     ///< "shapeform/state"; "rt/{ns}/cmd_vel": a vehicle's topic (vehicle_topic_name)
   const char* type;     ///< "shapeform::msg::AgentState": the registered type name
   Reliability reliability;
   Durability durability;
@@ -62,7 +64,6 @@ struct TopicInfo {
   TopicInfo{TopicId::Id,                                                                                   \
             name,                                                                                          \
             #Type,                                                                                         \
-            "shapeform::msg::" #Type,                                                                      \
             Reliability::reliability,                                                                      \
             Durability::durability,                                                                        \
             SHAPEFORM_TOPIC_KEY_NAME(key),                                                                 \
@@ -82,11 +83,25 @@ const TopicInfo& topic_info(TopicId id);
 /// "shapeform/metrics", "shapeform/status".
 const char* topic_name(TopicId id);
 
-/// The topic named `name` ("shapeform/state"), or nullopt.
+/// The topic named `name` ("shapeform/state"; a vehicle's, "rt/robot_3/odom", by the first row whose
+/// pattern it matches), or nullopt.
 std::optional<TopicId> find_topic(std::string_view name);
 
-/// Registered type name of the topic's message, e.g. "shapeform::msg::AgentState".
+/// Registered type name of the topic's message, e.g. "shapeform::msg::AgentState",
+/// "geometry_msgs::msg::dds_::Twist_".
 const char* type_name(TopicId id);
+
+/// The message as people name it: "AgentState" (idl/AgentState.idl), "geometry_msgs/msg/Twist" (a ROS 2
+/// type, idl/ros2/geometry_msgs/msg/Twist.idl).
+std::string message_name(TopicId id);
+
+/// Whether the topic is a vehicle's (ROS 2's names: one topic per vehicle namespace, its row's name a
+/// pattern with {ns}).
+bool is_vehicle_topic(TopicId id);
+
+/// A vehicle's topic as ROS 2 names it: "rt/" + ns + "/" + topic ("rt/robot_3/cmd_vel"); a topic that
+/// starts with '/' is absolute (no namespace). No check here: config validates the parts.
+std::string vehicle_topic_name(const std::string& ns, const std::string& topic);
 
 /// True for keyed topics: State and Status (one instance per agent, @key id), StateBatch (one per
 /// process, @key first_id).

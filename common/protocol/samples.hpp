@@ -131,6 +131,34 @@ struct StatusSample {
   std::uint64_t epoch = 0;
 };
 
+/// A velocity command to a vehicle as geometry_msgs/Twist carries it: the body frame of REP 103 (x along
+/// the heading, y to its left), m/s and rad/s; only the plane's components (linear z, angular x and y
+/// are sent as 0). TwistStamped adds the stamp and the frame.
+struct VelocitySample {
+  double vx = 0.0;
+  double vy = 0.0;
+  double wz = 0.0;
+  std::int64_t stamp_ns = 0;  ///< TwistStamped's header.stamp, ns since the sender's clock's epoch
+  std::string frame_id;       ///< TwistStamped's header.frame_id (the robot's base)
+};
+
+/// A vehicle's pose as nav_msgs/Odometry or geometry_msgs/PoseStamped carry it, in the plane.
+struct PoseSample {
+  core::Vec2 x = core::Vec2::Zero();  ///< pose.position (x, y), m; z is not used
+  double yaw = 0.0;                   ///< rad in [-pi, pi]: the orientation's rotation about z
+  std::string frame_id;               ///< header.frame_id: the frame the pose is in
+  std::int64_t stamp_ns = 0;          ///< header.stamp, ns
+  /// Odometry only: its twist (child_frame_id's frame, REP 103), and that frame.
+  bool has_twist = false;
+  double vx = 0.0;
+  double vy = 0.0;
+  double wz = 0.0;
+  std::string child_frame_id;
+};
+
+/// Longest frame name a received pose or command may carry (longer is refused).
+inline constexpr std::size_t kFrameIdMax = 256;
+
 /// The process-wide part of a status sample, as of stamp_ns: the loop's timing, the data ages of the
 /// period (ages_us is reordered), CPU and memory. The per-agent counters are the caller's to fill.
 inline StatusSample process_status(std::int64_t stamp_ns, const util::LoopStats& ls, std::vector<double>& ages_us,

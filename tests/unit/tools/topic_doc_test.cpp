@@ -48,9 +48,39 @@ TEST_CASE("every IDL type has a row of the topic table and every row an IDL type
       CHECK(final_);
     }
   }
-  for (const dds::TopicInfo& t : dds::kTopicTable) rows.insert(t.message);
+  std::size_t own_rows = 0;
+  for (const dds::TopicInfo& t : dds::kTopicTable) {
+    if (dds::is_vehicle_topic(t.id)) continue;
+    rows.insert(dds::message_name(t.id));
+    ++own_rows;
+  }
   CHECK(files == rows);  // a file without a row, or a row without a file (idl/Type.idl)
-  CHECK(rows.size() == dds::kTopicTable.size());  // one row per type
+  CHECK(rows.size() == own_rows);  // one row per type
+}
+
+TEST_CASE("a vehicle's rows are ROS 2 types, each from its IDL file under idl/ros2", "[tools][topics]") {
+  int vehicle_rows = 0;
+  for (const dds::TopicInfo& t : dds::kTopicTable) {
+    if (!dds::is_vehicle_topic(t.id)) continue;
+    ++vehicle_rows;
+    const std::string message = dds::message_name(t.id);  // geometry_msgs/msg/Twist
+    INFO(t.type << " from idl/ros2/" << message << ".idl");
+    CHECK(std::string(t.name).rfind("rt/{ns}/", 0) == 0);  // ROS 2's prefix and the vehicle's namespace
+    const auto structs = idl_structs(std::string(SHAPEFORM_SOURCE_DIR) + "/idl/ros2/" + message + ".idl");
+    const std::string name = message.substr(message.rfind('/') + 1) + "_";  // Twist_
+    REQUIRE(structs.count(name) == 1);
+    CHECK(structs.at(name));
+    // The registered name is ROS 2's: PKG::msg::dds_::X_.
+    CHECK(std::string(t.type) ==
+          message.substr(0, message.find('/')) + "::msg::dds_::" + name);
+    CHECK(!dds::is_keyed(t.id));  // ROS 2's topics have no key
+  }
+  CHECK(vehicle_rows == 4);
+  CHECK(dds::vehicle_topic_name("robot_3", "cmd_vel") == "rt/robot_3/cmd_vel");
+  CHECK(dds::vehicle_topic_name("robot_3", "/mocap/pose") == "rt/mocap/pose");
+  CHECK(dds::find_topic("rt/robot_3/odom") == dds::TopicId::Odom);
+  CHECK(dds::find_topic("rt/robot_3/cmd_vel") == dds::TopicId::CmdVel);
+  CHECK(dds::find_topic("rt//odom") == std::nullopt);
 }
 
 TEST_CASE("the topic table: ids in row order, names unique, types named after their IDL struct",
@@ -60,9 +90,11 @@ TEST_CASE("the topic table: ids in row order, names unique, types named after th
     const dds::TopicInfo& t = dds::kTopicTable[k];
     CHECK(static_cast<std::size_t>(t.id) == k);
     CHECK(dds::kAllTopics[k] == t.id);
-    CHECK(names.insert(t.name).second);
-    CHECK(std::string(t.type) == "shapeform::msg::" + std::string(t.message));
-    CHECK(dds::find_topic(t.name) == t.id);
+    CHECK(names.insert(std::string(t.name) + " " + t.type).second);
+    if (!dds::is_vehicle_topic(t.id)) {
+      CHECK(std::string(t.type) == "shapeform::msg::" + dds::message_name(t.id));
+      CHECK(dds::find_topic(t.name) == t.id);
+    }
     CHECK(t.publishers != 0);                      // somebody may publish it...
     CHECK((t.readers & dds::role::kViewer) != 0);  // ...and the read-only monitors may read it
   }
@@ -83,7 +115,12 @@ TEST_CASE("the generated tables and rules follow the rows", "[tools][topics]") {
   CHECK(rules.find("    viewer)\n      echo '<subscribe><topics><topic>shapeform/state</topic>") !=
         std::string::npos);
   CHECK(rules.find("<publish><topics><topic>shapeform/state</topic><topic>shapeform/state_batch</topic>"
-                   "<topic>shapeform/status</topic></topics></publish>") != std::string::npos);
+                   "<topic>shapeform/status</topic><topic>rt/*/cmd_vel</topic>"
+                   "</topics></publish>") != std::string::npos);
+  // A vehicle's topics: its namespace as a wildcard; a vehicle publishes its pose and reads its commands.
+  CHECK(rules.find("    vehicle)\n      echo '<publish><topics><topic>rt/*/odom</topic><topic>rt/*/pose</topic>"
+                   "</topics></publish>'\n      echo '<subscribe><topics><topic>rt/*/cmd_vel</topic></topics>") !=
+        std::string::npos);
   const std::string doc = "x\n<!-- BEGIN GENERATED topics: access -->\nold\n<!-- END GENERATED -->\n";
   CHECK(tools::regenerate_topic_doc(doc) ==
         "x\n<!-- BEGIN GENERATED topics: access -->\n" + access + "<!-- END GENERATED -->\n");
