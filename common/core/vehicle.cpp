@@ -39,6 +39,22 @@ UnicycleCommand exact_command(double offset, const Vec2& b, double h) {
   return {chord / (h * sinc(a)), 2.0 * a / h};
 }
 
+/// A unicycle's arc: holding forward speed v and yaw rate w for h seconds from `heading`, its axle moves
+/// by the chord of length v h sinc(w h / 2), along the heading half-way through the turn.
+Vec2 arc_chord(double heading, double v, double w, double h) {
+  const double turn = w * h;
+  return (v * h * sinc(0.5 * turn)) * heading_vector(heading + 0.5 * turn);
+}
+
+bool finite(const Twist& t) { return std::isfinite(t.vx) && std::isfinite(t.vy) && std::isfinite(t.wz); }
+
+/// The stop command of vehicle_command: what it sends for inputs it cannot use.
+VehicleCommand stop_command() {
+  VehicleCommand c;
+  c.saturated = true;
+  return c;
+}
+
 bool within(const VehicleParams& p, const UnicycleCommand& c) {
   return (p.max_speed <= 0.0 || std::abs(c.v) <= p.max_speed) &&
          (p.max_yaw_rate <= 0.0 || std::abs(c.w) <= p.max_yaw_rate);
@@ -160,10 +176,8 @@ UnicycleCommand unicycle_command(const VehicleParams& p, double heading, const V
 
 void unicycle_move(const VehicleParams& p, VehicleState& s, const UnicycleCommand& c, double h) {
   const Vec2 from = s.x;
-  const double turn = c.w * h;
-  // The axle's chord: length v h sinc(turn / 2), along the heading half-way through the turn.
-  const Vec2 a = axle(p, s) + (c.v * h * sinc(0.5 * turn)) * heading_vector(s.heading + 0.5 * turn);
-  s.heading = std::remainder(s.heading + turn, 2.0 * kPi);
+  const Vec2 a = axle(p, s) + arc_chord(s.heading, c.v, c.w, h);
+  s.heading = std::remainder(s.heading + c.w * h, 2.0 * kPi);
   s.x = a + p.offset * heading_vector(s.heading);
   s.velocity = (s.x - from) / h;
   s.speed = c.v;
@@ -191,6 +205,78 @@ StepResult drive(const VehicleParams& p, VehicleState& s, const StepResult& law,
       break;
   }
   return settle(s, before, dt, h, workspace, law.clamped);
+}
+
+VehicleCommand vehicle_command(const VehicleParams& p, const VehicleState& s, const Vec2& law_x, double dt,
+                               double period_s) {
+  const double h = dt * p.seconds_per_model_time;
+  if (!s.x.allFinite() || !std::isfinite(s.heading) || !s.velocity.allFinite() || !law_x.allFinite() ||
+      !(std::isfinite(h) && h > 0.0) || !(std::isfinite(period_s) && period_s > 0.0))
+    return stop_command();
+  const Vec2 step = law_x - s.x;
+  VehicleCommand c;
+  if (p.model == VehicleModel::Unicycle) {
+    const UnicycleCommand u = unicycle_command(p, s.heading, step, h);
+    VehicleParams free = p;
+    free.max_speed = free.max_yaw_rate = 0.0;
+    const UnicycleCommand wanted = unicycle_command(free, s.heading, step, h);
+    c.twist = {u.v, 0.0, u.w};
+    c.world = rotate(s.heading, Vec2(u.v, p.offset * u.w));
+    c.saturated = u.v != wanted.v || u.w != wanted.w;
+  } else {
+    const Vec2 wanted = step / h;
+    c.world = saturate(wanted, p.max_speed);
+    c.saturated = c.world != wanted;
+    if (p.model == VehicleModel::DoubleIntegrator) {
+      const Vec2 dv = c.world - s.velocity;
+      const double reach = p.max_accel * period_s;
+      c.saturated = c.saturated || (p.max_accel > 0.0 && dv.norm() > reach);
+      // Between s.velocity and the goal, both within max_speed: the guard only removes rounding.
+      c.world = saturate(s.velocity + (p.max_accel > 0.0 ? saturate(dv, reach) : dv), p.max_speed);
+    }
+    const Vec2 body = rotate(-s.heading, c.world);
+    c.twist = {body.x(), body.y(), 0.0};
+  }
+  if (!c.world.allFinite() || !finite(c.twist)) return stop_command();
+  return c;
+}
+
+void body_step(const VehicleParams& p, const BodyParams& b, Body& body, const Twist& command, double h) {
+  if (!(std::isfinite(h) && h > 0.0)) return;
+  const Twist cmd = finite(command) ? command : Twist{};
+  Twist& a = body.actual;
+  const Vec2 before(a.vx, a.vy);
+  if (b.response_s > 0.0) {
+    const double k = -std::expm1(-h / b.response_s);  // 1 - exp(-h / response_s)
+    a = {a.vx + k * (cmd.vx - a.vx), a.vy + k * (cmd.vy - a.vy), a.wz + k * (cmd.wz - a.wz)};
+  } else {
+    a = cmd;
+  }
+  if (p.model == VehicleModel::Unicycle) {
+    a.vy = 0.0;
+    if (p.max_speed > 0.0) a.vx = std::clamp(a.vx, -p.max_speed, p.max_speed);
+    if (p.max_yaw_rate > 0.0) a.wz = std::clamp(a.wz, -p.max_yaw_rate, p.max_yaw_rate);
+    body.base += arc_chord(body.heading, a.vx, a.wz, h);
+  } else {
+    Vec2 v(a.vx, a.vy);
+    if (p.model == VehicleModel::DoubleIntegrator && p.max_accel > 0.0)
+      v = before + saturate(v - before, p.max_accel * h);
+    // The projection on the speed limit's disc keeps the acceleration limit (before is within it).
+    v = saturate(v, p.max_speed);
+    a.vx = v.x();
+    a.vy = v.y();
+    const double turn = a.wz * h;
+    body.base += (h * sinc(0.5 * turn)) * rotate(body.heading + 0.5 * turn, v);
+  }
+  body.heading = std::remainder(body.heading + a.wz * h, 2.0 * kPi);
+}
+
+Vec2 controlled_point(const VehicleParams& p, const Vec2& base, double heading) {
+  return p.model == VehicleModel::Unicycle ? Vec2(base + p.offset * heading_vector(heading)) : base;
+}
+
+Vec2 base_of(const VehicleParams& p, const Vec2& point, double heading) {
+  return p.model == VehicleModel::Unicycle ? Vec2(point - p.offset * heading_vector(heading)) : point;
 }
 
 }  // namespace shapeform::core

@@ -107,4 +107,68 @@ UnicycleCommand unicycle_command(const VehicleParams& p, double heading, const V
 /// The unicycle holding c for h seconds: its axle runs the arc of radius v / w exactly.
 void unicycle_move(const VehicleParams& p, VehicleState& s, const UnicycleCommand& c, double h);
 
+// --- An external vehicle: the command an agent sends, and the body a vehicle simulator integrates ---
+
+/// A velocity command as a robot takes it (ROS REP 103, geometry_msgs/Twist's linear.x, linear.y and
+/// angular.z): in the body frame (x forward along the heading, y to the left), m/s and rad/s.
+struct Twist {
+  double vx = 0.0, vy = 0.0, wz = 0.0;
+};
+
+/// What an agent commands its external vehicle for the next period.
+struct VehicleCommand {
+  Twist twist;                ///< the command as sent, body frame
+  Vec2 world = Vec2::Zero();  ///< the same command: the controlled point's velocity, world frame, m/s
+  bool saturated = false;     ///< a limit cut the wanted command (the vehicle cannot follow the law)
+};
+
+/// The command that moves the controlled point s.x toward the law's new position law_x over one law
+/// step of h = dt * seconds_per_model_time seconds, within the vehicle's limits. s is measured: s.x the
+/// controlled point (controlled_point of the robot's pose), s.heading its heading; s.velocity is the
+/// last command's `world` (the double integrator's state: the caller sets s.velocity = c.world once c is
+/// published). period_s is the time until the next command (the agent's loop period).
+/// - integrator: world = (law_x - s.x) / h, shortened to max_speed (direction kept); wz = 0.
+/// - double integrator: world moves from s.velocity toward (law_x - s.x) / h (shortened to max_speed)
+///   by at most max_accel * period_s (the limit between successive commands); wz = 0. s.velocity is
+///   expected within max_speed (it was a command): max_speed is kept first.
+/// - unicycle: (vx, wz) = unicycle_command(p, s.heading, law_x - s.x, h), vy = 0; world is the
+///   point's velocity at the start of that motion, R(heading) (v, offset w).
+/// For the holonomic models twist = R(-heading) world. No command exceeds max_speed (|(vx, vy)| to
+/// rounding; the unicycle's |vx| exactly), max_yaw_rate (|wz|, unicycle) or max_accel (|world -
+/// s.velocity| <= max_accel period_s to rounding, double integrator). saturated is exact: true when a
+/// limit bound, not from rounding. Non-finite inputs, or h or period_s not positive, give the zero
+/// command with saturated = true (the vehicle is told to stop, whatever its acceleration limit).
+VehicleCommand vehicle_command(const VehicleParams& p, const VehicleState& s, const Vec2& law_x, double dt,
+                               double period_s);
+
+/// A simulated robot body's response.
+struct BodyParams {
+  double response_s = 0.1;  ///< s: first-order lag time constant of the wheels/motors; 0: the command at once
+};
+
+/// A simulated robot body: what the vehicle simulator integrates.
+struct Body {
+  Vec2 base = Vec2::Zero();  ///< m: the robot's pose position (the axle centre of a unicycle, the body else)
+  double heading = 0.0;      ///< rad in [-pi, pi]
+  Twist actual;              ///< the velocity it moves with now, body frame
+};
+
+/// The body over h seconds under `command`. Its velocity first: actual moves toward the command by the
+/// first-order lag, the factor 1 - exp(-h / response_s) on every component (the command itself when
+/// response_s is 0). Then the model's limits cut it: the holonomic models (integrator, double
+/// integrator) keep |(vx, vy)| <= max_speed and, the double integrator, |change of (vx, vy)| <=
+/// max_accel h from the previous actual (their wz is not limited); a unicycle drops vy (it cannot move
+/// sideways) and clamps |vx| <= max_speed, |wz| <= max_yaw_rate. Then it moves, holding actual over the
+/// whole h. The motion is exact for a constant body-frame velocity and yaw rate: the base runs an arc,
+/// moving by h sinc(wz h / 2) R(heading + wz h / 2) (vx, vy) (a unicycle's is unicycle_move's arc, to
+/// the bit), and heading += wz h, wrapped to [-pi, pi]. A non-finite command is taken as zero (a driver
+/// rejects it); an h not positive or not finite does nothing.
+void body_step(const VehicleParams& p, const BodyParams& b, Body& body, const Twist& command, double h);
+
+/// The controlled point of a robot whose pose is (base, heading): `offset` ahead of a unicycle's axle,
+/// the base itself for the other models.
+Vec2 controlled_point(const VehicleParams& p, const Vec2& base, double heading);
+/// Its inverse: the pose position whose controlled point is `point`.
+Vec2 base_of(const VehicleParams& p, const Vec2& point, double heading);
+
 }  // namespace shapeform::core
