@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -593,6 +594,50 @@ void check_transport(const dds::TransportConfig& tr, const std::map<std::string,
   }
 }
 
+/// Whether a ROS 2 name part is made of letters, digits, '_' and '/' (with `{id}` where allowed).
+bool ros_name_ok(std::string name, bool with_id) {
+  if (with_id)
+    for (auto at = name.find("{id}"); at != std::string::npos; at = name.find("{id}")) name.replace(at, 4, "0");
+  if (name.empty() || name.back() == '/') return false;
+  for (const char ch : name)
+    if (!(std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '/')) return false;
+  return name.find("//") == std::string::npos;
+}
+
+/// The vehicle interface's keys as a whole (config/README.md, docs/ROBOTS.md): the names, and what
+/// driving a robot over ROS 2 needs of the other keys.
+void check_vehicle(const Config& c, const std::map<std::string, Entry>& found, const std::set<std::string>& reported,
+                   Reader& rd) {
+  const auto bad = [&](const std::string& key, const std::string& what) {
+    if (reported.count(key) != 0) return;
+    const Entry& e = found.at(key);
+    if (e.present) rd.bad(e, what);
+    else rd.problems.push_back(key + ": " + what);
+  };
+  const VehicleLink& v = c.vehicle_link;
+  if (!ros_name_ok(v.ns, true) || v.ns.find("{id}") == std::string::npos)
+    bad("vehicle.namespace", "must be letters, digits, '_' and '/' with {id} (each agent drives its own robot: "
+                             "robot_{id}), got '" + util::excerpt(v.ns) + "'");
+  for (const auto& [key, name] : {std::pair<const char*, const std::string&>{"vehicle.cmd_topic", v.cmd_topic},
+                                  {"vehicle.pose_topic", v.pose_topic}}) {
+    const std::string relative = !name.empty() && name.front() == '/' ? name.substr(1) : name;
+    if (!ros_name_ok(relative, false))
+      bad(key, "must be a ROS 2 topic name (letters, digits, '_' and '/'), got '" + util::excerpt(name) + "'");
+  }
+  if (v.frame.empty()) bad("vehicle.frame", "must name the swarm's frame (map, world, ...), got ''");
+  if (c.vehicle_sim.child_frame.empty()) bad("vehicle_sim.child_frame", "must name the robot's frame, got ''");
+  if (!v.ros2()) return;
+  if (c.vehicle.max_speed <= 0.0)
+    bad("vehicle.max_speed", "must be > 0 with vehicle.interface: ros2 (a robot has a top speed: commands are "
+                             "held to it and a pose that moves faster is refused), got 0");
+  if (c.agent.lockstep)
+    bad("agent.sync", "must be free with vehicle.interface: ros2 (a robot moves in real time: it cannot wait "
+                      "for its neighbours' steps), got lockstep");
+  if (c.transport.static_edp)
+    bad("transport.static_edp", "must be false with vehicle.interface: ros2 (a ROS 2 robot announces its "
+                                "topics by simple discovery), got true");
+}
+
 /// The checked conversion of a (map) tree: every key of the config table, in order.
 Config convert(const YAML::Node& root, bool version_required, Reader& rd) {
   Config c;
@@ -639,6 +684,7 @@ Config convert(const YAML::Node& root, bool version_required, Reader& rd) {
     if (rd.problems.size() != before) reported.insert(p.key);
   }
   check_transport(c.transport, found, reported, rd);
+  check_vehicle(c, found, reported, rd);
   if (shape_ok.value_or(false)) {
     ShapeKeys keys{found.at("shape.r_expr"), found.at("shape.x_expr"), found.at("shape.y_expr"),
                    found.at("shape.f_expr"), found.at("shape.vertices")};
@@ -1005,6 +1051,14 @@ std::string default_yaml() {
     line.resize(std::max<std::size_t>(line.size() + 1, 32), ' ');
     out += line + "# " + note + "\n";
   }
+  return out;
+}
+
+std::string VehicleLink::namespace_of(std::int32_t id) const {
+  std::string out = ns;
+  const std::string value = std::to_string(id);
+  for (auto at = out.find("{id}"); at != std::string::npos; at = out.find("{id}", at + value.size()))
+    out.replace(at, 4, value);
   return out;
 }
 

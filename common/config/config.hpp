@@ -60,6 +60,36 @@ struct AgentConfig {
   bool leave_by_lease = false;
 };
 
+/// How an agent reaches the vehicle it drives (the vehicle.* keys beyond its model and limits): inside
+/// its own process (`internal`), or a robot over ROS 2's topics (`ros2`: its pose read from
+/// rt/<namespace>/<pose_topic>, its command written to rt/<namespace>/<cmd_topic>; docs/ROBOTS.md).
+struct VehicleLink {
+  enum class Interface { Internal, Ros2 };
+  enum class CmdType { Twist, TwistStamped };
+  enum class PoseType { Odometry, PoseStamped };
+  Interface interface = Interface::Internal;
+  std::string ns = "robot_{id}";  ///< the vehicle's namespace, {id} the agent's id
+  std::string cmd_topic = "cmd_vel";
+  CmdType cmd_type = CmdType::Twist;
+  std::string pose_topic = "odom";
+  PoseType pose_type = PoseType::Odometry;
+  std::string frame = "map";     ///< the frame every pose must be in (shared by the swarm)
+  double pose_timeout_s = 0.5;   ///< a pose older than this stops the vehicle
+  double pose_jump_m = 0.5;      ///< a pose may move at most max_speed * elapsed + this from the last
+  bool ros2() const { return interface == Interface::Ros2; }
+  /// The namespace of agent id's vehicle: ns with every {id} replaced by the id.
+  std::string namespace_of(std::int32_t id) const;
+};
+
+/// shapeform_vehicle's settings: how the simulated robots answer their commands (docs/ROBOTS.md).
+struct VehicleSimConfig {
+  double pose_rate_hz = 50.0;      ///< pose publication and integration rate
+  double response_s = 0.1;         ///< first-order lag of the wheels (core::BodyParams)
+  double pose_noise_m = 0.0;       ///< standard deviation of the noise on each published position, m
+  double command_timeout_s = 0.5;  ///< watchdog: a command older than this stops the vehicle
+  std::string child_frame = "base_link";  ///< Odometry's child_frame_id (after the namespace)
+};
+
 /// Supervisor settings.
 struct SupervisorConfig {
   double metrics_rate_hz = 10.0;      ///< metrics computation / publication / recording rate
@@ -79,6 +109,8 @@ struct Config {
   /// What each agent drives: the robot's own property, read by the agent process and the simulator,
   /// never part of the command (the wire does not carry it).
   core::VehicleParams vehicle;
+  VehicleLink vehicle_link;        ///< the vehicle.* keys of the interface
+  VehicleSimConfig vehicle_sim;
   SupervisorConfig supervisor;
   dds::TransportConfig transport;  ///< filled and checked by dds::transport_problems
 };

@@ -18,6 +18,13 @@ using P = params::Param<Config>;
 /// No loop of the project does useful work faster; an unbounded rate would spin a core.
 constexpr double kMaxRateHz = 1000.0;
 
+constexpr params::Name<VehicleLink::Interface> kInterfaceNames[] = {{VehicleLink::Interface::Internal, "internal"},
+                                                                    {VehicleLink::Interface::Ros2, "ros2"}};
+constexpr params::Name<VehicleLink::CmdType> kCmdTypeNames[] = {{VehicleLink::CmdType::Twist, "twist"},
+                                                                {VehicleLink::CmdType::TwistStamped, "twist_stamped"}};
+constexpr params::Name<VehicleLink::PoseType> kPoseTypeNames[] = {
+    {VehicleLink::PoseType::Odometry, "odometry"}, {VehicleLink::PoseType::PoseStamped, "pose_stamped"}};
+
 /// agent.sync spellings.
 constexpr params::Name<bool> kSyncNames[] = {{false, "free"}, {true, "lockstep"}};
 
@@ -39,6 +46,76 @@ P angle(std::string key, params::Range range, std::string doc, Field field) {
   P p = real(std::move(key), "degrees", range, std::move(doc), field);
   p.degrees = true;
   return p;
+}
+
+/// A text key with the rule it must follow (checked by the loader: check_vehicle in config.cpp).
+template <class Field>
+P text(std::string key, std::string doc, Field field, std::string rule) {
+  return param<std::string>(Type::Text, std::move(key), "", {}, std::move(doc), field, std::move(rule));
+}
+
+/// The vehicle section's interface keys (docs/ROBOTS.md): how an agent reaches its vehicle.
+void add_vehicle_link(std::vector<P>& t) {
+  t.push_back(params::make_choice<Config>(
+      "vehicle.interface",
+      "`internal` = the agent integrates its vehicle model itself (today's behaviour); `ros2` = it drives a "
+      "robot over ROS 2's topics: reads the robot's pose, publishes a velocity command every tick, integrates "
+      "nothing (needs `vehicle.max_speed` > 0)",
+      kInterfaceNames, [](auto& c) -> auto& { return c.vehicle_link.interface; }));
+  t.push_back(text(
+      "vehicle.namespace", "ros2: the robot's namespace; `{id}` is replaced by the agent's id",
+      [](auto& c) -> auto& { return c.vehicle_link.ns; },
+      "letters, digits, `_` and `/`, with `{id}` (each agent drives its own robot)"));
+  t.push_back(text(
+      "vehicle.cmd_topic", "ros2: the command topic, in the namespace (`/name`: absolute)",
+      [](auto& c) -> auto& { return c.vehicle_link.cmd_topic; }, "letters, digits, `_` and `/`"));
+  t.push_back(params::make_choice<Config>(
+      "vehicle.cmd_type",
+      "ros2: `twist` = geometry_msgs/Twist (most drivers); `twist_stamped` = geometry_msgs/TwistStamped (ROS 2 "
+      "Jazzy's diff_drive_controller)",
+      kCmdTypeNames, [](auto& c) -> auto& { return c.vehicle_link.cmd_type; }));
+  t.push_back(text(
+      "vehicle.pose_topic", "ros2: the pose topic, in the namespace (`/name`: absolute)",
+      [](auto& c) -> auto& { return c.vehicle_link.pose_topic; }, "letters, digits, `_` and `/`"));
+  t.push_back(params::make_choice<Config>(
+      "vehicle.pose_type",
+      "ros2: `odometry` = nav_msgs/Odometry (a driver's odom, localised into the swarm's frame); "
+      "`pose_stamped` = geometry_msgs/PoseStamped (motion capture, localisation)",
+      kPoseTypeNames, [](auto& c) -> auto& { return c.vehicle_link.pose_type; }));
+  t.push_back(text(
+      "vehicle.frame",
+      "ros2: the frame every pose must be in (header.frame_id), one shared by the swarm (`map`, the motion "
+      "capture's world); a pose in another frame is refused",
+      [](auto& c) -> auto& { return c.vehicle_link.frame; }, "not empty"));
+  t.push_back(real(
+      "vehicle.pose_timeout_s", "s", params::Range{0, true, 10, false, false},
+      "ros2: a pose older than this makes the agent command zero velocity at once (and say so) until poses "
+      "return",
+      [](auto& c) -> auto& { return c.vehicle_link.pose_timeout_s; }));
+  t.push_back(real(
+      "vehicle.pose_jump_m", "m", params::at_least(0),
+      "ros2: a pose further than `max_speed` x (time since the last) + this from the last accepted one is "
+      "refused and counted (noise, a relocalisation, a wrong robot)",
+      [](auto& c) -> auto& { return c.vehicle_link.pose_jump_m; }));
+  t.push_back(real(
+      "vehicle_sim.pose_rate_hz", "Hz", params::above_up_to(0, kMaxRateHz),
+      "shapeform_vehicle: pose publication and integration rate",
+      [](auto& c) -> auto& { return c.vehicle_sim.pose_rate_hz; }));
+  t.push_back(real(
+      "vehicle_sim.response_s", "s", params::Range{0, false, 10, false, false},
+      "shapeform_vehicle: first-order lag of the wheels (0: a command is taken at once)",
+      [](auto& c) -> auto& { return c.vehicle_sim.response_s; }));
+  t.push_back(real(
+      "vehicle_sim.pose_noise_m", "m", params::Range{0, false, 1, false, false},
+      "shapeform_vehicle: standard deviation of the Gaussian noise on each published position",
+      [](auto& c) -> auto& { return c.vehicle_sim.pose_noise_m; }));
+  t.push_back(real(
+      "vehicle_sim.command_timeout_s", "s", params::Range{0, true, 10, false, false},
+      "shapeform_vehicle: watchdog; a vehicle whose last command is older than this stops",
+      [](auto& c) -> auto& { return c.vehicle_sim.command_timeout_s; }));
+  t.push_back(text(
+      "vehicle_sim.child_frame", "shapeform_vehicle: Odometry's child_frame_id, after the namespace",
+      [](auto& c) -> auto& { return c.vehicle_sim.child_frame; }, "not empty"));
 }
 
 /// The vehicle section (core/vehicle.hpp, docs/VEHICLES.md): the robot each agent drives.
@@ -89,6 +166,7 @@ void add_vehicle(std::vector<P>& t) {
       "start headings uniform in `initial_heading_deg` +- this, drawn per agent from (`swarm.seed`, id) "
       "alone (180: any heading; the positions' draw is unchanged)",
       [](auto& c) -> auto& { return c.vehicle.heading_spread; }));
+  add_vehicle_link(t);
 }
 
 std::vector<P> build() {
