@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "core/law.hpp"
@@ -108,6 +109,48 @@ void AgentLogic::set_vehicle(const core::VehicleParams& p, double heading) {
   vehicle_state_ = core::vehicle_start(x_, heading);
 }
 
+void AgentLogic::set_external_vehicle(const core::VehicleParams& p, ExternalVehicle ext) {
+  vehicle_ = p;
+  external_ = std::move(ext);
+}
+
+AgentLogic::PoseVerdict AgentLogic::on_pose(const core::Vec2& base, double yaw, const std::string& frame,
+                                            std::int64_t now_ns, std::string& why) {
+  if (frame != external_->frame) {
+    ++poses_refused_;
+    why = "pose in frame '" + frame + "', not the swarm's '" + external_->frame +
+          "' (vehicle.frame): localise every robot in one frame";
+    return PoseVerdict::WrongFrame;
+  }
+  const core::Vec2 point = core::controlled_point(vehicle_, base, yaw);
+  if (has_pose()) {
+    const double elapsed_s = static_cast<double>(now_ns - pose_ns_) * 1e-9;
+    const double reach = vehicle_.max_speed * std::max(elapsed_s, 0.0) + external_->pose_jump_m;
+    const double moved = (point - vehicle_state_.x).norm();
+    if (moved > reach) {
+      ++poses_refused_;
+      char text[200];
+      std::snprintf(text, sizeof text,
+                    "pose jumped %.3g m in %.3g s, more than the vehicle can move (max_speed x elapsed + "
+                    "vehicle.pose_jump_m = %.3g m)",
+                    moved, elapsed_s, reach);
+      why = text;
+      return PoseVerdict::Jump;
+    }
+  }
+  vehicle_state_.x = point;
+  vehicle_state_.heading = yaw;
+  x_ = point;
+  pose_ns_ = now_ns;
+  return PoseVerdict::Accepted;
+}
+
+void AgentLogic::stop_vehicle() {
+  command_ = {};
+  vehicle_state_.velocity = core::Vec2::Zero();
+  v_ = core::Vec2::Zero();
+}
+
 AgentCounters AgentLogic::counters() const {
   AgentCounters c = table_->counters_for(id_);
   c.samples_rejected = rejected_;
@@ -204,6 +247,7 @@ bool AgentLogic::step() {
     // the lockstep step count) stands still.
     v_ = core::Vec2::Zero();
     core::stop(vehicle_state_);
+    command_ = {};
     return false;
   }
   const bool arc_law = cmd_.law == core::Law::Arc;
@@ -234,6 +278,7 @@ bool AgentLogic::step() {
     // (free running) until it catches up.
     if (++waited_ <= max_wait_ticks_) {
       v_ = core::Vec2::Zero();
+      command_ = {};
       return false;
     }
   } else {
@@ -266,6 +311,20 @@ core::Vec2 AgentLogic::seen_now(const CentreFrame& f, const Snapshot& s,
 }
 
 void AgentLogic::take_step(const core::StepResult& law) {
+  if (external_) {
+    // A robot outside: command it toward the law's new position; it moves by itself, and the next
+    // pose says where it got to.
+    command_ = core::vehicle_command(vehicle_, vehicle_state_, law.x, cmd_.dt, external_->period_s);
+    if (command_.saturated) ++saturated_;
+    if (law.clamped) ++clamped_;
+    vehicle_state_.velocity = command_.world;
+    arc_prev_ = cmd_.law == core::Law::Arc ? arc() : std::nullopt;
+    x_prev_ = x_;
+    v_ = command_.world * vehicle_.seconds_per_model_time;  // shape units per model time, as published
+    t_ += cmd_.dt;
+    target_age_ += cmd_.dt;
+    return;
+  }
   // The integrator without a speed limit returns the law's step bit for bit.
   const core::StepResult r = core::drive(vehicle_, vehicle_state_, law, cmd_.dt, cmd_.workspace);
   if (r.clamped) ++clamped_;

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -172,6 +173,44 @@ class AgentLogic {
   void set_vehicle(const core::VehicleParams& p, double heading);
   const core::VehicleState& vehicle() const { return vehicle_state_; }
 
+  /// A robot outside the process (vehicle.interface ros2): how the agent judges its poses.
+  struct ExternalVehicle {
+    std::string frame = "map";                   ///< the swarm's frame: a pose in another is refused
+    std::int64_t pose_timeout_ns = 500'000'000;  ///< an older pose stops the vehicle (pose_fresh)
+    double pose_jump_m = 0.5;  ///< a pose may be max_speed x elapsed + this from the last accepted one
+    double period_s = 0.02;    ///< the agent's loop period: how long a command is held
+  };
+  /// Drives a robot it does not simulate: its position and heading come from on_pose (the agent has
+  /// none before the first), and step() computes the velocity command for it (vehicle_command())
+  /// instead of moving anything. Call before the first step.
+  void set_external_vehicle(const core::VehicleParams& p, ExternalVehicle ext);
+  bool external() const { return external_.has_value(); }
+  enum class PoseVerdict {
+    Accepted,
+    WrongFrame,  ///< not in the swarm's frame
+    Jump         ///< further from the last accepted pose than the vehicle could move
+  };
+  /// A valid pose (the robot's base and yaw, in `frame`) received at now_ns. Accepted: the agent is
+  /// where it says (its controlled point, core::controlled_point). Refused: `why` says why, the pose is
+  /// counted (poses_refused) and not used.
+  PoseVerdict on_pose(const core::Vec2& base, double yaw, const std::string& frame, std::int64_t now_ns,
+                      std::string& why);
+  bool has_pose() const { return pose_ns_ >= 0; }
+  /// Whether the newest accepted pose is at most pose_timeout old.
+  bool pose_fresh(std::int64_t now_ns) const { return has_pose() && now_ns - pose_ns_ <= external_->pose_timeout_ns; }
+  /// When the newest accepted pose was received (-1: none).
+  std::int64_t pose_received_ns() const { return pose_ns_; }
+  /// The command for the external vehicle now: the last step's, zero before any command, while held,
+  /// and after stop_vehicle().
+  const core::VehicleCommand& vehicle_command() const { return command_; }
+  /// The pose is lost (or the agent stops): command zero, model time stands still.
+  void stop_vehicle();
+  std::uint64_t poses_refused() const { return poses_refused_; }
+  /// A pose refused before on_pose (its message was invalid): counted with the others.
+  void count_refused_pose() { ++poses_refused_; }
+  /// Commands a limit cut (the vehicle cannot follow the law).
+  std::uint64_t commands_saturated() const { return saturated_; }
+
   std::int32_t id() const { return id_; }
   const core::Vec2& position() const { return x_; }
   const core::Vec2& velocity() const { return v_; }
@@ -234,6 +273,11 @@ class AgentLogic {
   std::vector<core::Neighbour> nbrs_;  ///< reused every step
   std::uint64_t rejected_ = 0;         ///< AgentCounters::samples_rejected
   std::uint64_t clamped_ = 0;          ///< AgentCounters::steps_clamped
+  std::optional<ExternalVehicle> external_;
+  std::int64_t pose_ns_ = -1;           ///< when the newest accepted pose was received
+  core::VehicleCommand command_;        ///< the external vehicle's command now
+  std::uint64_t poses_refused_ = 0;
+  std::uint64_t saturated_ = 0;
 };
 
 /// Whether this process may publish its agent ids when another participant publishes one of them (two

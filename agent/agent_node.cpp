@@ -20,6 +20,7 @@
 #include "dds/convert.hpp"
 #include "dds/node.hpp"
 #include "dds/state_input.hpp"
+#include "dds/vehicle_io.hpp"
 #include "dds/participant.hpp"
 #include "util/log.hpp"
 #include "util/proc_stats.hpp"
@@ -123,7 +124,9 @@ class AgentNode {
     drain_states();
     if (identity_.yielding()) return farewell(now);
     if (!identity_.may_publish(now)) return;  // the grace period: listening whether an id is in use
+    drain_poses();
     step(now);
+    command_robots();
     // Slow until commanded (agent.idle_rate_hz): a large swarm's discovery runs on a nearly idle host.
     if (logics_.front()->has_command() || ticks_ % idle_every_ == 0) publish();
     report();
@@ -137,6 +140,13 @@ class AgentNode {
   void drain_targets();
   void drain_states();
   void step(std::int64_t now);
+  /// vehicle.interface ros2: the robots' poses into their agents (refused ones counted and said).
+  void drain_poses();
+  /// vehicle.interface ros2: each robot's command of this tick (zero without a fresh pose), and the
+  /// control latency of the commands that used a new pose.
+  void command_robots();
+  /// A hosted agent's robot changed health (pose lost, back, first pose): say so.
+  void vehicle_health(std::size_t k, dds::VehicleHealth health, const std::string& why);
   void publish();
   void report();
   /// Statuses of the hosted agents; with --json also their "status" events.
@@ -162,6 +172,16 @@ class AgentNode {
   std::shared_ptr<NeighbourTable> table_;
   std::vector<std::unique_ptr<AgentLogic>> logics_;
   std::vector<AgentLogic*> sharing_;  ///< reused by step(): the agents stepped together
+  /// vehicle.interface ros2: each hosted agent's robot (same order as logics_), else empty.
+  struct Robot {
+    dds::VehicleController io;
+    dds::VehicleHealth health = dds::VehicleHealth::NoPose;
+    std::int64_t pose_used_ns = -1;   ///< the pose the last command was computed from
+    std::vector<double> latency_us;   ///< control latencies of this status period
+    std::uint64_t saturated_reported = 0;
+  };
+  std::vector<Robot> robots_;
+  std::vector<dds::PoseItem> poses_;  ///< reused by drain_poses()
 
   dds::Node node_;
   dds::Writer<msg::AgentState> state_writer_;         ///< unless batch_
@@ -236,9 +256,38 @@ AgentNode::AgentNode(const std::vector<std::int32_t>& ids, const std::vector<cor
       idle_every_(ticks_per(cfg.agent.rate_hz, cfg.agent.idle_state_rate_hz())),
       identity_(node_.source(), util::steady_ns() + static_cast<std::int64_t>(cfg.agent.identity_grace_s * 1e9)) {
   const int max_wait_ticks = static_cast<int>(std::lround(5.0 * cfg.agent.rate_hz));
+  const config::VehicleLink& link = cfg.vehicle_link;
   for (std::size_t k = 0; k < ids.size(); ++k) {
     logics_.push_back(std::make_unique<AgentLogic>(ids[k], starts[k], table_, cfg.agent.lockstep, max_wait_ticks));
-    logics_.back()->set_vehicle(cfg.vehicle, core::start_heading(cfg.vehicle, ids[k], cfg.swarm.seed));
+    AgentLogic& l = *logics_.back();
+    if (!link.ros2()) {
+      l.set_vehicle(cfg.vehicle, core::start_heading(cfg.vehicle, ids[k], cfg.swarm.seed));
+      continue;
+    }
+    l.set_external_vehicle(cfg.vehicle, {link.frame, static_cast<std::int64_t>(link.pose_timeout_s * 1e9),
+                                         link.pose_jump_m, 1.0 / cfg.agent.rate_hz});
+    dds::VehicleTopics t;
+    t.ns = link.namespace_of(ids[k]);
+    t.cmd_topic = link.cmd_topic;
+    t.cmd_stamped = link.cmd_type == config::VehicleLink::CmdType::TwistStamped;
+    t.pose_topic = link.pose_topic;
+    t.pose_stamped = link.pose_type == config::VehicleLink::PoseType::PoseStamped;
+    robots_.emplace_back();
+    robots_.back().io = dds::VehicleController(node_, t);
+    robots_.back().latency_us.reserve(kAgeCapacity);
+    util::log_info("agent " + std::to_string(ids[k]) + " drives the robot " + t.ns + ": pose from " + t.pose_name() +
+                   ", commands on " + t.cmd_name());
+  }
+  if (link.ros2()) {
+    // One law step should last one tick: the robot then covers each step before the next one.
+    const double step_s = cfg.command.dt * cfg.vehicle.seconds_per_model_time, period_s = 1.0 / cfg.agent.rate_hz;
+    if (std::abs(step_s - period_s) > 0.01 * period_s)
+      util::log_warn("a law step lasts " + core::params::format_number(step_s) +
+                     " s (integration.dt x vehicle.seconds_per_model_time) but a tick " +
+                     core::params::format_number(period_s) + " s (1 / agent.rate_hz): the robot covers " +
+                     core::params::format_number(period_s / step_s) +
+                     " of each step per tick; set vehicle.seconds_per_model_time = " +
+                     core::params::format_number(period_s / cfg.command.dt));
   }
   ages_us_.reserve(kAgeCapacity);
 }
@@ -409,16 +458,36 @@ void AgentNode::step(std::int64_t now) {
     l.drop_stale(now);  // the shared table drops once per tick
     if (k == 0 && had_target && !l.following_target())
       util::log_warn("tracking target unheard for 1 s: the centre follows the command's path on this agent's clock");
-    if (group_ && l.shares_step_with(*logics_.front())) sharing_.push_back(&l);
+    if (group_ && robots_.empty() && l.shares_step_with(*logics_.front())) sharing_.push_back(&l);
   }
   std::vector<std::uint64_t>& clamped = clamped_before_;
   clamped.clear();
   for (const auto& l : logics_) clamped.push_back(l->steps_clamped());
   // The arc law: one sorted list and offset for all hosted agents when they can share them (same
-  // command, model time and target), else (and always for one agent) each on its own.
-  if (sharing_.size() == logics_.size()) AgentLogic::step_shared(sharing_);
-  else
-    for (auto& l : logics_) l->step();
+  // command, model time and target), else (and always for one agent, and for robots) each on its own.
+  if (sharing_.size() == logics_.size()) {
+    AgentLogic::step_shared(sharing_);
+  } else {
+    for (std::size_t k = 0; k < logics_.size(); ++k) {
+      AgentLogic& l = *logics_[k];
+      if (robots_.empty()) {
+        l.step();
+        continue;
+      }
+      // A robot is driven only from a fresh pose: without one it is told to stop, at once.
+      if (l.pose_fresh(now)) {
+        if (robots_[k].health != dds::VehicleHealth::Driving) vehicle_health(k, dds::VehicleHealth::Driving, "");
+        l.step();
+      } else {
+        l.stop_vehicle();
+        if (l.has_pose() && robots_[k].health == dds::VehicleHealth::Driving)
+          vehicle_health(k, dds::VehicleHealth::PoseLost,
+                         "no pose from " + robots_[k].io.topics().pose_name() + " for " +
+                             core::params::format_number(cfg_.vehicle_link.pose_timeout_s) +
+                             " s (vehicle.pose_timeout_s): commanding zero velocity until poses return");
+      }
+    }
+  }
   for (std::size_t k = 0; k < logics_.size(); ++k) {
     const AgentLogic& l = *logics_[k];
     if (l.steps_clamped() != clamped[k])
@@ -433,6 +502,7 @@ void AgentNode::publish() {
   ++seq_;
   batch_states_.clear();
   for (const auto& l : logics_) {
+    if (l->external() && !l->has_pose()) continue;  // where it is is not known yet
     dds::StateSample s;
     s.id = l->id();
     s.seq = seq_;
@@ -448,7 +518,61 @@ void AgentNode::publish() {
     if (batch_) batch_states_.push_back(s);
     else state_writer_.write(dds::to_msg(s));
   }
-  if (batch_) batch_writer_.write(dds::to_msg(batch_states_));
+  if (batch_ && !batch_states_.empty()) batch_writer_.write(dds::to_msg(batch_states_));
+}
+
+void AgentNode::drain_poses() {
+  for (std::size_t k = 0; k < robots_.size(); ++k) {
+    AgentLogic& l = *logics_[k];
+    robots_[k].io.drain(poses_);
+    for (const dds::PoseItem& p : poses_) {
+      std::string why = p.why;
+      const bool accepted =
+          p.valid && l.on_pose(p.sample.x, p.sample.yaw, p.sample.frame_id, p.receive_stamp_ns, why) ==
+                         AgentLogic::PoseVerdict::Accepted;
+      if (accepted) continue;
+      if (!p.valid) l.count_refused_pose();
+      const std::string line = "agent " + std::to_string(l.id()) + ": pose of " + robots_[k].io.topics().ns +
+                               " refused: " + why;
+      if (throttled_.warn("pose " + why.substr(0, why.find(' ')), line) && opt_.json)
+        emit({{"event", "pose_refused"}, {"id", l.id()}, {"why", why}});
+    }
+  }
+}
+
+void AgentNode::command_robots() {
+  for (std::size_t k = 0; k < robots_.size(); ++k) {
+    AgentLogic& l = *logics_[k];
+    Robot& r = robots_[k];
+    const core::Twist& c = l.vehicle_command().twist;
+    dds::VelocitySample v;
+    v.vx = c.vx;
+    v.vy = c.vy;
+    v.wz = c.wz;
+    v.stamp_ns = util::system_ns();
+    v.frame_id = r.io.topics().ns + "/" + cfg_.vehicle_sim.child_frame;
+    r.io.command(v);
+    // Pose received -> command published, once per pose that a step used.
+    if (r.health == dds::VehicleHealth::Driving && l.pose_received_ns() != r.pose_used_ns) {
+      r.pose_used_ns = l.pose_received_ns();
+      if (r.latency_us.size() < r.latency_us.capacity())
+        r.latency_us.push_back(static_cast<double>(util::steady_ns() - r.pose_used_ns) * 1e-3);
+    }
+  }
+}
+
+void AgentNode::vehicle_health(std::size_t k, dds::VehicleHealth health, const std::string& why) {
+  Robot& r = robots_[k];
+  const AgentLogic& l = *logics_[k];
+  const dds::VehicleHealth was = r.health;
+  r.health = health;
+  const std::string who = "agent " + std::to_string(l.id()) + " (robot " + r.io.topics().ns + ")";
+  if (health == dds::VehicleHealth::PoseLost) util::log_warn(who + ": " + why);
+  else if (was == dds::VehicleHealth::PoseLost) util::log_info(who + ": poses are back, driving again");
+  else util::log_info(who + ": first pose received, driving");
+  if (opt_.json)
+    emit({{"event", "vehicle"}, {"id", l.id()}, {"state", dds::to_string(health)}, {"was", dds::to_string(was)},
+          {"why", why}});
 }
 
 void AgentNode::report() {
@@ -466,9 +590,31 @@ void AgentNode::publish_status(bool json) {
   const double share = 1.0 / static_cast<double>(logics_.size());  // of the process figures, per agent
   dds::StatusSample st =
       dds::process_status(util::steady_ns(), loop_.stats(), ages_us_, cpu_.percent() * share, util::rss_mb() * share);
-  for (const auto& l : logics_) {
+  for (std::size_t i = 0; i < logics_.size(); ++i) {
+    const auto& l = logics_[i];
     const AgentCounters& k = l->counters();
     st.id = l->id();
+    if (!robots_.empty()) {
+      Robot& r = robots_[i];
+      st.vehicle = r.health;
+      st.poses_refused = l->poses_refused();
+      st.commands_saturated = l->commands_saturated();
+      st.control_latency_p50_us = util::percentile(r.latency_us, 50).value_or(-1);
+      st.control_latency_p99_us = util::percentile(r.latency_us, 99).value_or(-1);
+      r.latency_us.clear();
+      if (st.commands_saturated != r.saturated_reported) {
+        // Not hidden: a robot whose commands the limits cut does not move as the law asks.
+        throttled_.warn("saturated", "agent " + std::to_string(st.id) + ": " +
+                                         std::to_string(st.commands_saturated - r.saturated_reported) +
+                                         " commands cut by the vehicle's limits in the last status period "
+                                         "(vehicle.max_speed, max_yaw_rate, max_accel): the robot cannot follow "
+                                         "the law there");
+        if (opt_.json && json)
+          emit({{"event", "saturated"}, {"id", st.id}, {"commands", st.commands_saturated - r.saturated_reported},
+                {"total", st.commands_saturated}});
+        r.saturated_reported = st.commands_saturated;
+      }
+    }
     st.neighbours_heard = l->neighbours();
     st.stale_dropped = k.stale_dropped;
     st.samples_rejected = k.samples_rejected;
@@ -479,7 +625,11 @@ void AgentNode::publish_status(bool json) {
     if (opt_.json && json)
       emit({{"event", "status"}, {"id", st.id}, {"neighbours_heard", st.neighbours_heard}, {"epoch", st.epoch},
             {"model_time", l->model_time()}, {"x", l->position().x()}, {"y", l->position().y()},
-            {"ticks", st.ticks}, {"samples_rejected", st.samples_rejected}, {"steps_clamped", k.steps_clamped}});
+            {"ticks", st.ticks}, {"samples_rejected", st.samples_rejected}, {"steps_clamped", k.steps_clamped},
+            {"vehicle", dds::to_string(st.vehicle)}, {"heading", l->vehicle().heading},
+            {"poses_refused", st.poses_refused}, {"commands_saturated", st.commands_saturated},
+            {"control_latency_p50_us", st.control_latency_p50_us},
+            {"control_latency_p99_us", st.control_latency_p99_us}});
   }
   ages_us_.clear();
 }

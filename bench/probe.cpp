@@ -3,7 +3,8 @@
 // its receive time on the host's steady clock (CLOCK_MONOTONIC, the clock of every *_stamp_ns):
 //   DIR/status.csv   recv_ns,id,stamp_ns,ticks,overruns,lateness_max_us,lateness_p99_us,
 //                    neighbours_heard,stale_dropped,samples_rejected,samples_received,samples_lost,
-//                    age_p50_us,age_p99_us,cpu_percent,rss_mb,epoch
+//                    age_p50_us,age_p99_us,cpu_percent,rss_mb,epoch,control_latency_p50_us,
+//                    control_latency_p99_us
 //   DIR/metrics.csv  recv_ns,epoch,model_time,agents_alive,shape_error_mean,gap_cv,converged
 //                    (the metrics by their core::kMetricTable names; -1 = undefined)
 // Prints "ready <steady ns>" on stdout once its readers exist; runs until SIGINT/SIGTERM.
@@ -47,7 +48,7 @@ int run(const config::Config& cfg, const std::filesystem::path& dir) {
   std::fprintf(status_csv,
                "recv_ns,id,stamp_ns,ticks,overruns,lateness_max_us,lateness_p99_us,neighbours_heard,"
                "stale_dropped,samples_rejected,samples_received,samples_lost,age_p50_us,age_p99_us,"
-               "cpu_percent,rss_mb,epoch\n");
+               "cpu_percent,rss_mb,epoch,control_latency_p50_us,control_latency_p99_us\n");
   std::fprintf(metrics_csv, "recv_ns,epoch,model_time,agents_alive");
   for (const auto* info : kProbeMetrics) std::fprintf(metrics_csv, ",%s", std::string(info->name).c_str());
   std::fprintf(metrics_csv, ",converged\n");
@@ -66,14 +67,15 @@ int run(const config::Config& cfg, const std::filesystem::path& dir) {
         dds::StatusSample s;
         std::string why;
         if (!r.valid_data || !dds::from_msg(r.msg, s, why)) continue;
-        std::fprintf(status_csv, "%lld,%d,%lld,%llu,%llu,%.1f,%.1f,%d,%llu,%llu,%llu,%llu,%.1f,%.1f,%.2f,%.2f,%llu\n",
+        std::fprintf(status_csv, "%lld,%d,%lld,%llu,%llu,%.1f,%.1f,%d,%llu,%llu,%llu,%llu,%.1f,%.1f,%.2f,%.2f,%llu,%.1f,%.1f\n",
                      static_cast<long long>(r.receive_stamp_ns), s.id, static_cast<long long>(s.stamp_ns),
                      static_cast<unsigned long long>(s.ticks), static_cast<unsigned long long>(s.overruns),
                      s.lateness_max_us, s.lateness_p99_us, s.neighbours_heard,
                      static_cast<unsigned long long>(s.stale_dropped), static_cast<unsigned long long>(s.samples_rejected),
                      static_cast<unsigned long long>(s.samples_received),
                      static_cast<unsigned long long>(s.samples_lost), s.age_p50_us, s.age_p99_us, s.cpu_percent,
-                     s.rss_mb, static_cast<unsigned long long>(s.epoch));
+                     s.rss_mb, static_cast<unsigned long long>(s.epoch), s.control_latency_p50_us,
+                     s.control_latency_p99_us);
       }
       metrics_reader.drain(metrics);
       for (const auto& r : metrics) {

@@ -143,7 +143,12 @@ bool sample_json(const msg::AgentStatus& m, nlohmann::json& out, std::string& wh
          {"age_p99_us", s.age_p99_us},
          {"cpu_percent", s.cpu_percent},
          {"rss_mb", s.rss_mb},
-         {"epoch", s.epoch}};
+         {"epoch", s.epoch},
+         {"vehicle", dds::to_string(s.vehicle)},
+         {"poses_refused", s.poses_refused},
+         {"commands_saturated", s.commands_saturated},
+         {"control_latency_p50_us", s.control_latency_p50_us},
+         {"control_latency_p99_us", s.control_latency_p99_us}};
   return true;
 }
 

@@ -239,6 +239,11 @@ msg::AgentStatus to_msg(const StatusSample& s) {
   m.cpu_percent(s.cpu_percent);
   m.rss_mb(s.rss_mb);
   m.epoch(s.epoch);
+  m.vehicle(static_cast<std::uint8_t>(s.vehicle));
+  m.poses_refused(s.poses_refused);
+  m.commands_saturated(s.commands_saturated);
+  m.control_latency_p50_us(s.control_latency_p50_us);
+  m.control_latency_p99_us(s.control_latency_p99_us);
   return m;
 }
 
@@ -247,10 +252,16 @@ bool from_msg(const msg::AgentStatus& m, StatusSample& out, std::string& why) {
     why = "status.id: must be in 0.." + std::to_string(kMaxAgentId) + ", got " + std::to_string(m.id());
     return false;
   }
+  if (m.vehicle() > static_cast<std::uint8_t>(VehicleHealth::PoseLost)) {
+    why = "status.vehicle: must be 0..3, got " + std::to_string(m.vehicle());
+    return false;
+  }
   out = StatusSample{m.id(),           m.stamp_ns(),        m.ticks(),         m.overruns(),
                      m.lateness_max_us(), m.lateness_p99_us(), m.neighbours_heard(), m.stale_dropped(),
                      m.samples_rejected(), m.samples_received(), m.samples_lost(), m.age_p50_us(),
-                     m.age_p99_us(),    m.cpu_percent(),     m.rss_mb(),        m.epoch()};
+                     m.age_p99_us(),    m.cpu_percent(),     m.rss_mb(),        m.epoch(),
+                     static_cast<VehicleHealth>(m.vehicle()), m.poses_refused(), m.commands_saturated(),
+                     m.control_latency_p50_us(), m.control_latency_p99_us()};
   return true;
 }
 

@@ -111,6 +111,24 @@ struct TargetSample {
   std::int64_t stamp_ns = 0;  ///< supervisor's steady clock at publication, ns
 };
 
+/// How an agent's vehicle is (AgentStatus.vehicle).
+enum class VehicleHealth : std::uint8_t {
+  Internal = 0,  ///< integrated by the agent itself (vehicle.interface internal)
+  Driving = 1,   ///< a robot over ROS 2, its pose fresh
+  NoPose = 2,    ///< a robot whose first pose has not come yet
+  PoseLost = 3,  ///< a robot whose pose is older than vehicle.pose_timeout_s: commanding zero
+};
+/// "internal", "driving", "no_pose", "pose_lost".
+inline const char* to_string(VehicleHealth h) {
+  switch (h) {
+    case VehicleHealth::Internal: return "internal";
+    case VehicleHealth::Driving: return "driving";
+    case VehicleHealth::NoPose: return "no_pose";
+    case VehicleHealth::PoseLost: return "pose_lost";
+  }
+  return "?";
+}
+
 /// AgentStatus: an agent's health (see idl/AgentStatus.idl for each field's meaning).
 struct StatusSample {
   std::int32_t id = 0;
@@ -129,6 +147,11 @@ struct StatusSample {
   double cpu_percent = 0.0;
   double rss_mb = 0.0;
   std::uint64_t epoch = 0;
+  VehicleHealth vehicle = VehicleHealth::Internal;
+  std::uint64_t poses_refused = 0;
+  std::uint64_t commands_saturated = 0;
+  double control_latency_p50_us = -1.0;  ///< -1: no command in the period
+  double control_latency_p99_us = -1.0;
 };
 
 /// A velocity command to a vehicle as geometry_msgs/Twist carries it: the body frame of REP 103 (x along

@@ -10,4 +10,9 @@ std::int64_t steady_ns() {
       .count();
 }
 
+std::int64_t system_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
 }  // namespace shapeform::util

@@ -9,4 +9,8 @@ namespace shapeform::util {
 /// (e.g. data age = receiver steady_ns() - sender stamp_ns).
 std::int64_t steady_ns();
 
+/// system_clock now in nanoseconds since the Unix epoch: the wall time ROS 2 stamps its headers with
+/// (builtin_interfaces/Time). Only for stamps another system reads; never for ages (it may jump).
+std::int64_t system_ns();
+
 }  // namespace shapeform::util
