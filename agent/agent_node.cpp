@@ -502,7 +502,8 @@ void AgentNode::publish() {
   ++seq_;
   batch_states_.clear();
   for (const auto& l : logics_) {
-    if (l->external() && !l->has_pose()) continue;  // where it is is not known yet
+    // A robot whose pose is not known (none yet, or lost) is not in the swarm: the others space without it.
+    if (l->external() && !l->pose_fresh(stamp_ns_)) continue;
     dds::StateSample s;
     s.id = l->id();
     s.seq = seq_;
@@ -567,7 +568,14 @@ void AgentNode::vehicle_health(std::size_t k, dds::VehicleHealth health, const s
   const dds::VehicleHealth was = r.health;
   r.health = health;
   const std::string who = "agent " + std::to_string(l.id()) + " (robot " + r.io.topics().ns + ")";
-  if (health == dds::VehicleHealth::PoseLost) util::log_warn(who + ": " + why);
+  if (health == dds::VehicleHealth::PoseLost) {
+    util::log_warn(who + ": " + why + "; it leaves the swarm until then");
+    if (!batch_) {  // the others drop it at once (a batch's agents are dropped by the neighbour timeout)
+      msg::AgentState gone;
+      gone.id(l.id());
+      state_writer_.dispose(gone);
+    }
+  }
   else if (was == dds::VehicleHealth::PoseLost) util::log_info(who + ": poses are back, driving again");
   else util::log_info(who + ": first pose received, driving");
   if (opt_.json)

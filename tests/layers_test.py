@@ -28,6 +28,7 @@ ALLOWED = {
     "common/app": {"config", "core", "util", "protocol"},
     "sim": {"core", "util", "app", "record"},
     "agent": {"core", "shapes", "protocol", "dds", "config", "util", "app"},
+    "vehicle": {"core", "protocol", "dds", "config", "util", "app"},
     "supervisor": {"core", "shapes", "protocol", "dds", "config", "util", "app", "record"},
     "bench": {"core", "protocol", "dds", "config", "util", "app", "shapeform"},
     "tools": {"core", "protocol", "dds", "config", "util", "app"},
@@ -44,6 +45,7 @@ FORBIDDEN_SYSTEM = {
     "common/app": re.compile(r"^(fastdds|fastrtps|fastcdr)"),
     "common/record": re.compile(r"^(fastdds|fastrtps|fastcdr|yaml-cpp)"),
     "agent": re.compile(r"^(fastdds|fastrtps|fastcdr|yaml-cpp)"),
+    "vehicle": re.compile(r"^(fastdds|fastrtps|fastcdr|yaml-cpp)"),
     "supervisor": re.compile(r"^(fastdds|fastrtps|fastcdr|yaml-cpp)"),
     "tools": re.compile(r"^(fastdds|fastrtps|fastcdr|yaml-cpp)"),
     "view": re.compile(r"^(fastdds|fastrtps|fastcdr|yaml-cpp)"),
@@ -60,7 +62,7 @@ INCLUDE = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]', re.M)
 # may bring in Fast DDS, directly or through other headers (node.hpp, state_input.hpp, convert.hpp,
 # topics.hpp, participant.hpp, ...). The generated messages (shapeform/msg/*.h: plain types on fastcdr)
 # are not followed. bench/baseline.cpp is the raw Fast DDS baseline the benchmark compares with.
-PROJECT_API_ONLY = ("agent", "supervisor", "view", "tools", "bench")
+PROJECT_API_ONLY = ("agent", "vehicle", "supervisor", "view", "tools", "bench")
 RAW_FASTDDS = {"bench/baseline.cpp"}
 FASTDDS = re.compile(r"^(fastdds|fastrtps)/")
 
