@@ -124,7 +124,8 @@ TEST_CASE("echo lines: a sample, a disposed instance, a writer gone", "[tools][e
   CHECK(line["data"]["neighbours_heard"] == 11);
   CHECK(line["data"]["cpu_percent"] == 2.5);
   CHECK(line["data"]["epoch"] == 7);
-  CHECK(line["data"].size() == 16);  // every field of AgentStatus
+  CHECK(line["data"]["vehicle"] == "internal");
+  CHECK(line["data"].size() == 21);  // every field of AgentStatus
   r.valid_data = false;
   r.instance = dds::InstanceState::Disposed;
   line = tools::echo_line("shapeform/status", r);
@@ -176,6 +177,43 @@ TEST_CASE("a target and a metrics sample", "[tools][echo]") {
   CHECK(j["agents"] == 12);
   CHECK(j["shape_error_mean"] == 0.25);
   for (const core::MetricInfo& info : core::kMetricTable) CHECK(j.contains(std::string(info.name)));
+}
+
+TEST_CASE("echo lines: a vehicle's pose and command, through the ROS 2 conversion", "[tools][echo]") {
+  dds::PoseSample p;
+  p.x = {1.5, -2.0};
+  p.yaw = 0.75;
+  p.frame_id = "map";
+  p.child_frame_id = "robot_3/base_link";
+  p.stamp_ns = 1'700'000'000'123'456'789;
+  p.has_twist = true;
+  p.vx = 0.4;
+  p.wz = -0.1;
+  dds::ros2::Odometry odom;
+  dds::to_msg(p, odom);
+  dds::Received<dds::ros2::Odometry> r{odom, 0, true, dds::InstanceState::Alive, -1, {}};
+  nlohmann::json line = tools::echo_line("rt/robot_3/odom", r);
+  REQUIRE(line["event"] == "sample");
+  CHECK(line["data"]["x"] == nlohmann::json({1.5, -2.0}));
+  CHECK(line["data"]["yaw"].get<double>() == Approx(0.75).margin(1e-15));
+  CHECK(line["data"]["frame_id"] == "map");
+  CHECK(line["data"]["stamp_ns"] == p.stamp_ns);
+  CHECK(line["data"]["child_frame_id"] == "robot_3/base_link");
+  CHECK(line["data"]["v"] == nlohmann::json({0.4, 0.0}));
+  // A pose that is not a rotation is refused with the field named.
+  odom.pose().pose().orientation().w(0.0);
+  odom.pose().pose().orientation().z(0.0);
+  r.msg = odom;
+  line = tools::echo_line("rt/robot_3/odom", r);
+  CHECK(line["event"] == "rejected");
+  CHECK(line["why"].get<std::string>().rfind("odom.pose.orientation: not a rotation", 0) == 0);
+
+  dds::VelocitySample v{0.5, 0.0, 0.25, 42, "robot_3/base_link"};
+  dds::ros2::TwistStamped t;
+  dds::to_msg(v, t);
+  dds::Received<dds::ros2::TwistStamped> c{t, 0, true, dds::InstanceState::Alive, -1, {}};
+  CHECK(tools::echo_line("rt/robot_3/cmd_vel", c)["data"] ==
+        nlohmann::json({{"vx", 0.5}, {"vy", 0.0}, {"wz", 0.25}, {"stamp_ns", 42}, {"frame_id", "robot_3/base_link"}}));
 }
 
 }  // namespace shapeform
