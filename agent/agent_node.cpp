@@ -268,9 +268,9 @@ AgentNode::AgentNode(const std::vector<std::int32_t>& ids, const std::vector<cor
                                          link.pose_jump_m, 1.0 / cfg.agent.rate_hz});
     dds::VehicleTopics t;
     t.ns = link.namespace_of(ids[k]);
-    t.cmd_topic = link.cmd_topic;
+    t.cmd_topic = config::VehicleLink::with_id(link.cmd_topic, ids[k]);
     t.cmd_stamped = link.cmd_type == config::VehicleLink::CmdType::TwistStamped;
-    t.pose_topic = link.pose_topic;
+    t.pose_topic = config::VehicleLink::with_id(link.pose_topic, ids[k]);
     t.pose_stamped = link.pose_type == config::VehicleLink::PoseType::PoseStamped;
     robots_.emplace_back();
     robots_.back().io = dds::VehicleController(node_, t);

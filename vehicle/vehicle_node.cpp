@@ -47,9 +47,9 @@ class VehicleNode {
                            cfg.vehicle_sim.pose_noise_m, cfg.swarm.seed * 1000003u + static_cast<std::uint64_t>(id));
       dds::VehicleTopics t;
       t.ns = link.namespace_of(id);
-      t.cmd_topic = link.cmd_topic;
+      t.cmd_topic = config::VehicleLink::with_id(link.cmd_topic, id);
       t.cmd_stamped = link.cmd_type == config::VehicleLink::CmdType::TwistStamped;
-      t.pose_topic = link.pose_topic;
+      t.pose_topic = config::VehicleLink::with_id(link.pose_topic, id);
       t.pose_stamped = link.pose_type == config::VehicleLink::PoseType::PoseStamped;
       drivers_.emplace_back(node_, t);
       stopped_.push_back(true);

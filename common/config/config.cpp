@@ -621,8 +621,9 @@ void check_vehicle(const Config& c, const std::map<std::string, Entry>& found, c
   for (const auto& [key, name] : {std::pair<const char*, const std::string&>{"vehicle.cmd_topic", v.cmd_topic},
                                   {"vehicle.pose_topic", v.pose_topic}}) {
     const std::string relative = !name.empty() && name.front() == '/' ? name.substr(1) : name;
-    if (!ros_name_ok(relative, false))
-      bad(key, "must be a ROS 2 topic name (letters, digits, '_' and '/'), got '" + util::excerpt(name) + "'");
+    if (!ros_name_ok(relative, true))
+      bad(key, "must be a ROS 2 topic name (letters, digits, '_' and '/', {id} for the agent's id), got '" +
+                   util::excerpt(name) + "'");
   }
   if (v.frame.empty()) bad("vehicle.frame", "must name the swarm's frame (map, world, ...), got ''");
   if (c.vehicle_sim.child_frame.empty()) bad("vehicle_sim.child_frame", "must name the robot's frame, got ''");
@@ -1054,8 +1055,8 @@ std::string default_yaml() {
   return out;
 }
 
-std::string VehicleLink::namespace_of(std::int32_t id) const {
-  std::string out = ns;
+std::string VehicleLink::with_id(const std::string& text, std::int32_t id) {
+  std::string out = text;
   const std::string value = std::to_string(id);
   for (auto at = out.find("{id}"); at != std::string::npos; at = out.find("{id}", at + value.size()))
     out.replace(at, 4, value);

@@ -67,7 +67,7 @@ void add_vehicle_link(std::vector<P>& t) {
       [](auto& c) -> auto& { return c.vehicle_link.ns; },
       "letters, digits, `_` and `/`, with `{id}` (each agent drives its own robot)"));
   t.push_back(text(
-      "vehicle.cmd_topic", "ros2: the command topic, in the namespace (`/name`: absolute)",
+      "vehicle.cmd_topic", "ros2: the command topic, in the namespace (`/name`: absolute; `{id}`: the agent's id)",
       [](auto& c) -> auto& { return c.vehicle_link.cmd_topic; }, "letters, digits, `_` and `/`"));
   t.push_back(params::make_choice<Config>(
       "vehicle.cmd_type",
@@ -75,7 +75,9 @@ void add_vehicle_link(std::vector<P>& t) {
       "Jazzy's diff_drive_controller)",
       kCmdTypeNames, [](auto& c) -> auto& { return c.vehicle_link.cmd_type; }));
   t.push_back(text(
-      "vehicle.pose_topic", "ros2: the pose topic, in the namespace (`/name`: absolute)",
+      "vehicle.pose_topic",
+      "ros2: the pose topic, in the namespace (`/name`: absolute, e.g. `/vrpn_mocap/robot_{id}/pose`; `{id}`: the "
+      "agent's id)",
       [](auto& c) -> auto& { return c.vehicle_link.pose_topic; }, "letters, digits, `_` and `/`"));
   t.push_back(params::make_choice<Config>(
       "vehicle.pose_type",
