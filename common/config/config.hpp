@@ -77,7 +77,8 @@ struct VehicleLink {
   double pose_timeout_s = 0.5;   ///< a pose older than this stops the vehicle
   double pose_jump_m = 0.5;      ///< a pose may move at most max_speed * elapsed + this from the last
   bool ros2() const { return interface == Interface::Ros2; }
-  /// The namespace of agent id's vehicle: ns with every {id} replaced by the id.
+  /// The namespace of agent id's vehicle: ns with every {id} replaced by the id, without a leading '/'
+  /// (ROS 2 namespaces are absolute: "/robot_{id}" and "robot_{id}" name one, rt/robot_3/...).
   std::string namespace_of(std::int32_t id) const;
 };
 
