@@ -41,9 +41,11 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap.add_argument("--runs", type=int, help="runs per row (default 3; 1 with --quick)")
     ap.add_argument("--window", type=float, help="measurement window, s (default: max(30, 1100 ticks); 12 with --quick)")
     ap.add_argument("--only", action="append", default=[],
-                    help="row id or prefix to run (repeatable); `sim`: the simulator rows")
+                    help="row id or prefix to run (repeatable); `sim`: the simulator rows; `leverK`: lever K's rows")
     ap.add_argument("--row", action="append", default=[],
-                    help="ad-hoc row KIND:N:RATE[:PRESET[:STAGGER_S[:GROUP[:view]]]] (stored, shown under experiments)")
+                    help="ad-hoc row KIND:N:RATE[:PRESET[:STAGGER_S[:GROUP[:FLAG]...]]], FLAG view (the browser view "
+                         "beside), internal or ros2 (the agents drive robots: bench_plan.vehicle_sets) (stored, shown "
+                         "under experiments)")
     ap.add_argument("--levers", action="store_true", help="also run the lever rows")
     ap.add_argument("--lever-runs", type=int, default=1, help="runs per lever row that is not a main row (default 1)")
     ap.add_argument("--no-main", action="store_true", help="skip the main rows")
@@ -135,16 +137,18 @@ def main(argv=None) -> int:
         return render_only(store, results_path, report)
 
     bindir = Path(args.build).resolve() / "bin"
-    for exe in ("shapeform_agent", "shapeform_supervisor", "shapeform_bench_baseline", "shapeform_bench_probe"):
-        if not (bindir / exe).exists():
-            print(f"bench: {bindir / exe} missing: run ./scripts/build.sh first", file=sys.stderr)
-            return 2
     ctx = make_ctx(args, bindir)
     try:
         selected, run_sim = select_rows(args, store["rows"])
     except PlanError as e:
         print(f"bench: {e}", file=sys.stderr)
         return 2
+    needed = ["shapeform_agent", "shapeform_supervisor", "shapeform_bench_baseline", "shapeform_bench_probe"]
+    needed += ["shapeform_vehicle"] if any(r.vehicle == "ros2" for r in selected) else []
+    for exe in needed:
+        if not (bindir / exe).exists():
+            print(f"bench: {bindir / exe} missing: run ./scripts/build.sh first", file=sys.stderr)
+            return 2
 
     store["machine"] = machine_info()
     store["commit"] = git_commit()

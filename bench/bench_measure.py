@@ -206,6 +206,7 @@ def analyse(window_s: float, row: Row, rdir: Path, res: dict, sampler: Sampler) 
     _hearing(row.n, t0, by_id, res)
     _delivery(row, w0, w1, by_id, res)
     _data_age(w0, w1, status, res)
+    _control_latency(w0, w1, status, res)
     _loop(w0, w1, by_id, res)
     a, b = sampler.window(w0, w1)
     if a is not None:
@@ -268,6 +269,24 @@ def _data_age(w0: float, w1: float, status: list[dict], res: dict) -> None:
     res["age_p99_p90_ms"] = (sorted(p99s)[int(0.9 * (len(p99s) - 1))] / 1e3) if p99s else None
 
 
+def _control_latency(w0: float, w1: float, status: list[dict], res: dict) -> None:
+    """Agents driving robots over ROS 2 (vehicle.interface ros2): from a pose's receipt to the command
+    computed from it being published, as each agent reports p50 and p99 per status period (-1: no command
+    from a new pose in the period, and always for the internal vehicle). Median over agents and periods of
+    the window, and the worst period's p99; absent for agents that drive nothing outside."""
+    if not status or "control_latency_p50_us" not in status[0]:
+        return  # a status.csv of a probe older than the column
+    inwin = [s for s in status if w0 <= s["stamp_ns"] <= w1]
+    p50s = [s["control_latency_p50_us"] for s in inwin if s["control_latency_p50_us"] >= 0]
+    p99s = [s["control_latency_p99_us"] for s in inwin if s["control_latency_p99_us"] >= 0]
+    if not p50s:
+        return
+    res["control_p50_ms"] = median(p50s) / 1e3
+    res["control_p99_ms"] = median(p99s) / 1e3 if p99s else None
+    res["control_p99_worst_ms"] = max(p99s) / 1e3 if p99s else None
+    res["control_periods"] = len(p50s)
+
+
 def _loop(w0: float, w1: float, by_id: dict, res: dict) -> None:
     """Loop lateness (each agent's p99 over its last 1024 ticks, at the end of the window), overruns,
     CPU and RSS."""
@@ -305,7 +324,7 @@ def _host(a: dict, b: dict, samples: list[dict], res: dict) -> None:
     span_s = (b["t"] - a["t"]) / 1e9
     dt_total = b["host_total"] - a["host_total"]
     res["host_busy_pct"] = 100 * (1 - (b["host_idle"] - a["host_idle"]) / dt_total) if dt_total else None
-    for name in ("sup", "ds", "view"):
+    for name in ("sup", "ds", "view", "vehicle"):
         if a.get(name) is not None and b.get(name) is not None:
             res[f"{name}_cpu_pct"] = 100 * (b[name] - a[name]) / CLK_TCK / span_s
             res[f"{name}_rss_mb"] = b.get(name + "_rss")

@@ -77,6 +77,10 @@ class Row:
     section: str = "main"
     view: bool = False   # shapeform_view beside the swarm, one browser-like client reading its event stream
     runs: int = 0        # runs of a main row when not given by --runs (0: the default, 3)
+    # The agents' vehicles: "" = the scenario's (the integrator, moving as the law steps); "internal" = the
+    # robot model of VEHICLE_SETS integrated by each agent; "ros2" = the same model as robots of one
+    # shapeform_vehicle process, driven over ROS 2's topics (vehicle.interface ros2)
+    vehicle: str = ""
 
     @property
     def id(self) -> str:
@@ -90,6 +94,8 @@ class Row:
             s += f"-st{int(round(self.stagger_s * 1000))}"
         if self.view:
             s += "-view"
+        if self.vehicle:
+            s += f"-{self.vehicle}"
         return s
 
 
@@ -117,12 +123,37 @@ def main_rows() -> list[Row]:
     return rows
 
 
+VEHICLES = ("internal", "ros2")
+
+
 def row_from_spec(spec: str) -> Row:
-    """An ad-hoc row of --row KIND:N:RATE[:PRESET[:STAGGER_S[:GROUP[:view]]]]."""
+    """An ad-hoc row of --row KIND:N:RATE[:PRESET[:STAGGER_S[:GROUP[:FLAG...]]]], FLAG one of view,
+    internal, ros2 (the vehicle: Row.vehicle)."""
     parts = spec.split(":")
+    flags = parts[6:]
+    for f in flags:
+        if f not in ("view",) + VEHICLES:
+            raise PlanError(f"--row {spec}: unknown flag {f!r}; known: view, {', '.join(VEHICLES)}")
+    vehicle = next((f for f in flags if f in VEHICLES), "")
+    if vehicle and parts[0] == "baseline":
+        raise PlanError(f"--row {spec}: a baseline row has no vehicle")
     return Row(parts[0], int(parts[1]), float(parts[2]), parts[3] if len(parts) > 3 else "default",
                float(parts[4]) if len(parts) > 4 else 0.0, int(parts[5]) if len(parts) > 5 else 0, "experiment",
-               len(parts) > 6 and parts[6] == "view")
+               "view" in flags, vehicle=vehicle)
+
+
+# The robot both vehicle rows drive (Row.vehicle): the unicycle of the manual ROS 2 run (docs/VEHICLES.md),
+# one law step per tick: seconds_per_model_time = 1 / (rate x integration.dt), the scenario's dt being 1.
+VEHICLE_MODEL_SETS = ["vehicle.model=unicycle", "vehicle.max_speed=1", "vehicle.max_yaw_rate=2",
+                      "vehicle.heading_spread_deg=180"]
+
+
+def vehicle_sets(row: Row) -> list[str]:
+    """The --set overrides of a row's vehicle, for its agents, its supervisor and its shapeform_vehicle."""
+    if not row.vehicle:
+        return []
+    return VEHICLE_MODEL_SETS + [f"vehicle.seconds_per_model_time={1.0 / row.rate:g}",
+                                 f"vehicle.interface={row.vehicle}"]
 
 
 # --------------------------------------------------------------------------------------------
@@ -132,8 +163,8 @@ def row_from_spec(spec: str) -> Row:
 # "extra" (the table of the kernel's UDP counters), "view" (the table of the browser view's figures).
 
 
-def _lv(kind, n, preset, stagger=0.0, group=0, rate=20.0):
-    return Row(kind, n, rate, preset, stagger, group, "lever")
+def _lv(kind, n, preset, stagger=0.0, group=0, rate=20.0, vehicle=""):
+    return Row(kind, n, rate, preset, stagger, group, "lever", vehicle=vehicle)
 
 
 B, A, G = "baseline", "agents", "group"
@@ -170,6 +201,8 @@ LEVER_ROWS: dict[int, dict] = {
          "extra": True},
     15: {"rows": [_lv(A, 50, "largequiet"), _lv(A, 75, "largequiet"), _lv(A, 100, "largequiet")], "pairs": [],
          "extra": True},
+    16: {"pairs": [(_lv(A, n, MAIN_PRESET, vehicle="internal"), _lv(A, n, MAIN_PRESET, vehicle="ros2"))
+                   for n in (12, 50)], "vehicle": True},
 }
 
 
@@ -220,6 +253,13 @@ class PlanError(Exception):
     """A selection that names nothing runnable (bench.py prints it and exits 2)."""
 
 
+def lever_of(name: str) -> dict | None:
+    """The lever an --only value `leverK` names (K its number), else None."""
+    if not (name.startswith("lever") and name[5:].isdigit()):
+        return None
+    return next((lv for lv in LEVERS if lv["name"].split(".")[0] == name[5:]), None)
+
+
 def select_rows(args, stored: dict) -> tuple[list[Row], bool]:
     """The rows this invocation runs, in order and each once, and whether it runs the simulator rows.
     `stored`: the stored results by row id."""
@@ -240,9 +280,14 @@ def select_rows(args, stored: dict) -> tuple[list[Row], bool]:
     if args.only:
         pool = all_rows + levers + selected
         ids = {r.id for r in pool}
+        # `leverK`: the rows of lever K.
+        named = [r.id for o in only_rows if lever_of(o) for r in lever_of(o)["rows"]]
+        bad = [o for o in only_rows if o.startswith("lever") and o[5:].isdigit() and not lever_of(o)]
+        if bad:
+            raise PlanError(f"--only {bad[0]}: no such lever (1..{len(LEVERS)})")
         # A row id selects that row; anything else is a prefix (agents-n100 selects every N = 100 agent row).
         selected = [r for r in dict((r.id, r) for r in pool).values()
-                    if any(r.id == o or (o not in ids and r.id.startswith(o)) for o in only_rows)]
+                    if r.id in named or any(r.id == o or (o not in ids and r.id.startswith(o)) for o in only_rows)]
         if not selected and not run_sim:
             raise PlanError("--only matched no row (see --list)")
     seen = set()
@@ -269,6 +314,7 @@ def rerun_command(row: Row, args, runs: int) -> str:
     if args.quick:
         cmd += " --quick"
     if row.section == "experiment":
-        spec = f"{row.kind}:{row.n}:{row.rate:g}:{row.preset}:{row.stagger_s:g}:{row.group}" + (":view" if row.view else "")
+        spec = (f"{row.kind}:{row.n}:{row.rate:g}:{row.preset}:{row.stagger_s:g}:{row.group}" + (":view" if row.view else "")
+                + (f":{row.vehicle}" if row.vehicle else ""))
         return f"{cmd} --runs {runs} --row {spec} --only {row.id}"
     return f"{cmd} --runs {runs} --only {row.id}"

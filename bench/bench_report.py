@@ -194,7 +194,8 @@ def table_line(rid: str, e: dict) -> str:
     st = f" +{r['stagger_s'] * 1000:.0f} ms stagger" if r.get("stagger_s") else ""
     aborts = a.get("aborts_total", 0)
     runs = a.get("runs", 1)
-    return (f"| `{rid}` | {row_label(r)} | {r['n']} | {r['rate']:g} Hz | {processes(r)} | {r['preset']}{st} "
+    veh = f", vehicle {r['vehicle']}" if r.get("vehicle") else ""
+    return (f"| `{rid}` | {row_label(r)} | {r['n']} | {r['rate']:g} Hz | {processes(r)} | {r['preset']}{st}{veh} "
             f"| {f_s(a.get('all_heard_s'))} | {f_pct(a.get('delivery'))} | {f_ms(a.get('age_p50_ms'))} "
             f"| {f_ms(a.get('age_p99_ms'))} | {f_ms(a.get('age_p99_worst_ms'))} | {f_ms(a.get('lateness_p99_ms'))} "
             f"| {f_num(a.get('overrun_pct'), '{:.2f} %')} | {f_num(a.get('cpu_pct'), '{:.2f}')} "
@@ -242,6 +243,7 @@ def pair_effect(rows: dict, a_id: str, b_id: str) -> str:
              ("receive-buffer drops/s", ch("udp_rcvbuf_errors_per_s", lambda v: f_num(v, "{:,.0f}"))),
              ("UDP datagrams received/s", ch("udp_in_per_s", lambda v: f_num(v, "{:,.0f}"))),
              ("CPU %/agent", ch("cpu_pct", lambda v: f_num(v, "{:.2f}"))),
+             ("control latency p50", ch("control_p50_ms", f_ms)), ("control latency p99", ch("control_p99_ms", f_ms)),
              ("aborts", ch("aborts_total", lambda v: "-" if v is None else str(int(v))))]
     return f"`{a_id}` -> `{b_id}`: " + ", ".join(f"{k} {v}" for k, v in parts if v)
 
@@ -436,7 +438,7 @@ def limits_text(store: dict) -> str:
 def report_plan(store: dict) -> dict:
     """What render() writes besides the tables: {"main": [row ids], "targets": [(row id, targets)],
     "headline": [lines], "limits", "main_intro", "levers": [{name, question, rows, pairs, note, extra,
-    view}], "levers_intro", "presets": {name: about}, "method"}."""
+    view, vehicle}], "levers_intro", "presets": {name: about}, "method"}."""
     r, report = ROW_NAMES, NOTES["report"]
     main_intro = report["main_intro"].format(main_preset=MAIN_PRESET, main_about=PRESETS[MAIN_PRESET]["about"],
                                              large_min=LARGE_MIN, large_about=PRESETS["large"]["about"])
@@ -447,7 +449,7 @@ def report_plan(store: dict) -> dict:
             "levers": [{"name": lv["name"], "question": lv["question"], "rows": [row.id for row in lv["rows"]],
                         "pairs": [(a.id, b.id) for a, b in lv.get("pairs", [])],
                         "note": lv.get("note", ""), "extra": lv.get("extra", False),
-                        "view": lv.get("view", False)} for lv in LEVERS],
+                        "view": lv.get("view", False), "vehicle": lv.get("vehicle", False)} for lv in LEVERS],
             "levers_intro": report["levers_intro"],
             "presets": {k: v["about"] for k, v in PRESETS.items()}, "method": report["method"]}
 
@@ -511,7 +513,7 @@ def _lever(rows: dict, lv: dict) -> list[str]:
     if not lv["rows"]:
         return o + ([lv["note"] + "\n\n"] if lv.get("note") else [])
     if not present:
-        return o + ["_not run yet: `scripts/bench.sh --levers`_\n\n"]
+        return o + [f"_not run yet: `scripts/bench.sh --only lever{lv['name'].split('.')[0]}`_\n\n"]
     o += [TABLE_HEAD] + [table_line(rid, rows[rid]) for rid in present] + ["\n"]
     if lv.get("view") and any(rows[rid]["row"].get("view") for rid in present):
         o.append("| row | viewer CPU (% of one core) | viewer RSS MB | frames/s received |\n|---|---|---|---|\n")
@@ -521,6 +523,8 @@ def _lever(rows: dict, lv: dict) -> list[str]:
                 o.append(f"| `{rid}` | {f_num(a.get('view_cpu_pct'))} | {f_num(a.get('view_rss_mb'))} "
                          f"| {f_num(a.get('view_fps'))} |\n")
         o.append("\n")
+    if lv.get("vehicle"):
+        o += vehicle_table(rows, present)
     if lv.get("extra"):
         o.append("| row | UDP datagrams in/s | UDP out/s | receive-buffer drops/s | our CPU (% of one core) "
                  "| datagrams received from launch to all hear all (or to the command) |\n|---|---|---|---|---|---|\n")
@@ -536,6 +540,28 @@ def _lever(rows: dict, lv: dict) -> list[str]:
     if lv.get("note"):
         o.append(lv["note"] + "\n\n")
     return o
+
+
+VEHICLE_HEAD = ("| row | vehicle | N | control latency p50 | control latency p99 | p99 worst period | CPU %/agent "
+                "| agents' CPU (% of one core) | shapeform_vehicle CPU (% of one core) | its RSS MB | launch to converged "
+                "|\n|---|---|---|---|---|---|---|---|---|---|---|\n")
+
+
+def vehicle_table(rows: dict, present: list[str]) -> list[str]:
+    """Rows with a vehicle (Row.vehicle): the control latency the agents report (pose received to command
+    published), their CPU, and the CPU of the process that simulates the robots, apart."""
+    o = [VEHICLE_HEAD]
+    for rid in present:
+        r, a = rows[rid]["row"], rows[rid]["agg"]
+        if not r.get("vehicle"):
+            continue
+        ros2 = r["vehicle"] == "ros2"
+        o.append(f"| `{rid}` | {'robots over ROS 2' if ros2 else 'integrated by each agent'} | {r['n']} "
+                 f"| {f_ms(a.get('control_p50_ms')) if ros2 else 'n/a'} | {f_ms(a.get('control_p99_ms')) if ros2 else 'n/a'} "
+                 f"| {f_ms(a.get('control_p99_worst_ms')) if ros2 else 'n/a'} | {f_num(a.get('cpu_pct'), '{:.2f}')} "
+                 f"| {f_num(a.get('cpu_pct_total'))} | {f_num(a.get('vehicle_cpu_pct')) if ros2 else 'n/a'} "
+                 f"| {f_num(a.get('vehicle_rss_mb')) if ros2 else 'n/a'} | {f_s(a.get('converge_s'))} |\n")
+    return o + ["\n"]
 
 
 def _levers(rows: dict, plan: dict) -> list[str]:

@@ -20,7 +20,7 @@ from pathlib import Path
 
 from bench_measure import (EventClient, Sampler, aggregate, analyse, git_commit, host_busy_over, log, now_ns,
                            read_csv, read_host_cpu)
-from bench_plan import PRESETS, ROOT, SIM_ROWS, Row
+from bench_plan import PRESETS, ROOT, SIM_ROWS, Row, vehicle_sets
 
 sys.path.insert(0, str(ROOT / "scripts" / "lib"))
 import shapeform_procs as procs  # noqa: E402
@@ -111,7 +111,7 @@ class Run:
         self.port = 12000 + domain  # the discovery server's, for a preset that has one
         self.common = ["--domain", str(domain)] + procs.sets_args(self._transport_sets())
         self.rate_sets = [f"agent.rate_hz={row.rate:g}", f"agent.status_rate_hz={ctx.status_rate_hz:g}",
-                          f"swarm.agents={row.n}"]
+                          f"swarm.agents={row.n}"] + vehicle_sets(row)
         self.sampler = Sampler()
         self.started: list[procs.Proc] = []
         self.client: EventClient | None = None
@@ -176,6 +176,19 @@ class Run:
         self.client = EventClient(start["url"])
         self.client.start()
 
+    def start_vehicles(self) -> procs.Proc:
+        """One shapeform_vehicle hosting the row's N robots (robot i where agent i starts), before the
+        agents, so that each finds its robot's pose."""
+        ctx, row = self.ctx, self.row
+        veh = self.spawn("vehicle", [str(ctx.bin / "shapeform_vehicle"), "--ids", f"0-{row.n - 1}", "--json"]
+                         + self.agent_args())
+        try:
+            veh.wait_event("start", 30)
+        except AssertionError:
+            raise RuntimeError(f"shapeform_vehicle did not start: {veh.log()[-500:]!r}") from None
+        self.sampler.pids["vehicle"] = veh.pid
+        return veh
+
     def start_workers(self) -> list[procs.Proc]:
         """The row's N agents (or baseline processes): one process each, or `group` per process."""
         row, bindir = self.row, self.ctx.bin
@@ -235,6 +248,7 @@ class Run:
         sup = self.start_supervisor() if self.row.kind in ("agents", "group") else None
         if self.row.view:
             self.start_view()
+        veh = self.start_vehicles() if self.row.vehicle == "ros2" else None
         workers = self.start_workers()
         result["launch_s"] = (now_ns() - t0) / 1e9
         result["t_end"] = self.wait_end(sup)
@@ -242,6 +256,8 @@ class Run:
         codes = procs.stop_all(workers, grace=20, spacing=0.01)
         result["exit_codes"] = codes
         result["died_early"] = early
+        if veh is not None:
+            result["vehicle_exit"] = procs.stop_all([veh], grace=10)[0]
         if sup is not None:
             result["supervisor_exit"] = procs.stop_all([sup], grace=10)[0]
         procs.stop_all([probe], grace=10)

@@ -5,6 +5,8 @@
 #  - agents (one process each, or grouped) against a bare Fast DDS pub/sub baseline with the same payload,
 #    transport and rate, N = 10, 25, 50, 100 (20 Hz; 50 Hz for N <= 25);
 #  - the transport levers, measured one at a time (--levers);
+#  - agents driving robots over ROS 2 (one shapeform_vehicle for the N robots) beside agents integrating
+#    the same robot themselves, N = 12 and 50: control latency p50/p99 and CPU per agent (--only lever16);
 #  - simulator throughput (build/bin/shapeform_bench_sim), N = 100, 1000, 10000, against the core's peak
 #    multiply-add rate (run alone: --only sim).
 # Rows not run keep their committed results (docs/figures/bench_results.json), so a partial run renders
@@ -14,9 +16,11 @@
 # Usage: scripts/bench.sh [--quick] [--runs K] [--levers] [--only ROW_ID]... [--row SPEC]... [--list]
 #                         [--out DIR | --write-docs] [--help]
 #   --quick       1 run per row, 12 s windows (minutes instead of about an hour; lateness then includes start-up)
-#   --levers      also run the lever rows (socket buffers, multicast, announcement period, stagger, grouping)
-#   --only ROW    run only this row (or id prefix; `sim`: the simulator rows), keep the stored others,
-#                 re-render the report
+#   --levers      also run the lever rows (socket buffers, multicast, announcement period, stagger, grouping,
+#                 robots over ROS 2, ...)
+#   --only ROW    run only this row (or id prefix; `sim`: the simulator rows; `leverK`: lever K's rows, e.g.
+#                 lever16: agents driving robots over ROS 2 beside the internal model), keep the stored
+#                 others, re-render the report
 #   --list        list the row ids
 #   --out DIR     the output folder
 #   --write-docs  rewrite the committed docs/BENCHMARKS.md and docs/figures/bench_*

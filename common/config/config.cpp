@@ -608,35 +608,47 @@ bool ros_name_ok(std::string name, bool with_id) {
 /// driving a robot over ROS 2 needs of the other keys.
 void check_vehicle(const Config& c, const std::map<std::string, Entry>& found, const std::set<std::string>& reported,
                    Reader& rd) {
-  const auto bad = [&](const std::string& key, const std::string& what) {
+  // `what` without the value: a key given in the file or by --set is quoted as given, with where; a
+  // default one with `got` (as check_transport does).
+  const auto bad = [&](const std::string& key, const std::string& what, const std::string& got) {
     if (reported.count(key) != 0) return;
     const Entry& e = found.at(key);
-    if (e.present) rd.bad(e, what);
-    else rd.problems.push_back(key + ": " + what);
+    if (e.present)
+      rd.bad(e, what);
+    else
+      rd.problems.push_back(key + ": " + what + ", got " + got);
   };
   const VehicleLink& v = c.vehicle_link;
   if (!ros_name_ok(v.ns, true) || v.ns.find("{id}") == std::string::npos)
-    bad("vehicle.namespace", "must be letters, digits, '_' and '/' with {id} (each agent drives its own robot: "
-                             "robot_{id}), got '" + util::excerpt(v.ns) + "'");
+    bad("vehicle.namespace",
+        "must be letters, digits, '_' and '/' with {id} (each agent drives its own robot: "
+        "robot_{id})",
+        quote(v.ns));
   for (const auto& [key, name] : {std::pair<const char*, const std::string&>{"vehicle.cmd_topic", v.cmd_topic},
                                   {"vehicle.pose_topic", v.pose_topic}}) {
     const std::string relative = !name.empty() && name.front() == '/' ? name.substr(1) : name;
     if (!ros_name_ok(relative, true))
-      bad(key, "must be a ROS 2 topic name (letters, digits, '_' and '/', {id} for the agent's id), got '" +
-                   util::excerpt(name) + "'");
+      bad(key, "must be a ROS 2 topic name (letters, digits, '_' and '/', {id} for the agent's id)", quote(name));
   }
-  if (v.frame.empty()) bad("vehicle.frame", "must name the swarm's frame (map, world, ...), got ''");
-  if (c.vehicle_sim.child_frame.empty()) bad("vehicle_sim.child_frame", "must name the robot's frame, got ''");
+  if (v.frame.empty()) bad("vehicle.frame", "must name the swarm's frame (map, world, ...)", quote(v.frame));
+  if (c.vehicle_sim.child_frame.empty())
+    bad("vehicle_sim.child_frame", "must name the robot's frame", quote(c.vehicle_sim.child_frame));
   if (!v.ros2()) return;
   if (c.vehicle.max_speed <= 0.0)
-    bad("vehicle.max_speed", "must be > 0 with vehicle.interface: ros2 (a robot has a top speed: commands are "
-                             "held to it and a pose that moves faster is refused), got 0");
+    bad("vehicle.max_speed",
+        "must be > 0 with vehicle.interface: ros2 (a robot has a top speed: commands are "
+        "held to it and a pose that moves faster is refused)",
+        format_number(c.vehicle.max_speed));
   if (c.agent.lockstep)
-    bad("agent.sync", "must be free with vehicle.interface: ros2 (a robot moves in real time: it cannot wait "
-                      "for its neighbours' steps), got lockstep");
+    bad("agent.sync",
+        "must be free with vehicle.interface: ros2 (a robot moves in real time: it cannot wait "
+        "for its neighbours' steps)",
+        "\"lockstep\"");
   if (c.transport.static_edp)
-    bad("transport.static_edp", "must be false with vehicle.interface: ros2 (a ROS 2 robot announces its "
-                                "topics by simple discovery), got true");
+    bad("transport.static_edp",
+        "must be false with vehicle.interface: ros2 (a ROS 2 robot announces its "
+        "topics by simple discovery)",
+        "true");
 }
 
 /// The checked conversion of a (map) tree: every key of the config table, in order.
@@ -1053,6 +1065,11 @@ std::string default_yaml() {
     out += line + "# " + note + "\n";
   }
   return out;
+}
+
+std::string VehicleLink::namespace_of(std::int32_t id) const {
+  // ROS 2 namespaces are absolute: "/robot_{id}" is "robot_{id}" (topics rt/robot_3/...).
+  return with_id(!ns.empty() && ns.front() == '/' ? ns.substr(1) : ns, id);
 }
 
 std::string VehicleLink::with_id(const std::string& text, std::int32_t id) {

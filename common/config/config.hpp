@@ -77,8 +77,9 @@ struct VehicleLink {
   double pose_timeout_s = 0.5;   ///< a pose older than this stops the vehicle
   double pose_jump_m = 0.5;      ///< a pose may move at most max_speed * elapsed + this from the last
   bool ros2() const { return interface == Interface::Ros2; }
-  /// The namespace of agent id's vehicle: ns with every {id} replaced by the id.
-  std::string namespace_of(std::int32_t id) const { return with_id(ns, id); }
+  /// The namespace of agent id's vehicle: ns with every {id} replaced by the id, without a leading '/'
+  /// (ROS 2 namespaces are absolute: "/robot_{id}" and "robot_{id}" name one, rt/robot_3/...).
+  std::string namespace_of(std::int32_t id) const;
   /// A topic of agent id's vehicle (cmd_topic or pose_topic) with every {id} replaced (an absolute
   /// topic, "/vrpn_mocap/robot_{id}/pose", names each robot's own that way).
   static std::string with_id(const std::string& text, std::int32_t id);

@@ -1270,3 +1270,108 @@ TEST_CASE("vehicle keys: the robot's own, read from the file, checked at the key
   CHECK(problem_of("schema_version: 1\n", {"vehicle.model=Unicycle"}) ==
         "vehicle.model: must be one of integrator, double_integrator, unicycle, got \"Unicycle\" (--set)");
 }
+
+TEST_CASE("vehicle.interface ros2: what it needs of the other keys, each refused at its key with the fix",
+          "[config][vehicle][ros2]") {
+  const Config d;
+  CHECK(d.vehicle_link.interface == config::VehicleLink::Interface::Internal);
+  CHECK_FALSE(d.vehicle_link.ros2());
+  const std::string ros2 = "schema_version: 1\nvehicle:\n  interface: ros2\n";
+  // max_speed left at its default 0: a robot has a top speed.
+  CHECK(problem_of(ros2) ==
+        "vehicle.max_speed: must be > 0 with vehicle.interface: ros2 (a robot has a top speed: commands are "
+        "held to "
+        "it and a pose that moves faster is refused), got 0");
+  // ... or given as 0: at its line, its value said once.
+  CHECK(problem_of(ros2 + "  max_speed: 0\n") ==
+        "vehicle.max_speed: must be > 0 with vehicle.interface: ros2 (a robot has a top speed: commands are "
+        "held to "
+        "it and a pose that moves faster is refused), got 0 (line 4)");
+  CHECK(problem_of("schema_version: 1\n", {"vehicle.interface=ros2", "vehicle.max_speed=0"}) ==
+        "vehicle.max_speed: must be > 0 with vehicle.interface: ros2 (a robot has a top speed: commands are "
+        "held to "
+        "it and a pose that moves faster is refused), got 0 (--set)");
+  const Config ok = load_string(ros2 + "  max_speed: 1.5\n");
+  CHECK(ok.vehicle_link.ros2());
+  CHECK(ok.vehicle.max_speed == 1.5);
+  // Lockstep: a robot moves in real time.
+  CHECK(problem_of(ros2 + "  max_speed: 1\nagent:\n  sync: lockstep\n") ==
+        "agent.sync: must be free with vehicle.interface: ros2 (a robot moves in real time: it cannot wait "
+        "for its "
+        "neighbours' steps), got \"lockstep\" (line 6)");
+  // Static endpoint discovery: a ROS 2 robot announces its topics by simple discovery.
+  CHECK(problem_of(ros2 + "  max_speed: 1\n", {"transport.static_edp=true"}) ==
+        "transport.static_edp: must be false with vehicle.interface: ros2 (a ROS 2 robot announces its "
+        "topics by "
+        "simple discovery), got true (--set)");
+  // All three at once: every one reported.
+  const auto all = problems_of(
+      "schema_version: 1\n", {"vehicle.interface=ros2", "agent.sync=lockstep", "transport.static_edp=true"});
+  REQUIRE(all.size() == 3);
+  CHECK(all[0].rfind("vehicle.max_speed: must be > 0 with vehicle.interface: ros2", 0) == 0);
+  CHECK(all[1].rfind("agent.sync: must be free with vehicle.interface: ros2", 0) == 0);
+  CHECK(all[2].rfind("transport.static_edp: must be false with vehicle.interface: ros2", 0) == 0);
+  // The internal vehicle needs none of it.
+  CHECK_NOTHROW(load_string("schema_version: 1\n", {"agent.sync=lockstep", "transport.static_edp=true"}));
+}
+
+TEST_CASE("vehicle.namespace and the topic names: ROS 2 names, checked whatever the interface",
+          "[config][vehicle][ros2]") {
+  const auto ns = [](const std::string& v) {
+    return problem_of("schema_version: 1\nvehicle:\n  namespace: '" + v + "'\n");
+  };
+  const std::string rule =
+      "vehicle.namespace: must be letters, digits, '_' and '/' with {id} (each agent drives its own robot: "
+      "robot_{id})";
+  CHECK(ns("robot") == rule + ", got \"robot\" (line 3)");            // every agent on one robot
+  CHECK(ns("robot-{id}") == rule + ", got \"robot-{id}\" (line 3)");  // '-' is not in a ROS 2 name
+  CHECK(ns("robot {id}") == rule + ", got \"robot {id}\" (line 3)");
+  CHECK(ns("robot_{id}/") == rule + ", got \"robot_{id}/\" (line 3)");
+  CHECK(ns("fleet//robot_{id}") == rule + ", got \"fleet//robot_{id}\" (line 3)");
+  CHECK(ns("robot_{ID}") == rule + ", got \"robot_{ID}\" (line 3)");
+  CHECK(ns("") == rule + ", got \"\" (line 3)");
+  CHECK(problem_of("schema_version: 1\n", {"vehicle.namespace=r.{id}"}) == rule + ", got \"r.{id}\" (--set)");
+  for (const std::string good : {"robot_{id}", "fleet_a/robot_{id}", "{id}_bot", "/robot_{id}", "r{id}_{id}"})
+    CHECK(load_string("schema_version: 1\nvehicle:\n  namespace: '" + good + "'\n").vehicle_link.ns == good);
+
+  const auto topic = [](const std::string& key, const std::string& v) {
+    return problem_of("schema_version: 1\nvehicle:\n  " + key + ": '" + v + "'\n");
+  };
+  for (const std::string key : {"cmd_topic", "pose_topic"}) {
+    const std::string rule_of =
+        "vehicle." + key + ": must be a ROS 2 topic name (letters, digits, '_' and '/')";
+    CHECK(topic(key, "cmd vel") == rule_of + ", got \"cmd vel\" (line 3)");
+    CHECK(topic(key, "odom!") == rule_of + ", got \"odom!\" (line 3)");
+    CHECK(topic(key, "a//b") == rule_of + ", got \"a//b\" (line 3)");
+    CHECK(topic(key, "odom/") == rule_of + ", got \"odom/\" (line 3)");
+    CHECK(topic(key, "/") == rule_of + ", got \"/\" (line 3)");
+    CHECK(topic(key, "") == rule_of + ", got \"\" (line 3)");
+    CHECK(topic(key, "{id}") == rule_of + ", got \"{id}\" (line 3)");  // no {id} in a topic
+    for (const std::string good : {"cmd_vel", "/diff_drive/odom", "base/odom_1"})
+      CHECK_NOTHROW(load_string("schema_version: 1\n", {"vehicle." + key + "=" + good}));
+  }
+  CHECK(problem_of("schema_version: 1\nvehicle:\n  frame: ''\n") ==
+        "vehicle.frame: must name the swarm's frame (map, world, ...), got \"\" (line 3)");
+  CHECK(problem_of("schema_version: 1\nvehicle_sim:\n  child_frame: ''\n") ==
+        "vehicle_sim.child_frame: must name the robot's frame, got \"\" (line 3)");
+}
+
+TEST_CASE("VehicleLink::namespace_of replaces every {id} by the id", "[config][vehicle][ros2]") {
+  config::VehicleLink v;
+  CHECK(v.namespace_of(3) == "robot_3");
+  CHECK(v.namespace_of(0) == "robot_0");
+  CHECK(v.namespace_of(9999) == "robot_9999");
+  v.ns = "fleet_{id}/robot_{id}";
+  CHECK(v.namespace_of(12) == "fleet_12/robot_12");
+  v.ns = "{id}{id}{id}";
+  CHECK(v.namespace_of(7) == "777");
+  CHECK(v.namespace_of(10) == "101010");
+  v.ns = "r{id}_{i}";
+  CHECK(v.namespace_of(5) == "r5_{i}");
+  // ROS 2 namespaces are absolute: a leading '/' names the same one (its topics rt/robot_4/...).
+  v.ns = "/robot_{id}";
+  CHECK(v.namespace_of(4) == "robot_4");
+  // From the file.
+  const Config c = load_string("schema_version: 1\nvehicle:\n  namespace: 'site_b/bot_{id}'\n");
+  CHECK(c.vehicle_link.namespace_of(21) == "site_b/bot_21");
+}
