@@ -646,7 +646,7 @@ if [ -n "$vehicles" ]; then
       --domain "$domain" --seed "$seed" --record "$vrecord" "${setargs[@]}" "${hsets[@]+"${hsets[@]}"}" --json
     vehicle_pids+=("$started_pid") vehicle_procs+=("$proc") vehicle_hosts+=("$h")
     on_ssh "$h" && ssh_vehicle_pids+=("$started_pid")
-    say "started $proc (pid $started_pid${h:+ on $h}): robots ${ids[0]}..${ids[$((${#ids[@]} - 1))]}"
+    say "started $proc (pid $started_pid${h:+ on $h}): the robots of agents $([ -n "$fleet" ] && echo "${ids[*]}" || echo "0..$((n - 1))")"
   done
   # Each says "start" once its arguments and config are read (it runs with the agents' config: no
   # surprise here, but a process that did not start is said now, not as agents without poses).
