@@ -576,6 +576,16 @@ say "scenario $name ($config), $n agents, domain $domain ($domain_note), rate ${
   "$([ -n "$steps" ] && echo "$steps iterations" || echo "until converged")$([ -n "$vehicles" ] && echo ", simulated robots")$(
     [ $secure -eq 1 ] && echo ", DDS Security with keystore $keystore")"
 
+# --vehicles: the user's timing is kept; one law step per agent tick is what the robots follow best (each
+# agent says so in its log; said here once, where the user looks).
+if [ -n "$vehicles" ]; then
+  spm=$(yaml_key vehicle seconds_per_model_time)
+  awk -v s="${spm:-1}" -v dt="$dt" -v r="$rate_eff" 'BEGIN { d = s * dt - 1 / r; exit !(d > 0.01 / r || d < -0.01 / r) }' &&
+    say "note: a law step lasts integration.dt x vehicle.seconds_per_model_time = $(awk -v s="${spm:-1}" -v dt="$dt" \
+      'BEGIN { printf "%g", s * dt }') s but an agent tick $(awk -v r="$rate_eff" 'BEGIN { printf "%g", 1 / r }') s" \
+      "(1 / agent.rate_hz): for one step per tick --set vehicle.seconds_per_model_time=$(awk -v r="$rate_eff" -v dt="$dt" \
+      'BEGIN { printf "%g", 1 / (r * dt) }') (docs/VEHICLES.md)"
+fi
 if [ -n "$fleet" ]; then
   for h in "${hosts[@]}"; do
     ids=()
