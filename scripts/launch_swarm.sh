@@ -4,7 +4,7 @@
 #
 #   scripts/launch_swarm.sh -n N --scenario NAME [--domain D] [--rate HZ] [--record DIR] [--init CSV]
 #                           [--seed S] [--steps K] [--timeout S] [--set key=value]... [--json]
-#                           [--build DIR] [--runs DIR] [--view] [--secure [--keystore DIR]]
+#                           [--build DIR] [--runs DIR] [--view] [--vehicles sim] [--secure [--keystore DIR]]
 #   scripts/launch_swarm.sh --fleet FILE --scenario NAME [the same options but -n]
 #
 #   -n N            number of agent processes, ids 0..N-1 (default: the rows of --init, else the
@@ -33,18 +33,28 @@
 #   --view          also start shapeform_view (the swarm in a web browser, on 127.0.0.1 and a free
 #                   port) beside the supervisor, and print its URL (with --json also the line
 #                   {"event":"view","url":URL}); it stops with the run (replay: shapeform_view --replay RUN)
+#   --vehicles sim  the agents drive simulated robots: shapeform_vehicle starts before the agents and
+#                   hosts their robots (with --fleet one per host that runs agents, hosting that host's
+#                   robots), with the same config, --set, domain and seed; every process gets
+#                   vehicle.interface=ros2 (robot i starts where agent i would, at its seeded start and
+#                   heading; choose the model and its limits with --set vehicle.model=unicycle
+#                   --set vehicle.max_speed=1 ...: docs/VEHICLES.md). The robots' poses are recorded in
+#                   RECORD/vehicles.csv; the vehicle processes stop after the agents. Not with --init.
 #   --secure        DDS Security for every process (security.enabled: authenticated, access-controlled,
 #                   encrypted; docs/SECURITY.md), with a new keystore made in RUN/keystore
-#                   (scripts/make_keystore.sh RUN/keystore --agents N) unless --keystore is given
+#                   (scripts/make_keystore.sh RUN/keystore --agents N, and --enclave vehicle with
+#                   --vehicles) unless --keystore is given
 #                   (a fleet with ssh hosts needs --keystore: the keystore must be on every host)
 #   --keystore DIR  use this keystore (implies --secure); it must hold the enclaves supervisor,
-#                   agent_0..agent_{N-1} (and viewer with --view); with ssh hosts, at the same path on each
+#                   agent_0..agent_{N-1} (and viewer with --view, vehicle with --vehicles); with ssh hosts,
+#                   at the same path on each
 #
 # One run folder per launch: RUNS/<UTC timestamp>-<scenario>-n<N>/ with agent_<i>.log (stderr),
 # agent_<i>.out (the agent's JSON event lines: status, command), supervisor.log (stderr: progress),
 # supervisor.out (stdout: answers and summary; JSON event lines with --json), script.txt and record/
-# (with --fleet also fleet.yaml, the file, and fleet.txt, the plan followed; an ssh host's streams come
-# back through ssh into these files). Progress goes to stderr. On exit, error or Ctrl-C only this
+# (with --vehicles also vehicle.log and vehicle.out, or vehicle_<host>.log and .out per fleet host; with
+# --fleet also fleet.yaml, the file, and fleet.txt, the plan followed; an ssh host's streams come back
+# through ssh into these files). Progress goes to stderr. On exit, error or Ctrl-C only this
 # launcher's own children are stopped (SIGTERM, then SIGKILL after 5 s; on an ssh host the process
 # group it started there), and test hosts it made are removed. Exit status: the supervisor's (0 ok,
 # 1 runtime failure, 2 bad input, 3 a wait timed out); 2 for bad launcher arguments or fleet file;
@@ -69,7 +79,7 @@ is_posnum() { [[ $1 =~ ^([0-9]+([.][0-9]*)?|[.][0-9]+)([eE][-+]?[0-9]+)?$ ]] && 
 # Arguments
 
 n="" scenario="" fleet="" domain="" rate="" record="" init="" seed="" steps="" timeout="" json=0
-build="build" runs="runs" view=0 secure=0 keystore=""
+build="build" runs="runs" view=0 secure=0 keystore="" vehicles=""
 sets=()
 need_value() { # flag remaining-args value
   [ "$2" -ge 2 ] || die "$1: missing value"
@@ -92,6 +102,7 @@ while [ $# -gt 0 ]; do
     --runs) need_value "$1" $# "${2-}"; runs=$2; shift 2 ;;
     --json) json=1; shift ;;
     --view) view=1; shift ;;
+    --vehicles) need_value "$1" $# "${2-}"; vehicles=$2; shift 2 ;;
     --secure) secure=1; shift ;;
     --keystore) need_value "$1" $# "${2-}"; keystore=$2; secure=1; shift 2 ;;
     -h|--help) usage; exit 0 ;;
@@ -112,12 +123,21 @@ if [ -n "$rate" ]; then
   { is_posnum "$rate" && awk -v v="$rate" 'BEGIN{exit !(v <= 1000)}'; } || die "--rate: expected a number in (0, 1000], got '$rate'"
 fi
 [ -z "$seed" ] || is_uint "$seed" || die "--seed: expected an integer >= 0, got '$seed'"
+case "$vehicles" in
+  "" | sim) ;;
+  *) die "--vehicles: expected sim (simulated robots: shapeform_vehicle), got '${vehicles:0:60}'" ;;
+esac
+[ -z "$vehicles" ] || [ -z "$init" ] ||
+  die "--init: not with --vehicles sim (the simulated robots start at the seeded starts: give --seed S instead)"
 if [ -n "$steps" ]; then
   { is_uint "$steps" && [ "$steps" -ge 1 ]; } || die "--steps: expected an integer >= 1, got '$steps'"
 fi
 [ -z "$timeout" ] || is_posnum "$timeout" || die "--timeout: expected a number of seconds > 0, got '$timeout'"
 for s in "${sets[@]+"${sets[@]}"}"; do
   [[ $s == ?*=* ]] || die "--set: expected key=value, got '$s'"
+  if [ -n "$vehicles" ] && [[ $s == vehicle.interface=* ]] && [ "${s#*=}" != ros2 ]; then
+    die "--set $s: not with --vehicles sim (the agents drive the simulated robots over ROS 2 topics: drop this --set)"
+  fi
 done
 if [ -n "$init" ]; then [ -r "$init" ] && [ -f "$init" ] || die "--init: cannot read '$init'"; fi
 if [ $secure -eq 1 ] && [ -z "$keystore" ] && [ -n "$fleet" ] && grep -qE 'run: *ssh' "$fleet"; then
@@ -141,7 +161,7 @@ fi
 case "$build" in /*) ;; *) build="$root/$build" ;; esac
 case "$runs" in /*) ;; *) runs="$root/$runs" ;; esac
 bin="$build/bin"
-for exe in shapeform_agent shapeform_supervisor shapeform_sim; do
+for exe in shapeform_agent shapeform_supervisor shapeform_sim ${vehicles:+shapeform_vehicle}; do
   [ -x "$bin/$exe" ] || die "--build: $bin/$exe not found (run ./scripts/build.sh first)"
 done
 
@@ -202,6 +222,7 @@ host_sets() {
 # as the processes, so a bad --set or --init is one clear message and nothing starts.
 
 [ -n "$rate" ] && sets+=("agent.rate_hz=$rate" "supervisor.target_rate_hz=$rate")
+[ -n "$vehicles" ] && sets+=("vehicle.interface=ros2")
 simargs=(--config "$config" --steps 0 --verbose)
 [ -n "$seed" ] && simargs+=(--seed "$seed")
 [ -n "$init" ] && simargs+=(--init "$init")
@@ -242,18 +263,22 @@ if [ -n "$init" ]; then
 fi
 [ -n "$n" ] || n=$cfg_agents
 [ -n "$seed" ] || seed=$cfg_seed
-# N agents and the supervisor each take one of the domain's participant slots on their host.
+# N agents, the supervisor and the vehicle process (--vehicles) each take one of the domain's
+# participant slots on their host.
 max_participants=$(yaml_key transport max_participants)
+nveh=0
+[ -n "$vehicles" ] && nveh=1
 if [ -n "$max_participants" ] && [ -n "$fleet" ]; then
   for h in "${hosts[@]}"; do
     k=0
     for i in "${!agent_host[@]}"; do [ "${agent_host[$i]}" = "$h" ] && k=$((k + 1)); done
+    [ $k -gt 0 ] && k=$((k + nveh))
     [ "$sup_host" = "$h" ] && k=$((k + 1))
     [ "$k" -le "$max_participants" ] ||
       die "--fleet: host $h runs $k processes, transport.max_participants is $max_participants (--set transport.max_participants=$k or more)"
   done
-elif [ -n "$max_participants" ] && [ $((n + 1)) -gt "$max_participants" ]; then
-  die "-n $n: $n agents and the supervisor need $((n + 1)) participants on this host, transport.max_participants is $max_participants (--set transport.max_participants=$((n + 1)) or more)"
+elif [ -n "$max_participants" ] && [ $((n + 1 + nveh)) -gt "$max_participants" ]; then
+  die "-n $n: $n agents, the supervisor$([ $nveh -eq 1 ] && echo " and the vehicle process") need $((n + 1 + nveh)) participants on this host, transport.max_participants is $max_participants (--set transport.max_participants=$((n + 1 + nveh)) or more)"
 fi
 # A large swarm on this host: the settings of config/large_swarm.sets first, so the user's --set win.
 large_min=$(sed -n 's/^min_agents=//p' "$root/config/large_swarm.sets")
@@ -319,14 +344,18 @@ fi
 if [ $secure -eq 1 ]; then
   if [ -z "$keystore" ]; then
     keystore="$run/keystore"
-    "$root/scripts/make_keystore.sh" "$keystore" --agents "$n" >&2 || die "--secure: making the keystore failed"
+    kargs=(--agents "$n")
+    [ -n "$vehicles" ] && kargs+=(--enclave supervisor --enclave viewer --enclave vehicle)
+    "$root/scripts/make_keystore.sh" "$keystore" "${kargs[@]}" >&2 || die "--secure: making the keystore failed"
   fi
   needed=(supervisor)
   [ $view -eq 1 ] && needed+=(viewer)
+  [ -n "$vehicles" ] && needed+=(vehicle)
   for ((i = 0; i < n; i++)); do needed+=("agent_$i"); done
   for e in "${needed[@]}"; do
     [ -d "$keystore/enclaves/$e" ] ||
-      die "--keystore: no enclave $e in $keystore (add the missing ones: scripts/make_keystore.sh $keystore --agents $n)"
+      die "--keystore: no enclave $e in $keystore (add the missing ones: scripts/make_keystore.sh $keystore --agents $n$(
+        [ -n "$vehicles" ] && printf ' --enclave %s' "${needed[@]:0:${#needed[@]}-n}"))"
   done
   setargs+=(--set security.enabled=true --set "security.keystore=$keystore")
   # Measured (docs/SECURITY.md, Cost): past about 15 secured processes on one 2-core host, Fast DDS 2.9.1
@@ -356,6 +385,7 @@ agents_timeout=$((30 + n / 2))
 # Children and cleanup
 
 sup_pid="" tail_pids=() agent_pids=() ssh_agent_pids=() view_pid=""
+vehicle_pids=() vehicle_procs=() vehicle_hosts=() ssh_vehicle_pids=() # --vehicles: one process per host
 interrupted=""
 shm_list() { ls /dev/shm 2>/dev/null | grep -E '^(sem\.)?(fastrtps|fast_datasharing|fastdds)' | sort; }
 shm_before=$(shm_list)
@@ -456,6 +486,15 @@ cleanup() {
     fi
   done
   [ $bad -gt 5 ] && say "... $bad agents exited abnormally in all"
+  # The robots last: once their agents are gone each stops by its watchdog, and their poses are
+  # recorded to the end.
+  settle "${ssh_vehicle_pids[@]+"${ssh_vehicle_pids[@]}"}"
+  stop_pids "${vehicle_pids[@]+"${vehicle_pids[@]}"}"
+  for i in "${!vehicle_pids[@]}"; do
+    wait "${vehicle_pids[$i]}" 2>/dev/null
+    st=$?
+    [ $st -eq 0 ] || say "${vehicle_procs[$i]} exited with status $st (see $run/${vehicle_procs[$i]}.log)"
+  done
   # The progress tails end by themselves once the supervisor is gone (they flush what is left).
   for ((i = 0; i < 30; i++)); do
     local any=0
@@ -471,6 +510,7 @@ cleanup() {
       "$(printf 'cd %q && tar -cf - .' "$remote_dir/record")" | tar -xf - -C "$record" ||
       say "warning: could not copy the recording from $sup_host ($remote_dir/record)"
   fi
+  [ -n "$fleet" ] && [ ${#vehicle_pids[@]} -gt 0 ] && merge_vehicle_records
   for h in $(ssh_hosts); do
     ssh -n "${ssh_opts[@]}" -- "${host_target[$h]}" "$(printf 'rm -rf %q' "$remote_dir")" ||
       say "warning: could not remove $remote_dir on $h"
@@ -480,9 +520,11 @@ cleanup() {
   fi
   if [ -n "$sup_pid" ]; then
     [ $json -eq 1 ] && grep -E '"event": ?"summary"' "$run/supervisor.out" | tail -n 1
-    [ -d "$record" ] && say "recording: $record (metrics, positions, commands, centre: docs/RECORDING.md)"
+    [ -d "$record" ] && say "recording: $record (metrics, positions, commands, centre$(
+      [ ${#vehicle_pids[@]} -gt 0 ] && echo ", the robots' poses in vehicles.csv"): docs/RECORDING.md)"
     [ -n "$view_pid" ] && say "replay: $bin/shapeform_view --replay $run"
-    say "logs: $run (supervisor.log, supervisor.out, agent_0..$((n - 1)).log and .out, script.txt)"
+    say "logs: $run (supervisor.log, supervisor.out, agent_0..$((n - 1)).log and .out$(
+      [ ${#vehicle_pids[@]} -gt 0 ] && echo ", vehicle${fleet:+_<host>}.log and .out"), script.txt)"
   fi
   new_shm=$(comm -13 <(printf '%s\n' "$shm_before") <(shm_list) | sed '/^$/d')
   if [ -n "$new_shm" ]; then
@@ -492,9 +534,28 @@ cleanup() {
   [ -n "$sup_pid" ] && say "exit status $rc"
   exit "$rc"
 }
+# --fleet --vehicles: each host's vehicle process recorded into RECORD/vehicle_<host>/ (an ssh host's
+# there, copied back here); their rows are merged into RECORD/vehicles.csv in the order of t_s, and the
+# folders removed.
+merge_vehicle_records() {
+  local i proc h files=()
+  for i in "${!vehicle_procs[@]}"; do
+    proc=${vehicle_procs[$i]} h=${vehicle_hosts[$i]}
+    if on_ssh "$h"; then
+      mkdir -p "$record/$proc" && ssh -n "${ssh_opts[@]}" -- "${host_target[$h]}" \
+        "$(printf 'cd %q && tar -cf - .' "$remote_dir/$proc")" | tar -xf - -C "$record/$proc" ||
+        say "warning: could not copy the robots' poses from $h ($remote_dir/$proc)"
+    fi
+    [ -f "$record/$proc/vehicles.csv" ] && files+=("$record/$proc/vehicles.csv")
+  done
+  [ ${#files[@]} -gt 0 ] || { say "warning: no vehicles.csv from the vehicle processes"; return 0; }
+  # A row cut short by a kill (not 11 fields) is left out: merged, it would no longer be the last line.
+  { head -n 1 "${files[0]}"; awk -F, 'FNR > 1 && NF == 11' "${files[@]}" | sort -s -t, -k1,1g; } >"$record/vehicles.csv" &&
+    for i in "${!vehicle_procs[@]}"; do rm -rf -- "${record:?}/${vehicle_procs[$i]}"; done
+}
 on_signal() {
   interrupted=$1
-  say "interrupted: stopping the supervisor and $n agents"
+  say "interrupted: stopping the supervisor, $n agents$([ ${#vehicle_pids[@]} -gt 0 ] && echo " and the robots")"
   exit "$1"
 }
 trap cleanup EXIT
@@ -507,13 +568,24 @@ trap 'on_signal 143' TERM
 say "run folder $run"
 if [ $json -eq 1 ]; then
   json_str() { local s=${1//\\/\\\\}; printf '"%s"' "${s//\"/\\\"}"; }
-  printf '{"event":"run","dir":%s,"domain":%d,"agents":%d%s}\n' "$(json_str "$run")" "$domain" "$n" \
-    "${fleet:+,\"fleet\":$(json_str "$fleet_name")}"
+  printf '{"event":"run","dir":%s,"domain":%d,"agents":%d%s%s}\n' "$(json_str "$run")" "$domain" "$n" \
+    "${fleet:+,\"fleet\":$(json_str "$fleet_name")}" "${vehicles:+,\"vehicles\":\"$vehicles\"}"
 fi
 say "scenario $name ($config), $n agents, domain $domain ($domain_note), rate ${rate_eff} Hz," \
   "$([ -n "$init" ] && echo "starts from $init" || echo "seed $seed")," \
-  "$([ -n "$steps" ] && echo "$steps iterations" || echo "until converged")$([ $secure -eq 1 ] && echo ", DDS Security with keystore $keystore")"
+  "$([ -n "$steps" ] && echo "$steps iterations" || echo "until converged")$([ -n "$vehicles" ] && echo ", simulated robots")$(
+    [ $secure -eq 1 ] && echo ", DDS Security with keystore $keystore")"
 
+# --vehicles: the user's timing is kept; one law step per agent tick is what the robots follow best (each
+# agent says so in its log; said here once, where the user looks).
+if [ -n "$vehicles" ]; then
+  spm=$(yaml_key vehicle seconds_per_model_time)
+  awk -v s="${spm:-1}" -v dt="$dt" -v r="$rate_eff" 'BEGIN { d = s * dt - 1 / r; exit !(d > 0.01 / r || d < -0.01 / r) }' &&
+    say "note: a law step lasts integration.dt x vehicle.seconds_per_model_time = $(awk -v s="${spm:-1}" -v dt="$dt" \
+      'BEGIN { printf "%g", s * dt }') s but an agent tick $(awk -v r="$rate_eff" 'BEGIN { printf "%g", 1 / r }') s" \
+      "(1 / agent.rate_hz): for one step per tick --set vehicle.seconds_per_model_time=$(awk -v r="$rate_eff" -v dt="$dt" \
+      'BEGIN { printf "%g", 1 / (r * dt) }') (docs/VEHICLES.md)"
+fi
 if [ -n "$fleet" ]; then
   for h in "${hosts[@]}"; do
     ids=()
@@ -562,6 +634,43 @@ if [ $view -eq 1 ]; then
   [ -n "$url" ] || die "--view: shapeform_view printed no URL (see $run/view.log)"
   say "view: $url"
   [ $json -eq 1 ] && printf '{"event":"view","url":"%s"}\n' "$url"
+fi
+
+# The simulated robots (--vehicles sim): before the agents, so that their poses are there when the agents
+# start (an agent waits for its first pose anyway). One process per host that runs agents, hosting the
+# robots of that host's agents, recording their poses.
+if [ -n "$vehicles" ]; then
+  vhosts=("")
+  [ -n "$fleet" ] && vhosts=("${hosts[@]}")
+  for h in "${vhosts[@]}"; do
+    ids=()
+    for ((i = 0; i < n; i++)); do [ "${agent_host[$i]-}" = "$h" ] && ids+=("$i"); done
+    [ ${#ids[@]} -gt 0 ] || continue
+    proc=vehicle${h:+_$h} vrecord=$record
+    if [ -n "$fleet" ]; then # merged into RECORD/vehicles.csv on exit (merge_vehicle_records)
+      vrecord="$record/$proc"
+      on_ssh "$h" && vrecord="$remote_dir/$proc"
+    fi
+    host_sets "$h"
+    start_on "$h" "$proc" "$bin/shapeform_vehicle" --ids "$(IFS=,; echo "${ids[*]}")" --config "$config" \
+      --domain "$domain" --seed "$seed" --record "$vrecord" "${setargs[@]}" "${hsets[@]+"${hsets[@]}"}" --json
+    vehicle_pids+=("$started_pid") vehicle_procs+=("$proc") vehicle_hosts+=("$h")
+    on_ssh "$h" && ssh_vehicle_pids+=("$started_pid")
+    say "started $proc (pid $started_pid${h:+ on $h}): the robots of agents $([ -n "$fleet" ] && echo "${ids[*]}" || echo "0..$((n - 1))")"
+  done
+  # Each says "start" once its arguments and config are read (it runs with the agents' config: no
+  # surprise here, but a process that did not start is said now, not as agents without poses).
+  for i in "${!vehicle_pids[@]}"; do
+    k=0
+    until grep -q '"event":"start"' "$run/${vehicle_procs[$i]}.out" 2>/dev/null; do
+      if ! alive "${vehicle_pids[$i]}" || [ $k -ge 200 ]; then
+        say "${vehicle_procs[$i]}: shapeform_vehicle did not start (see $run/${vehicle_procs[$i]}.log)"
+        exit 1
+      fi
+      sleep 0.1
+      k=$((k + 1))
+    done
+  done
 fi
 
 for ((i = 0; i < n; i++)); do

@@ -1,25 +1,75 @@
 #include "live.hpp"
 
 #include <cmath>
+#include <map>
+#include <optional>
+#include <string>
 #include <vector>
 
-#include "protocol/command_arbiter.hpp"
 #include "dds/convert.hpp"
+#include "dds/convert_ros2.hpp"
 #include "dds/node.hpp"
 #include "dds/state_input.hpp"
+#include "protocol/command_arbiter.hpp"
 #include "util/log.hpp"
 
 namespace shapeform::view {
+namespace {
+
+/// Mailbox bound of a vehicle's pose reader: a second of a 50 Hz driver; drained at the view's rate.
+constexpr std::size_t kPoseMailbox = 64;
+
+/// The pose topic of one agent's vehicle (vehicle.interface ros2), read only: the view takes the
+/// heading from it and never writes the vehicle's command topic (dds::VehicleController would).
+struct PoseFeed {
+  dds::Reader<dds::ros2::Odometry> odom;
+  dds::Reader<dds::ros2::PoseStamped> pose;
+  std::vector<dds::Received<dds::ros2::Odometry>> odom_buf;
+  std::vector<dds::Received<dds::ros2::PoseStamped>> pose_buf;
+
+  PoseFeed(dds::Node& node, const config::VehicleLink& link, std::int32_t id) {
+    const std::string name = dds::vehicle_topic_name(link.namespace_of(id), link.pose_topic);
+    if (link.pose_type == config::VehicleLink::PoseType::PoseStamped)
+      pose = node.reader<dds::ros2::PoseStamped>(dds::TopicId::Pose, kPoseMailbox, name);
+    else
+      odom = node.reader<dds::ros2::Odometry>(dds::TopicId::Odom, kPoseMailbox, name);
+  }
+
+  /// The yaw of the newest valid pose in `frame` since the last call, if any.
+  std::optional<double> newest_yaw(const std::string& frame) {
+    std::optional<double> yaw;
+    odom.drain(odom_buf);
+    pose.drain(pose_buf);
+    take(odom_buf, frame, yaw);
+    take(pose_buf, frame, yaw);
+    return yaw;
+  }
+
+ private:
+  template <class Msg>
+  static void take(const std::vector<dds::Received<Msg>>& in, const std::string& frame,
+                   std::optional<double>& yaw) {
+    std::string why;
+    for (const auto& r : in) {
+      dds::PoseSample p;
+      if (r.valid_data && dds::from_msg(r.msg, p, why) && p.frame_id == frame) yaw = p.yaw;
+    }
+  }
+};
+
+}  // namespace
 
 struct LiveFeed::Impl {
   explicit Impl(const config::Config& cfg)
-      : node(dds::with_identity(cfg.transport, "viewer"), "shapeform_view"),
+      : link(cfg.vehicle_link),
+        node(dds::with_identity(cfg.transport, "viewer"), "shapeform_view"),
         states(node),
         statuses(node.reader<msg::AgentStatus>(dds::TopicId::Status)),
         commands(node.reader<msg::ShapeCommand>(dds::TopicId::Command)),
         targets(node.reader<msg::TrackingTarget>(dds::TopicId::Target)),
         metrics(node.reader<msg::SwarmMetrics>(dds::TopicId::Metrics)) {}
 
+  const config::VehicleLink link;
   dds::Node node;  // readers only: the viewer never writes a topic
   // Each reader with the buffer its samples are drained into.
   dds::StateInput states;  // shapeform/state and shapeform/state_batch
@@ -33,6 +83,7 @@ struct LiveFeed::Impl {
   dds::Reader<msg::SwarmMetrics> metrics;
   std::vector<dds::Received<msg::SwarmMetrics>> metrics_buf;
   dds::CommandArbiter arbiter;
+  std::map<std::int32_t, PoseFeed> poses;  ///< vehicle.interface ros2: one per agent id heard
 };
 
 LiveFeed::LiveFeed(const config::Config& cfg) : impl_(std::make_unique<Impl>(cfg)) {}
@@ -48,6 +99,15 @@ void LiveFeed::drain(Scene& scene, double now_s, double period_s) {
       if (r.instance == dds::InstanceState::Disposed) scene.on_departed(r.id);
     } else if (r.kind == dds::StateItem::Kind::State) {
       scene.on_state(r.state.id, r.state.x, r.state.model_time, r.state.command.epoch, now_s);
+    }
+  }
+  if (m.link.ros2()) {
+    // Each agent heard drives a vehicle: its heading from the vehicle's pose topic.
+    for (const auto& [id, a] : scene.agents()) {
+      if (m.poses.find(id) == m.poses.end()) m.poses.try_emplace(id, m.node, m.link, id);
+    }
+    for (auto& [id, feed] : m.poses) {
+      if (const auto yaw = feed.newest_yaw(m.link.frame)) scene.on_heading(id, *yaw, now_s);
     }
   }
   m.statuses.drain(m.status_buf);

@@ -79,6 +79,13 @@ void Scene::on_status(std::int32_t id, int heard, double lateness_p99_us) {
   it->second.lateness_p99_us = lateness_p99_us;
 }
 
+void Scene::on_heading(std::int32_t id, double heading, double now_s) {
+  const auto it = agents_.find(id);
+  if (it == agents_.end() || !std::isfinite(heading)) return;  // a pose before any state: nothing to draw
+  it->second.heading = heading;
+  it->second.heading_seen_s = now_s;
+}
+
 void Scene::on_departed(std::int32_t id) {
   const auto it = agents_.find(id);
   if (it != agents_.end()) it->second.departed = true;
@@ -156,6 +163,7 @@ nlohmann::json Scene::frame(double now_s) {
   for (auto& [id, a] : agents_) {
     auto& tr = a.trail;
     tr.erase(tr.begin(), std::find_if(tr.begin(), tr.end(), [&](const auto& p) { return p.first >= now_s - p_.trail_s; }));
+    const bool fresh_heading = a.heading && now_s - a.heading_seen_s <= p_.dead_s;
     agents.push_back({{"id", id},
                       {"x1", a.x.x()},
                       {"x2", a.x.y()},
@@ -163,7 +171,8 @@ nlohmann::json Scene::frame(double now_s) {
                       {"model_time", a.model_time},
                       {"epoch", a.epoch},
                       {"heard", a.heard ? json(*a.heard) : json(nullptr)},
-                      {"lateness_us", optional_number(a.lateness_p99_us)}});
+                      {"lateness_us", optional_number(a.lateness_p99_us)},
+                      {"heading", fresh_heading ? json(*a.heading) : json(nullptr)}});
     json pts = json::array();
     for (const auto& p : tr) pts.push_back(point(p.second));
     trails.push_back({{"id", id}, {"points", std::move(pts)}});

@@ -61,6 +61,8 @@ struct AgentInfo {
   bool departed = false;          ///< disposed its instance (left cleanly)
   std::optional<int> heard;                ///< neighbours heard (its latest status)
   std::optional<double> lateness_p99_us;   ///< its loop's lateness, p99 (its latest status)
+  std::optional<double> heading;           ///< its vehicle's heading, rad (vehicle.interface ros2: its pose)
+  double heading_seen_s = 0.0;             ///< now_s of that pose
   std::vector<std::pair<double, core::Vec2>> trail;  ///< (now_s, x), oldest first
 };
 
@@ -70,6 +72,8 @@ class Scene {
 
   void on_state(std::int32_t id, const core::Vec2& x, double model_time, std::uint64_t epoch, double now_s);
   void on_status(std::int32_t id, int heard, double lateness_p99_us);
+  /// The heading (rad, counter-clockwise from the x1 axis) of agent id's vehicle, from its pose.
+  void on_heading(std::int32_t id, double heading, double now_s);
   void on_departed(std::int32_t id);
   /// The command in force from now (the caller decides which one: dds::CommandArbiter live, the
   /// recording's order in replay).
@@ -93,12 +97,13 @@ class Scene {
 
   /// The frame the page draws at now_s (trails older than trail_s are dropped first):
   /// {"now_s", "model_time", "epoch", "converged",
-  ///  "agents": [{"id", "x1", "x2", "state", "model_time", "epoch", "heard", "lateness_us"}],
+  ///  "agents": [{"id", "x1", "x2", "state", "model_time", "epoch", "heard", "lateness_us", "heading"}],
   ///  "outline": {"points": [[x1, x2], ...], "closed"} or null, "centre": [x1, x2] or null,
   ///  "centre_path": [[x1, x2], ...], "trails": [{"id", "points": [[x1, x2], ...]}],
   ///  "chart": {"columns": ["model_time", "shape_error_mean", "gap_cv", "agents_alive"], "points": [[...], ...]},
   ///  "metrics": {"agents_alive", <every metric of core::kMetricTable>}}.
-  /// Agent positions are exact; outline, centre path and trail points are rounded to 1e-4.
+  /// Agent positions are exact; outline, centre path and trail points are rounded to 1e-4. "heading" is
+  /// the vehicle's (rad), null without a pose heard within dead_s.
   nlohmann::json frame(double now_s);
 
  private:

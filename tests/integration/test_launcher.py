@@ -232,13 +232,24 @@ class LauncherTest(harness.SwarmTestCase):
         (["--scenario", "circle", "--frobnicate"], r"^launch_swarm: unknown argument '--frobnicate'"),
         (["--scenario", "circle", "-n", "120"], r"^launch_swarm: -n 120: .* need 121 participants on this host, "
                                                 r"transport\.max_participants is 120"),
+        (["--scenario", "circle", "--vehicles", "real"], r"^launch_swarm: --vehicles: expected sim .*got 'real'"),
+        (["--scenario", "circle", "--vehicles"], r"^launch_swarm: --vehicles: missing value"),
+        (["--scenario", "circle", "--vehicles", "sim", "--set", "vehicle.interface=internal"],
+         r"^launch_swarm: --set vehicle\.interface=internal: not with --vehicles sim"),
+        # --vehicles sets vehicle.interface=ros2 for every process, and the configuration is checked with it.
+        (["--scenario", "circle", "--vehicles", "sim"], r"^launch_swarm: vehicle\.max_speed: must be > 0 with "
+                                                        r"vehicle\.interface: ros2"),
+        (["--scenario", "circle", "--vehicles", "sim", "--set", "vehicle.max_speed=1", "-n", "119"],
+         r"^launch_swarm: -n 119: 119 agents, the supervisor and the vehicle process need 121 participants"),
     ]
 
     def test_bad_arguments_exit_2(self):
         runs = os.path.join(self.run_dir, "runs")
         csv_path = self.write("three.csv", "0,0\n1,1\n2,2\n")
         cases = self.BAD_ARGS + [(["--scenario", "circle", "-n", "4", "--init", csv_path],
-                                  r"^launch_swarm: --init: .* has 3 positions but -n is 4")]
+                                  r"^launch_swarm: --init: .* has 3 positions but -n is 4"),
+                                 (["--scenario", "circle", "--vehicles", "sim", "--init", csv_path],
+                                  r"^launch_swarm: --init: not with --vehicles sim")]
         for k, (args, message) in enumerate(cases):
             with self.subTest(args=args):
                 # Own process group and the test's domain: were a bad argument let through, the

@@ -98,7 +98,14 @@ function draw_scene(f) {
       ctx.strokeStyle = "#fff";
       ctx.beginPath(); ctx.moveTo(u - 3, v - 3); ctx.lineTo(u + 3, v + 3); ctx.moveTo(u + 3, v - 3); ctx.lineTo(u - 3, v + 3); ctx.stroke();
     }
-    drawn.push({ id: a.id, x1: a.x1, x2: a.x2, state: a.state, model_time: a.model_time, u: u, v: v });
+    const heading = a.heading === undefined ? null : a.heading;
+    if (heading !== null) {
+      // The vehicle's heading: a tick from the agent's edge outward (screen y points down).
+      const c = Math.cos(heading), s = -Math.sin(heading);
+      ctx.strokeStyle = COLOURS[a.state];
+      ctx.beginPath(); ctx.moveTo(u + 6 * c, v + 6 * s); ctx.lineTo(u + 16 * c, v + 16 * s); ctx.stroke();
+    }
+    drawn.push({ id: a.id, x1: a.x1, x2: a.x2, state: a.state, model_time: a.model_time, heading: heading, u: u, v: v });
   }
   return { drawn: drawn, outline_points: outline_points };
 }
@@ -133,6 +140,7 @@ function fill_table(f) {
   const body = document.querySelector("#agents tbody");
   const rows = f.agents.map((a) =>
     `<tr class="${a.state}"><td>${a.id}</td><td>${a.state}</td><td>${fmt(a.x1, 3)}</td><td>${fmt(a.x2, 3)}</td>` +
+    `<td>${a.heading === null || a.heading === undefined ? "–" : fmt((a.heading * 180) / Math.PI, 0)}</td>` +
     `<td>${a.heard === null ? "–" : a.heard}</td><td>${a.epoch}</td><td>${fmt(a.lateness_us, 0)}</td></tr>`);
   body.innerHTML = rows.join("");
 }
@@ -187,7 +195,8 @@ function on_frame(f) {
   fill_header(f);
   fill_replay(f);
   window.shapeformDrawn = {
-    agents: s.drawn.map((a) => ({ id: a.id, x1: a.x1, x2: a.x2, state: a.state, model_time: a.model_time })),
+    agents: s.drawn.map((a) => ({ id: a.id, x1: a.x1, x2: a.x2, state: a.state, model_time: a.model_time,
+      heading: a.heading })),
     outline_points: s.outline_points,
     chart_points: chart_points,
     chart_model_time: f.chart.points.length ? f.chart.points[f.chart.points.length - 1][0] : null,
@@ -211,7 +220,8 @@ canvas.addEventListener("mousemove", (e) => {
   }
   if (!best) { tip.hidden = true; return; }
   tip.hidden = false;
-  tip.textContent = `agent ${best.id} (${best.state}) x = (${fmt(best.x1, 3)}, ${fmt(best.x2, 3)})`;
+  tip.textContent = `agent ${best.id} (${best.state}) x = (${fmt(best.x1, 3)}, ${fmt(best.x2, 3)})` +
+    (best.heading === null ? "" : `, heading ${fmt((best.heading * 180) / Math.PI, 0)}°`);
   tip.style.left = (e.clientX - r.left + 12) + "px";
   tip.style.top = (e.clientY - r.top + 12) + "px";
 });

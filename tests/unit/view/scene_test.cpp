@@ -110,6 +110,21 @@ TEST_CASE("Scene::frame: exact agent positions, the outline, the table fields an
   CHECK(f["centre"].is_null());
 }
 
+TEST_CASE("Scene::frame: a vehicle's heading while its pose is fresh, null before and after") {
+  view::SceneParams p;
+  p.dead_s = 1.0;
+  view::Scene scene(p);
+  scene.on_heading(2, 1.0, 100.0);  // a pose before the agent's state: nothing to draw it at
+  scene.on_state(2, {1.0, 2.0}, 1.0, 1, 100.0);
+  CHECK(scene.frame(100.0)["agents"][0]["heading"].is_null());
+  scene.on_heading(2, -2.5, 100.1);
+  CHECK(scene.frame(100.2)["agents"][0]["heading"] == -2.5);
+  scene.on_heading(2, std::nan(""), 100.3);  // not a heading: the last one kept
+  CHECK(scene.frame(100.4)["agents"][0]["heading"] == -2.5);
+  scene.on_state(2, {1.0, 2.0}, 2.0, 1, 101.2);  // the agent still heard, its vehicle's pose no longer
+  CHECK(scene.frame(101.2)["agents"][0]["heading"].is_null());
+}
+
 TEST_CASE("Scene: a new epoch or a model time going back starts the charts anew; one point per model time") {
   view::Scene scene;
   core::Metrics m;
