@@ -7,8 +7,8 @@
 //   shapeform_rogue_publisher --domain 138 --topic odom --robot 3 --field x=nan --wait-readers 1
 // Each sample starts from a plausible one (state: agent 0 at the origin; command: the config's
 // command, epoch 1; target: centre 0, epoch 1; odom: nav_msgs/Odometry on robot K's pose topic,
-// rt/<vehicle.namespace>/<vehicle.pose_topic>, at the origin, yaw 0, in vehicle.frame) and the --field
-// values are applied in order.
+// rt/<vehicle.namespace>/<vehicle.pose_topic> with {id} = K, at the origin, yaw 0, in vehicle.frame) and
+// the --field values are applied in order.
 // Prints one JSON line per event on stdout: {"event":"matched","readers":N},
 // {"event":"sent","count":N,"source":"<its GUID prefix>"}. With --stay it then keeps its writer until
 // SIGINT/SIGTERM (a transient-local command lives as long as its writer). With DDS Security (the
@@ -195,7 +195,8 @@ int run(int argc, char** argv) {
       dds::ros2::Odometry m;
       dds::to_msg(p, m);
       return publish(node, dds::TopicId::Odom, m, kOdomFields, opt,
-                     dds::vehicle_topic_name(link.namespace_of(robot), link.pose_topic));
+                     dds::vehicle_topic_name(link.namespace_of(robot),
+                                             config::VehicleLink::with_id(link.pose_topic, robot)));
     }
     return publish(node, dds::TopicId::Target, dds::to_msg(dds::TargetSample{1, 0.0, {}, {}, 0}), kTargetFields, opt);
   });
