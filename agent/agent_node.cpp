@@ -528,14 +528,21 @@ void AgentNode::drain_poses() {
     robots_[k].io.drain(poses_);
     for (const dds::PoseItem& p : poses_) {
       std::string why = p.why;
-      const bool accepted =
-          p.valid && l.on_pose(p.sample.x, p.sample.yaw, p.sample.frame_id, p.receive_stamp_ns, why) ==
-                         AgentLogic::PoseVerdict::Accepted;
-      if (accepted) continue;
-      if (!p.valid) l.count_refused_pose();
+      // Refusals are throttled per agent and per reason (the first bad field, another frame, a jump): one
+      // kind does not hide another, nor one robot's another's.
+      std::string reason;
+      if (!p.valid) {
+        l.count_refused_pose();
+        reason = why.substr(0, why.find(':'));
+      } else {
+        const AgentLogic::PoseVerdict verdict =
+            l.on_pose(p.sample.x, p.sample.yaw, p.sample.frame_id, p.receive_stamp_ns, why);
+        if (verdict == AgentLogic::PoseVerdict::Accepted) continue;
+        reason = verdict == AgentLogic::PoseVerdict::WrongFrame ? "frame" : "jump";
+      }
       const std::string line = "agent " + std::to_string(l.id()) + ": pose of " + robots_[k].io.topics().ns +
                                " refused: " + why;
-      if (throttled_.warn("pose " + why.substr(0, why.find(' ')), line) && opt_.json)
+      if (throttled_.warn("pose " + std::to_string(l.id()) + " " + reason, line) && opt_.json)
         emit({{"event", "pose_refused"}, {"id", l.id()}, {"why", why}});
     }
   }

@@ -1,17 +1,22 @@
 // shapeform_rogue_publisher: a test tool that publishes hand-made samples built from the project's own
 // types on one topic, to check how the swarm treats a participant that is not one of its processes
-// (absurd ids or model times, epochs from nowhere). Any field of the message a test needs is settable:
+// (absurd ids or model times, epochs from nowhere) or a robot's pose that is not the robot's (a jump, a
+// position that is not a number, another frame). Any field of the message a test needs is settable:
 //   shapeform_rogue_publisher --domain 138 --topic state --field id=2147483647 --field model_time=1e300
 //                             --count 50 --rate 50 --wait-readers 1
+//   shapeform_rogue_publisher --domain 138 --topic odom --robot 3 --field x=nan --wait-readers 1
 // Each sample starts from a plausible one (state: agent 0 at the origin; command: the config's
-// command, epoch 1; target: centre 0, epoch 1) and the --field values are applied in order.
+// command, epoch 1; target: centre 0, epoch 1; odom: nav_msgs/Odometry on robot K's pose topic,
+// rt/<vehicle.namespace>/<vehicle.pose_topic> with {id} = K, at the origin, yaw 0, in vehicle.frame) and
+// the --field values are applied in order.
 // Prints one JSON line per event on stdout: {"event":"matched","readers":N},
 // {"event":"sent","count":N,"source":"<its GUID prefix>"}. With --stay it then keeps its writer until
 // SIGINT/SIGTERM (a transient-local command lives as long as its writer). With DDS Security (the
 // security.* keys, an identity always given) it reports each participant it refused, as the swarm's
-// processes do: {"event":"refused","participant":"<GUID prefix>","by":"<its own>"}. A command leaves its issuer
-// field empty, so receivers take the writer's GUID prefix ("source") as the issuer.
+// processes do: {"event":"refused","participant":"<GUID prefix>","by":"<its own>"}. A command leaves its
+// issuer field empty, so receivers take the writer's GUID prefix ("source") as the issuer.
 #include <chrono>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <iostream>
@@ -24,7 +29,9 @@
 
 #include "app/app.hpp"
 #include "dds/convert.hpp"
+#include "dds/convert_ros2.hpp"
 #include "dds/node.hpp"
+#include "util/clock.hpp"
 #include "util/signals.hpp"
 
 namespace shapeform {
@@ -72,6 +79,20 @@ const Setters<msg::TrackingTarget> kTargetFields = {
     ROGUE_NUMBER(msg::TrackingTarget, cx),    ROGUE_NUMBER(msg::TrackingTarget, cy),
     ROGUE_NUMBER(msg::TrackingTarget, vx),    ROGUE_NUMBER(msg::TrackingTarget, vy)};
 
+/// A robot's pose: its position, its yaw (the orientation about z) and its frame.
+const Setters<dds::ros2::Odometry> kOdomFields = {
+    {"x",
+     [](dds::ros2::Odometry& m, const std::string& v) { m.pose().pose().position().x(parse_as<double>(v)); }},
+    {"y",
+     [](dds::ros2::Odometry& m, const std::string& v) { m.pose().pose().position().y(parse_as<double>(v)); }},
+    {"yaw",
+     [](dds::ros2::Odometry& m, const std::string& v) {
+       const double yaw = parse_as<double>(v);
+       m.pose().pose().orientation().z(std::sin(yaw / 2));
+       m.pose().pose().orientation().w(std::cos(yaw / 2));
+     }},
+    {"frame_id", [](dds::ros2::Odometry& m, const std::string& v) { m.header().frame_id(v); }}};
+
 #undef ROGUE_NUMBER
 #undef ROGUE_TEXT
 
@@ -91,8 +112,10 @@ void report_refused(dds::Node& node) {
               << dds::to_string(node.source()) << "\"}" << std::endl;
 }
 
+/// topic_name: the DDS topic's name for a vehicle's topic, else empty (the topic table's).
 template <class Msg>
-int publish(dds::Node& node, dds::TopicId topic, Msg m, const Setters<Msg>& setters, const Options& opt) {
+int publish(dds::Node& node, dds::TopicId topic, Msg m, const Setters<Msg>& setters, const Options& opt,
+            const std::string& topic_name = {}) {
   for (const std::string& f : opt.fields) {
     const auto eq = f.find('=');
     const auto it = eq == std::string::npos ? setters.end() : setters.find(f.substr(0, eq));
@@ -103,7 +126,7 @@ int publish(dds::Node& node, dds::TopicId topic, Msg m, const Setters<Msg>& sett
     }
     it->second(m, f.substr(eq + 1));
   }
-  dds::Writer<Msg> writer = node.writer<Msg>(topic);
+  dds::Writer<Msg> writer = node.writer<Msg>(topic, topic_name);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(opt.wait_s);
   while (writer.matched() < opt.wait_readers && !util::stop_flag()) {
     if (std::chrono::steady_clock::now() > deadline)
@@ -134,8 +157,14 @@ int run(int argc, char** argv) {
                "shapeform_rogue_publisher: publishes hand-made samples on one topic (a test tool).");
   std::string topic;
   Options opt;
-  app.cli().add_option("--topic", topic, "state | command | target")->required()->check(
-      CLI::IsMember({"state", "command", "target"}));
+  int robot = 0;
+  app.cli()
+      .add_option("--topic", topic, "state | command | target | odom (a robot's pose)")
+      ->required()
+      ->check(CLI::IsMember({"state", "command", "target", "odom"}));
+  app.cli()
+      .add_option("--robot", robot, "odom: the robot whose pose topic it is (default 0)")
+      ->check(CLI::Range(0, dds::kMaxAgentId));
   app.cli().add_option("--field", opt.fields, "name=value: a field of the message (repeatable)");
   app.cli().add_option("--count", opt.count, "samples to publish (default 1)")->check(CLI::Range(1, 1000000));
   app.cli().add_option("--rate", opt.rate_hz, "samples per second (default 10)")->check(CLI::Range(0.001, 1000.0));
@@ -157,6 +186,18 @@ int run(int argc, char** argv) {
       return publish(node, dds::TopicId::State, dds::to_msg(s), kStateFields, opt);
     }
     if (topic == "command") return publish(node, dds::TopicId::Command, dds::to_msg(cfg->command, 1), kCommandFields, opt);
+    if (topic == "odom") {
+      const config::VehicleLink& link = cfg->vehicle_link;
+      dds::PoseSample p;
+      p.stamp_ns = util::system_ns();
+      p.frame_id = link.frame;
+      p.child_frame_id = link.namespace_of(robot) + "/" + cfg->vehicle_sim.child_frame;
+      dds::ros2::Odometry m;
+      dds::to_msg(p, m);
+      return publish(node, dds::TopicId::Odom, m, kOdomFields, opt,
+                     dds::vehicle_topic_name(link.namespace_of(robot),
+                                             config::VehicleLink::with_id(link.pose_topic, robot)));
+    }
     return publish(node, dds::TopicId::Target, dds::to_msg(dds::TargetSample{1, 0.0, {}, {}, 0}), kTargetFields, opt);
   });
 }
