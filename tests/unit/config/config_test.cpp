@@ -1339,15 +1339,15 @@ TEST_CASE("vehicle.namespace and the topic names: ROS 2 names, checked whatever 
   };
   for (const std::string key : {"cmd_topic", "pose_topic"}) {
     const std::string rule_of =
-        "vehicle." + key + ": must be a ROS 2 topic name (letters, digits, '_' and '/')";
+        "vehicle." + key + ": must be a ROS 2 topic name (letters, digits, '_' and '/', {id} for the agent's id)";
     CHECK(topic(key, "cmd vel") == rule_of + ", got \"cmd vel\" (line 3)");
     CHECK(topic(key, "odom!") == rule_of + ", got \"odom!\" (line 3)");
     CHECK(topic(key, "a//b") == rule_of + ", got \"a//b\" (line 3)");
     CHECK(topic(key, "odom/") == rule_of + ", got \"odom/\" (line 3)");
     CHECK(topic(key, "/") == rule_of + ", got \"/\" (line 3)");
     CHECK(topic(key, "") == rule_of + ", got \"\" (line 3)");
-    CHECK(topic(key, "{id}") == rule_of + ", got \"{id}\" (line 3)");  // no {id} in a topic
-    for (const std::string good : {"cmd_vel", "/diff_drive/odom", "base/odom_1"})
+    CHECK(topic(key, "{ID}/odom") == rule_of + ", got \"{ID}/odom\" (line 3)");
+    for (const std::string good : {"cmd_vel", "/diff_drive/odom", "base/odom_1", "/vrpn_mocap/robot_{id}/pose"})
       CHECK_NOTHROW(load_string("schema_version: 1\n", {"vehicle." + key + "=" + good}));
   }
   CHECK(problem_of("schema_version: 1\nvehicle:\n  frame: ''\n") ==
