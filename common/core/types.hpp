@@ -19,4 +19,19 @@ struct Neighbour {
   double s = std::numeric_limits<double>::quiet_NaN();
 };
 
+/// A keep-out zone (`safety.keep_out`): a region no agent may enter, in shape units, world frame.
+struct KeepOutZone {
+  enum class Kind { Circle, Polygon };
+  Kind kind = Kind::Circle;
+  Vec2 centre = Vec2::Zero();  ///< circle: its centre
+  double radius = 0.0;         ///< circle: its radius, > 0
+  /// polygon: a simple polygon's vertices in order (either orientation, >= 3, convex or not)
+  std::vector<Vec2> vertices;
+
+  bool operator==(const KeepOutZone& o) const {
+    return kind == o.kind && centre == o.centre && radius == o.radius && vertices == o.vertices;
+  }
+  bool operator!=(const KeepOutZone& o) const { return !(*this == o); }
+};
+
 }  // namespace shapeform::core

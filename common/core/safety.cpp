@@ -1,0 +1,437 @@
+#include "safety.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+namespace shapeform::core {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// Rounding allowance of a constraint n . p <= b: relative to the size of its numbers.
+double tol(double b) { return 1e-12 * (1.0 + std::abs(b)); }
+
+double cross(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+/// The point of segment [a, b] nearest p.
+Vec2 segment_point(const Vec2& a, const Vec2& b, const Vec2& p) {
+  const Vec2 e = b - a;
+  const double l2 = e.squaredNorm();
+  const double t = l2 > 0.0 ? std::clamp((p - a).dot(e) / l2, 0.0, 1.0) : 0.0;
+  return a + t * e;
+}
+
+/// Twice the signed area (> 0: counter-clockwise).
+double twice_area(const std::vector<Vec2>& v) {
+  double a = 0.0;
+  for (std::size_t i = 0; i < v.size(); ++i) a += cross(v[i], v[(i + 1) % v.size()]);
+  return a;
+}
+
+/// Whether segments [a, b] and [c, d] meet (touching counts).
+bool segments_meet(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d) {
+  const auto side = [](const Vec2& p, const Vec2& q, const Vec2& r) {
+    const double v = cross(q - p, r - p);
+    return v > 0.0 ? 1 : (v < 0.0 ? -1 : 0);
+  };
+  const auto on = [](const Vec2& p, const Vec2& q, const Vec2& r) {  // r on [p, q], collinear given
+    return std::min(p.x(), q.x()) <= r.x() && r.x() <= std::max(p.x(), q.x()) && std::min(p.y(), q.y()) <= r.y() &&
+           r.y() <= std::max(p.y(), q.y());
+  };
+  const int d1 = side(a, b, c), d2 = side(a, b, d), d3 = side(c, d, a), d4 = side(c, d, b);
+  if (d1 * d2 < 0 && d3 * d4 < 0) return true;
+  return (d1 == 0 && on(a, b, c)) || (d2 == 0 && on(a, b, d)) || (d3 == 0 && on(c, d, a)) ||
+         (d4 == 0 && on(c, d, b));
+}
+
+bool convex_ccw(const std::vector<Vec2>& v) {
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    const Vec2& a = v[i];
+    const Vec2& b = v[(i + 1) % v.size()];
+    const Vec2& c = v[(i + 2) % v.size()];
+    if (cross(b - a, c - b) < 0.0) return false;
+  }
+  return true;
+}
+
+/// Whether p is inside or on the counter-clockwise triangle abc.
+bool in_triangle(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& p) {
+  return cross(b - a, p - a) >= 0.0 && cross(c - b, p - b) >= 0.0 && cross(a - c, p - c) >= 0.0;
+}
+
+/// The convex hull of points, counter-clockwise (Andrew's monotone chain).
+std::vector<Vec2> hull(std::vector<Vec2> v) {
+  std::sort(v.begin(), v.end(), [](const Vec2& a, const Vec2& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
+  std::vector<Vec2> h(2 * v.size());
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    while (k >= 2 && cross(h[k - 1] - h[k - 2], v[i] - h[k - 2]) <= 0.0) --k;
+    h[k++] = v[i];
+  }
+  for (std::size_t i = v.size() - 1, t = k + 1; i-- > 0;) {
+    while (k >= t && cross(h[k - 1] - h[k - 2], v[i] - h[k - 2]) <= 0.0) --k;
+    h[k++] = v[i];
+  }
+  h.resize(k > 1 ? k - 1 : k);
+  return h;
+}
+
+/// A simple counter-clockwise polygon cut into triangles (ear clipping, O(n^3) at worst: zones are
+/// cut once per command). Collinear vertices are dropped.
+std::vector<std::vector<Vec2>> triangles(std::vector<Vec2> v) {
+  std::vector<std::vector<Vec2>> out;
+  while (v.size() > 3) {
+    const std::size_t n = v.size();
+    bool cut = false;
+    for (std::size_t i = 0; i < n && !cut; ++i) {
+      const Vec2& a = v[(i + n - 1) % n];
+      const Vec2& b = v[i];
+      const Vec2& c = v[(i + 1) % n];
+      const double turn = cross(b - a, c - b);
+      if (turn == 0.0) {  // b lies on the line a-c: no triangle, drop it
+        v.erase(v.begin() + static_cast<std::ptrdiff_t>(i));
+        cut = true;
+        break;
+      }
+      if (turn < 0.0) continue;  // a reflex vertex is no ear
+      bool empty = true;
+      for (std::size_t k = 0; k < n && empty; ++k) {
+        if (k == i || k == (i + n - 1) % n || k == (i + 1) % n) continue;
+        if (in_triangle(a, b, c, v[k])) empty = false;
+      }
+      if (!empty) continue;
+      out.push_back({a, b, c});
+      v.erase(v.begin() + static_cast<std::ptrdiff_t>(i));
+      cut = true;
+    }
+    if (!cut) {  // rounding found no ear: the rest's convex hull (it covers the rest: conservative)
+      out.push_back(hull(v));
+      return out;
+    }
+  }
+  if (v.size() == 3 && cross(v[1] - v[0], v[2] - v[1]) > 0.0) out.push_back(v);
+  return out;
+}
+
+/// Clockwise turn of v by `deg` degrees.
+Vec2 turn_right(const Vec2& v, double deg) {
+  const double a = -deg * kPi / 180.0;
+  const double c = std::cos(a), s = std::sin(a);
+  return {c * v.x() - s * v.y(), s * v.x() + c * v.y()};
+}
+
+}  // namespace
+
+std::vector<std::string> keep_out_problems(const KeepOutZone& z) {
+  std::vector<std::string> out;
+  if (z.kind == KeepOutZone::Kind::Circle) {
+    if (!z.centre.allFinite()) out.push_back("circle centre must be finite");
+    if (!std::isfinite(z.radius) || z.radius <= 0.0) out.push_back("circle radius must be > 0");
+    return out;
+  }
+  const std::vector<Vec2>& v = z.vertices;
+  if (v.size() < 3) {
+    out.push_back("polygon needs >= 3 vertices, got " + std::to_string(v.size()));
+    return out;
+  }
+  for (const Vec2& p : v)
+    if (!p.allFinite()) {
+      out.push_back("polygon vertices must be finite");
+      return out;
+    }
+  for (std::size_t i = 0; i < v.size(); ++i)
+    if (v[i] == v[(i + 1) % v.size()])
+      out.push_back("polygon vertices " + std::to_string(i) + " and " + std::to_string((i + 1) % v.size()) +
+                    " are equal");
+  if (!out.empty()) return out;
+  if (twice_area(v) == 0.0) {
+    out.push_back("polygon vertices are all on one line (no area)");
+    return out;
+  }
+  const std::size_t n = v.size();
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i + 2; j < n; ++j) {
+      if (i == 0 && j == n - 1) continue;  // adjacent through the closing edge
+      if (segments_meet(v[i], v[(i + 1) % n], v[j], v[(j + 1) % n])) {
+        out.push_back("polygon edges " + std::to_string(i) + " and " + std::to_string(j) +
+                      " cross (the polygon must be simple)");
+        return out;
+      }
+    }
+  return out;
+}
+
+std::vector<ConvexZone> convex_pieces(const std::vector<KeepOutZone>& zones) {
+  std::vector<ConvexZone> out;
+  for (std::size_t k = 0; k < zones.size(); ++k) {
+    const KeepOutZone& z = zones[k];
+    if (!keep_out_problems(z).empty()) continue;
+    ConvexZone piece;
+    piece.zone = static_cast<int>(k);
+    if (z.kind == KeepOutZone::Kind::Circle) {
+      piece.centre = z.centre;
+      piece.radius = z.radius;
+      out.push_back(piece);
+      continue;
+    }
+    std::vector<Vec2> v = z.vertices;
+    if (twice_area(v) < 0.0) std::reverse(v.begin(), v.end());
+    piece.circle = false;
+    const auto add = [&](std::vector<Vec2> poly) {
+      piece.vertices = std::move(poly);
+      piece.centre = Vec2::Zero();
+      for (const Vec2& p : piece.vertices) piece.centre += p;
+      piece.centre /= static_cast<double>(piece.vertices.size());
+      out.push_back(piece);
+    };
+    if (convex_ccw(v))
+      add(v);
+    else
+      for (auto& t : triangles(v)) add(std::move(t));
+  }
+  return out;
+}
+
+bool inside(const ConvexZone& z, const Vec2& p) {
+  if (z.circle) return (p - z.centre).norm() <= z.radius;
+  const std::size_t n = z.vertices.size();
+  for (std::size_t i = 0; i < n; ++i)
+    if (cross(z.vertices[(i + 1) % n] - z.vertices[i], p - z.vertices[i]) < 0.0) return false;
+  return true;
+}
+
+double distance(const ConvexZone& z, const Vec2& p) {
+  if (z.circle) return std::max(0.0, (p - z.centre).norm() - z.radius);
+  if (inside(z, p)) return 0.0;
+  double best = std::numeric_limits<double>::infinity();
+  const std::size_t n = z.vertices.size();
+  for (std::size_t i = 0; i < n; ++i)
+    best = std::min(best, (segment_point(z.vertices[i], z.vertices[(i + 1) % n], p) - p).norm());
+  return best;
+}
+
+HalfPlane separation_half_plane(std::int32_t self_id, const Vec2& x, const SafetyNeighbour& j, double d,
+                                bool& broken) {
+  const Vec2 diff = j.x - x;
+  const double dist = diff.norm();
+  HalfPlane h;
+  h.n = dist > 0.0 ? Vec2(diff / dist) : Vec2(self_id < j.id ? 1.0 : -1.0, 0.0);
+  broken = dist < d;
+  const double margin = j.max_speed * j.age_s;
+  const double nx = h.n.dot(x);
+  // The agent's half of the gap beyond d, less the neighbour's possible motion; a margin that is not
+  // a finite non-negative number (an unknown speed or age) leaves only "do not approach".
+  const double half = std::isfinite(margin) && margin >= 0.0 ? 0.5 * (dist - d) - margin : -1.0;
+  h.b = half > 0.0 ? nx + half : nx;
+  return h;
+}
+
+HalfPlane keep_out_half_plane(const ConvexZone& z, const Vec2& x, bool& in) {
+  HalfPlane h;
+  in = inside(z, x);
+  if (in) {
+    const Vec2 to = z.centre - x;
+    const double l = to.norm();
+    h.n = l > 0.0 ? Vec2(to / l) : Vec2::UnitX();
+    h.b = h.n.dot(x);
+    return h;
+  }
+  Vec2 q;
+  if (z.circle) {
+    q = z.centre + z.radius * (x - z.centre) / (x - z.centre).norm();
+  } else {
+    double best = std::numeric_limits<double>::infinity();
+    const std::size_t n = z.vertices.size();
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec2 c = segment_point(z.vertices[i], z.vertices[(i + 1) % n], x);
+      const double dd = (c - x).squaredNorm();
+      if (dd < best) best = dd, q = c;
+    }
+  }
+  const Vec2 to = q - x;
+  const double l = to.norm();
+  h.n = l > 0.0 ? Vec2(to / l) : Vec2::UnitX();
+  h.b = l > 0.0 ? h.n.dot(q) : h.n.dot(x);
+  return h;
+}
+
+Vec2 closest_feasible(const Vec2& w, const std::vector<HalfPlane>& h, const Vec2& c, double r) {
+  // Seidel's incremental method for a strictly convex objective: the optimum of the first k
+  // constraints either satisfies constraint k + 1 or lies on its line, where the problem is one
+  // interval of the line (clipped by the earlier constraints and the disc), solved exactly.
+  const bool disc = r > 0.0;
+  const Vec2 wc = w - c;
+  const double lw = wc.norm();
+  Vec2 p = disc && lw > r ? Vec2(c + (r / lw) * wc) : w;
+  // Only a line nearer c than the optimum can be (|opt - c| <= |w - c|, c being feasible) matters.
+  const double reach = disc ? std::min(r, lw) : lw;
+  thread_local std::vector<const HalfPlane*> act;
+  act.clear();
+  for (const HalfPlane& k : h)
+    if (k.b - k.n.dot(c) <= reach + tol(k.b)) act.push_back(&k);
+  // Tightest first: the constraints most likely to bind come early, so later ones rarely move p.
+  std::sort(act.begin(), act.end(), [&c](const HalfPlane* a, const HalfPlane* b) {
+    return a->b - a->n.dot(c) < b->b - b->n.dot(c);
+  });
+  for (std::size_t k = 0; k < act.size(); ++k) {
+    const HalfPlane& hk = *act[k];
+    if (hk.contains(p, tol(hk.b))) continue;
+    const Vec2 foot = w - (hk.n.dot(w) - hk.b) * hk.n;  // w's projection on the line
+    const Vec2 u(-hk.n.y(), hk.n.x());
+    double lo = -std::numeric_limits<double>::infinity(), hi = std::numeric_limits<double>::infinity();
+    bool empty = false;
+    for (std::size_t j = 0; j < k && !empty; ++j) {
+      const HalfPlane& hj = *act[j];
+      const double a = hj.n.dot(u);
+      const double s = hj.b - hj.n.dot(foot);
+      if (std::abs(a) <= 1e-15) {
+        if (s < -tol(hj.b)) empty = true;
+      } else if (a > 0.0) {
+        hi = std::min(hi, s / a);
+      } else {
+        lo = std::max(lo, s / a);
+      }
+    }
+    if (disc && !empty) {
+      // |foot + t u - c|^2 <= r^2: t^2 + 2 t u.(foot - c) + |foot - c|^2 - r^2 <= 0
+      const Vec2 fc = foot - c;
+      const double bq = u.dot(fc);
+      const double disc2 = bq * bq - (fc.squaredNorm() - r * r);
+      if (disc2 < 0.0) {
+        empty = true;
+      } else {
+        const double root = std::sqrt(disc2);
+        lo = std::max(lo, -bq - root);
+        hi = std::min(hi, -bq + root);
+      }
+    }
+    if (empty || lo > hi) {
+      if (empty || lo - hi > 1e-12 * (1.0 + std::abs(lo))) return c;  // rounding left nothing: stand still
+      hi = lo = 0.5 * (lo + hi);
+    }
+    p = foot + std::clamp(0.0, lo, hi) * u;
+  }
+  return p;
+}
+
+bool SafetyOutcome::in_cell(const Vec2& p) const {
+  for (const HalfPlane& h : cell)
+    if (!h.contains(p, tol(h.b))) return false;
+  return max_step <= 0.0 || (p - from).norm() <= max_step * (1.0 + 1e-12) + 1e-15;
+}
+
+SafetyOutcome safety_filter(const SafetyParams& p, SafetyState& state, std::int32_t self_id, const Vec2& x,
+                            const Vec2& wanted, const std::vector<SafetyNeighbour>& nbrs,
+                            const std::vector<ConvexZone>& zones) {
+  SafetyOutcome out;
+  out.from = x;
+  out.max_step = p.max_step;
+  const double d = p.min_separation;
+  // Each constraint's source, for blocking_id / blocking_zone: >= 0 a neighbour's id, else -1 - zone.
+  thread_local std::vector<std::int64_t> source;
+  source.clear();
+  out.cell.reserve(nbrs.size() + zones.size());
+  Vec2 away = Vec2::Zero();
+  double nearest_broken = std::numeric_limits<double>::infinity();
+  if (d > 0.0) {
+    for (const SafetyNeighbour& j : nbrs) {
+      bool broken = false;
+      const HalfPlane h = separation_half_plane(self_id, x, j, d, broken);
+      if (broken) {
+        ++out.broken;
+        away -= h.n;
+        nearest_broken = std::min(nearest_broken, (j.x - x).norm());
+      }
+      out.cell.push_back(h);
+      source.push_back(j.id);
+    }
+  }
+  for (const ConvexZone& z : zones) {
+    bool in = false;
+    out.cell.push_back(keep_out_half_plane(z, x, in));
+    source.push_back(-1 - static_cast<std::int64_t>(z.zone));
+    if (in) ++out.inside_zones;
+  }
+  const Vec2 step = wanted - x;
+  const double len = step.norm();
+  Vec2 goal = wanted;
+  if (out.broken > 0) {
+    // The largest safe step away from the neighbours on top: as far as the speed disc allows (or the
+    // whole missing separation), straight away from them, then kept in the cell.
+    const double l = away.norm();
+    const Vec2 dir = l > 0.0 ? Vec2(away / l) : Vec2(-out.cell.front().n);
+    goal = x + (p.max_step > 0.0 ? p.max_step : d - nearest_broken) * dir;
+    state.held = 0;
+  } else if (state.sidestep_left > 0) {
+    goal = x + turn_right(step, p.sidestep_deg);
+    out.sidestep = true;
+    --state.sidestep_left;
+  }
+  out.x = closest_feasible(goal, out.cell, x, p.max_step);
+  if (out.broken == 0 && !out.sidestep) {
+    out.held = len > p.stuck_min_step && (out.x - x).norm() < p.stuck_fraction * len;
+    state.held = out.held ? state.held + 1 : 0;
+    if (state.held >= p.stuck_steps && p.stuck_steps > 0) {
+      state.held = 0;
+      state.sidestep_left = p.stuck_steps - 1;  // this step is the first
+      out.sidestep = out.sidestep_started = true;
+      out.x = closest_feasible(x + turn_right(step, p.sidestep_deg), out.cell, x, p.max_step);
+    }
+  }
+  out.intervened = !(out.x == wanted);
+  // The constraint with the least slack at the answer, when it binds there.
+  double least = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < out.cell.size(); ++k) {
+    const double slack = out.cell[k].b - out.cell[k].n.dot(out.x);
+    if (slack <= 1e-9 * (1.0 + std::abs(out.cell[k].b)) && slack < least) {
+      least = slack;
+      out.blocking_id = source[k] >= 0 ? static_cast<std::int32_t>(source[k]) : -1;
+      out.blocking_zone = source[k] >= 0 ? -1 : static_cast<int>(-1 - source[k]);
+    }
+  }
+  return out;
+}
+
+StepResult drive_safely(const VehicleParams& p, VehicleState& s, const StepResult& law, const SafetyOutcome& f,
+                        double dt, double workspace, bool& outside) {
+  outside = false;
+  const Vec2 x = s.x;
+  const auto command = [&](const Vec2& point) { return StepResult{point, (point - x) / dt, law.clamped}; };
+  VehicleState trial = s;
+  StepResult r = drive(p, trial, command(f.x), dt, workspace);
+  if (moves_as_law(p) || f.in_cell(r.x)) {
+    s = trial;
+    return r;
+  }
+  // The vehicle would leave the cell: look for a command that lands it inside.
+  const double h = dt * p.seconds_per_model_time;
+  const auto violation = [&f](const Vec2& q) {
+    double v = f.max_step > 0.0 ? std::max(0.0, (q - f.from).norm() - f.max_step) : 0.0;
+    for (const HalfPlane& c : f.cell) v = std::max(v, c.n.dot(q) - c.b);
+    return v;
+  };
+  VehicleState best_state = trial;
+  StepResult best = r;
+  double best_v = violation(r.x);
+  for (int k = 0; k <= 8; ++k) {
+    const Vec2 aim = k == 8 ? x : Vec2(x + std::ldexp(1.0, -k) * (f.x - x));
+    // A double integrator lands at x + h (v0 + v1) / 2: command v1 = 2 (aim - x) / h - v0.
+    const Vec2 point = p.model == VehicleModel::DoubleIntegrator ? Vec2(x + 2.0 * (aim - x) - h * s.velocity) : aim;
+    trial = s;
+    r = drive(p, trial, command(point), dt, workspace);
+    const double v = violation(r.x);
+    if (f.in_cell(r.x)) {
+      s = trial;
+      return r;
+    }
+    if (v < best_v) best_v = v, best = r, best_state = trial;
+  }
+  outside = true;
+  s = best_state;
+  return best;
+}
+
+}  // namespace shapeform::core
