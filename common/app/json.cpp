@@ -42,6 +42,18 @@ nlohmann::json table_json(const std::vector<core::params::Param<T>>& table, cons
             nlohmann::json list = nlohmann::json::array();
             for (const auto& x : v) list.push_back({x.x(), x.y()});
             return list;
+          } else if constexpr (std::is_same_v<V, std::vector<core::KeepOutZone>>) {
+            nlohmann::json list = nlohmann::json::array();
+            for (const auto& z : v) {
+              if (z.kind == core::KeepOutZone::Kind::Circle) {
+                list.push_back({{"circle", {z.centre.x(), z.centre.y(), z.radius}}});
+              } else {
+                nlohmann::json poly = nlohmann::json::array();
+                for (const auto& x : z.vertices) poly.push_back({x.x(), x.y()});
+                list.push_back({{"polygon", poly}});
+              }
+            }
+            return list;
           } else {
             return v;
           }

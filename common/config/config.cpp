@@ -27,6 +27,7 @@
 
 #include "core/command_table.hpp"
 #include "core/envelope.hpp"
+#include "core/safety.hpp"
 #include "shapes/shapes.hpp"
 #include "util/text.hpp"
 
@@ -442,6 +443,63 @@ class Reader {
     return list<core::Vec2>(e, "a list of [x, y] pairs", [this](const Entry& item) { return vec2(item); });
   }
 
+  /// A list of keep-out zones, each {circle: [cx, cy, r]} or {polygon: [[x, y], ...]}, checked by
+  /// core::keep_out_problems; null means empty. Circles come first (the order they travel in).
+  std::optional<std::vector<core::KeepOutZone>> zone_list(const Entry& e) {
+    const char* form = "{circle: [cx, cy, r]} or {polygon: [[x, y], ...]}";
+    auto zones = list<core::KeepOutZone>(
+        e, "a list of zones", [this, form](const Entry& item) -> std::optional<core::KeepOutZone> {
+          const YAML::Node& v = item.value;
+          if (!v.IsMap() || v.size() != 1 || !v.begin()->first.IsScalar()) {
+            bad(item, std::string("expected ") + form);
+            return std::nullopt;
+          }
+          const std::string kind = v.begin()->first.Scalar();
+          Entry body;
+          body.path = item.path + "." + kind;
+          body.key.reset(v.begin()->first);
+          body.value.reset(v.begin()->second);
+          body.present = true;
+          core::KeepOutZone z;
+          if (kind == "circle") {
+            if (!body.value.IsSequence() || body.value.size() != 3) {
+              bad(body, "expected [cx, cy, r] (centre and radius)");
+              return std::nullopt;
+            }
+            double n[3] = {0, 0, 0};
+            bool ok = true;
+            for (std::size_t i = 0; i < 3; ++i) {
+              const YAML::Node at = body.value[i];
+              const auto x = real(body.path + "[" + std::to_string(i) + "]", at, at.IsNull() ? body.anchor() : at,
+                                  i == 2 ? params::above(0) : params::any());
+              if (x) n[i] = *x;
+              ok = ok && x.has_value();
+            }
+            if (!ok) return std::nullopt;
+            z.centre = core::Vec2(n[0], n[1]);
+            z.radius = n[2];
+          } else if (kind == "polygon") {
+            const auto vs = vec2_list(body);
+            if (!vs) return std::nullopt;
+            z.kind = core::KeepOutZone::Kind::Polygon;
+            z.vertices = *vs;
+          } else {
+            bad(item.path, std::string("unknown zone ") + quote(kind) + ", expected " + form, body.key, body.key);
+            return std::nullopt;
+          }
+          const auto found = core::keep_out_problems(z);
+          if (!found.empty()) {
+            bad(body, params::join(found, "; "));
+            return std::nullopt;
+          }
+          return z;
+        });
+    if (zones)
+      std::stable_partition(zones->begin(), zones->end(),
+                            [](const core::KeepOutZone& z) { return z.kind == core::KeepOutZone::Kind::Circle; });
+    return zones;
+  }
+
   /// A list of non-empty strings; null means empty.
   std::optional<std::vector<std::string>> text_list(const Entry& e) {
     return list<std::string>(e, "a list of strings", [this, &e](const Entry& item) -> std::optional<std::string> {
@@ -476,6 +534,7 @@ class Reader {
       case Type::Vec2: return wrap(vec2(e));
       case Type::Vec2List: return wrap(vec2_list(e));
       case Type::TextList: return wrap(text_list(e));
+      case Type::ZoneList: return wrap(zone_list(e));
     }
     return std::nullopt;
   }
@@ -856,6 +915,23 @@ void put_value(YAML::Emitter& e, const char* key, const params::Param<T>& p, con
       e << YAML::EndSeq;
       return;
     case Type::TextList: put_list(e, key, std::get<std::vector<std::string>>(v)); return;
+    case Type::ZoneList:
+      e << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq;
+      for (const core::KeepOutZone& z : std::get<std::vector<core::KeepOutZone>>(v)) {
+        e << YAML::Flow << YAML::BeginMap;
+        if (z.kind == core::KeepOutZone::Kind::Circle) {
+          e << YAML::Key << "circle" << YAML::Value << YAML::Flow << YAML::BeginSeq << format_real(z.centre.x())
+            << format_real(z.centre.y()) << format_real(z.radius) << YAML::EndSeq;
+        } else {
+          e << YAML::Key << "polygon" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+          for (const auto& x : z.vertices)
+            e << YAML::Flow << YAML::BeginSeq << format_real(x.x()) << format_real(x.y()) << YAML::EndSeq;
+          e << YAML::EndSeq;
+        }
+        e << YAML::EndMap;
+      }
+      e << YAML::EndSeq;
+      return;
   }
 }
 
@@ -1004,7 +1080,8 @@ std::string range_doc(const Param& p) {
     case Type::Vec2: base = "2 finite numbers"; break;
     case Type::Text:
     case Type::Vec2List:
-    case Type::TextList: break;
+    case Type::TextList:
+    case Type::ZoneList: break;
   }
   return base + p.range_note;
 }

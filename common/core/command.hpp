@@ -2,6 +2,7 @@
 /// What an agent is told to do: the plain command description that travels in config files, on the
 /// console and on the wire. The curve of its shape is compiled once per command (CompiledCommand).
 #include <string_view>
+#include <vector>
 
 #include "integrator.hpp"
 #include "law_arc.hpp"
@@ -39,6 +40,11 @@ struct Command {
   /// Half-width of the workspace [-w, w]^2 (shape units): commands that would carry agents outside are
   /// refused (core::envelope_problems) and no step leaves it (core::agent_step).
   double workspace = 1000.0;
+  /// Smallest distance two agents keep at every step (shape units); 0 = no separation filter. When > 0
+  /// (or with keep-out zones) every agent's step goes through core::safety_filter (safety.hpp).
+  double min_separation = 0.0;
+  /// Regions no agent enters (core::safety_filter keeps every step out of them).
+  std::vector<KeepOutZone> keep_out;
   Law law = Law::Paper;
   ArcParams arc;
   /// Held (the console's hold / stop): every agent keeps its position (velocity 0) and its model

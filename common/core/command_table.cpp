@@ -193,6 +193,20 @@ std::vector<P> build_command_table() {
       "half-width of the workspace `[-w, w]^2` centred on the origin: a command whose shape, centre, path or "
       "gains could carry agents outside is refused, and no agent steps outside",
       [](auto& c) -> auto& { return c.workspace; }));
+  t.push_back(real(
+      "safety.min_separation", "min_separation", su, at_least(0),
+      "smallest distance two agents keep at every step, not only at the end: each agent's step is moved as "
+      "little as possible into its buffered Voronoi cell (core/safety.hpp; docs/SAFETY.md); 0 = off, the law's "
+      "steps bit for bit",
+      [](auto& c) -> auto& { return c.min_separation; }));
+  t.push_back(plain<std::vector<KeepOutZone>>(
+      Type::ZoneList, "safety.keep_out", {"keep_out_circles", "keep_out_polygons"}, su,
+      "regions no agent enters: `[{circle: [cx, cy, r]}, {polygon: [[x, y], ...]}]` (circles first, as they "
+      "travel; on the wire the circles flattened cx, cy, r, ... and each polygon as its vertex count then its "
+      "x, y pairs)",
+      "circles: finite, `r > 0`; polygons: `>= 3` finite vertices, no two consecutive equal, not all collinear, "
+      "edges that do not cross (convex or not)",
+      [](auto& c) -> auto& { return c.keep_out; }));
   return t;
 }
 

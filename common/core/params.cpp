@@ -88,6 +88,8 @@ std::string_view type_name(Type t) {
       return "list of 2-vectors";
     case Type::TextList:
       return "list of text";
+    case Type::ZoneList:
+      return "list of zones";
   }
   return "?";
 }

@@ -124,7 +124,8 @@ enum class Type {
   Text,      ///< free text
   Vec2,      ///< [x1, x2]
   Vec2List,  ///< [[x, y], ...]
-  TextList   ///< [a, b, ...]
+  TextList,  ///< [a, b, ...]
+  ZoneList   ///< keep-out zones: [{circle: [cx, cy, r]}, {polygon: [[x, y], ...]}, ...]
 };
 
 /// The type as the docs name it ("number", "integer", "flag", ...).
@@ -132,7 +133,7 @@ std::string_view type_name(Type t);
 
 /// A parameter's value, whatever its type (Choice: the name).
 using Value = std::variant<double, long long, std::uint64_t, bool, std::string, Vec2, std::vector<Vec2>,
-                           std::vector<std::string>>;
+                           std::vector<std::string>, std::vector<KeepOutZone>>;
 
 /// One declared parameter of the struct T.
 template <class T>

@@ -11,6 +11,7 @@
 
 #include "core/envelope.hpp"
 #include "core/params.hpp"
+#include "core/safety.hpp"
 #include "dds/convert.hpp"
 #include "shapes/shapes.hpp"
 #include "util/text.hpp"
@@ -25,7 +26,8 @@
   X(tracking) X(path_kind) X(path_px) X(path_py) X(path_vx) X(path_vy) X(path_ox) X(path_oy)          \
   X(path_radius) X(path_period) X(path_phase) X(feedforward)                                          \
   X(k1) X(k2) X(sigma) X(beta) X(r) X(max_speed)                                                      \
-  X(integrator) X(dt) X(law) X(k_normal) X(k_tangent) X(spacing) X(hold) X(workspace)
+  X(integrator) X(dt) X(law) X(k_normal) X(k_tangent) X(spacing) X(hold) X(workspace)        \
+  X(min_separation) X(keep_out_circles) X(keep_out_polygons)
 // clang-format on
 
 namespace shapeform::dds {
@@ -63,6 +65,7 @@ WireValue wire_form(const Param& p) {
     case params::Type::Choice:
       return std::string();
     case params::Type::Vec2List:
+    case params::Type::ZoneList:
       return std::vector<double>();
     default:
       throw std::logic_error("command table entry " + p.key + ": its type has no ShapeCommand form");
@@ -108,6 +111,19 @@ struct ToWire {
     for (const core::Vec2& p : v) {
       flat.push_back(p.x());
       flat.push_back(p.y());
+    }
+    return flat;
+  }
+  /// Keep-out zones: component 0 the circles (cx, cy, r, ...), 1 the polygons (each n, x0, y0, ...).
+  WireValue operator()(const std::vector<core::KeepOutZone>& zones) const {
+    std::vector<double> flat;
+    for (const core::KeepOutZone& z : zones) {
+      const bool circle = z.kind == core::KeepOutZone::Kind::Circle;
+      if (circle && k == 0) flat.insert(flat.end(), {z.centre.x(), z.centre.y(), z.radius});
+      if (!circle && k == 1) {
+        flat.push_back(static_cast<double>(z.vertices.size()));
+        for (const core::Vec2& p : z.vertices) flat.insert(flat.end(), {p.x(), p.y()});
+      }
     }
     return flat;
   }
@@ -174,6 +190,68 @@ void read_vertices(const CommandWireField& f, const std::vector<double>& flat, c
   f.param->set(c, params::Value(std::move(vertices)));
 }
 
+/// Keep-out zones: the circles (component 0: cx, cy, r triples) or the polygons (component 1: each its
+/// vertex count, then its x, y pairs); each zone checked by core::keep_out_problems. The zones of the
+/// other component are kept (circles come first).
+void read_zones(const CommandWireField& f, const std::vector<double>& flat, core::Command& c, CommandProblems& p) {
+  const std::string name(f.name);
+  const auto at = [&name](std::size_t i) { return name + "[" + std::to_string(i) + "]"; };
+  std::vector<core::KeepOutZone> zones;
+  bool ok = true;
+  if (f.component == 0) {
+    if (flat.size() % 3 != 0)
+      return p.add(name, "must hold cx, cy, r triples (a count divisible by 3), got " + std::to_string(flat.size()) +
+                             " numbers");
+    for (std::size_t i = 0; i < flat.size(); ++i) {
+      const bool radius = i % 3 == 2;
+      if (!std::isfinite(flat[i]) || (radius && !(flat[i] > 0.0))) {
+        p.add(at(i), std::string(std::isfinite(flat[i]) ? "radius must be > 0" : "must be finite") + ", got " +
+                         util::format_g10(flat[i]));
+        ok = false;
+      }
+    }
+    for (std::size_t i = 0; ok && i + 2 < flat.size(); i += 3) {
+      core::KeepOutZone z;
+      z.centre = core::Vec2(flat[i], flat[i + 1]);
+      z.radius = flat[i + 2];
+      zones.push_back(z);
+    }
+  } else {
+    for (std::size_t i = 0; i < flat.size();) {
+      const double n = flat[i];
+      if (!(n >= 3.0 && n == std::floor(n) && n <= static_cast<double>((flat.size() - i - 1) / 2)))
+        return p.add(at(i), "must be a polygon's vertex count (an integer >= 3, its 2 n numbers following), got " +
+                                util::format_g10(n));
+      core::KeepOutZone z;
+      z.kind = core::KeepOutZone::Kind::Polygon;
+      const std::size_t count = static_cast<std::size_t>(n);
+      for (std::size_t v = 0; v < count; ++v) {
+        const std::size_t ix = i + 1 + 2 * v;
+        for (std::size_t k = ix; k < ix + 2; ++k)
+          if (!std::isfinite(flat[k])) {
+            p.add(at(k), "must be finite, got " + util::format_g10(flat[k]));
+            ok = false;
+          }
+        z.vertices.emplace_back(flat[ix], flat[ix + 1]);
+      }
+      if (ok)
+        for (const std::string& problem : core::keep_out_problems(z)) {
+          p.add(at(i), problem);
+          ok = false;
+        }
+      zones.push_back(std::move(z));
+      i += 1 + 2 * count;
+    }
+  }
+  if (!ok) return;
+  std::vector<core::KeepOutZone> all = std::get<std::vector<core::KeepOutZone>>(f.param->get(c));
+  const auto kind = f.component == 0 ? core::KeepOutZone::Kind::Circle : core::KeepOutZone::Kind::Polygon;
+  all.erase(std::remove_if(all.begin(), all.end(), [kind](const core::KeepOutZone& z) { return z.kind == kind; }),
+            all.end());
+  all.insert(f.component == 0 ? all.begin() : all.end(), zones.begin(), zones.end());
+  f.param->set(c, params::Value(std::move(all)));
+}
+
 /// One received field into c, its problems into p.
 void read_field(const CommandWireField& f, WireValue v, core::Command& c, CommandProblems& p) {
   switch (f.param->type) {
@@ -184,6 +262,8 @@ void read_field(const CommandWireField& f, WireValue v, core::Command& c, Comman
       return read_choice(f, std::move(std::get<std::string>(v)), c, p);
     case params::Type::Vec2List:
       return read_vertices(f, std::get<std::vector<double>>(v), c, p);
+    case params::Type::ZoneList:
+      return read_zones(f, std::get<std::vector<double>>(v), c, p);
     case params::Type::Bool:
       return f.param->set(c, params::Value(std::get<bool>(v)));
     default:  // Text: any text (a shape's expression is checked when the shape is compiled)

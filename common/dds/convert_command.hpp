@@ -31,7 +31,7 @@ struct CommandWireField {
 /// Every bound field, in IDL order (the order in which a refused command lists its problems), built
 /// once. Throws std::logic_error when a bound field is named by no entry's `wire`, an entry's `wire`
 /// name is bound not exactly once, or a field's IDL type is not the one its entry's type travels as
-/// (Real and Vec2: double; Bool: boolean; Text and Choice: string; Vec2List: sequence<double>).
+/// (Real and Vec2: double; Bool: boolean; Text and Choice: string; Vec2List and ZoneList: sequence<double>).
 const std::vector<CommandWireField>& command_wire();
 
 }  // namespace shapeform::dds

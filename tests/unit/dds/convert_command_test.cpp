@@ -75,6 +75,15 @@ std::vector<params::Value> non_defaults(const Param& p, const params::Value& v) 
     case params::Type::Vec2List:
       return {std::vector<core::Vec2>{core::Vec2(1.0 / 3, -2.0 / 3), core::Vec2(5.0 / 3, 1.0 / 7),
                                       core::Vec2(-1.0 / 9, 7.0 / 3)}};
+    case params::Type::ZoneList: {
+      core::KeepOutZone circle;
+      circle.centre = core::Vec2(1.0 / 3, -2.0 / 3);
+      circle.radius = 1.0 / 7;
+      core::KeepOutZone polygon;
+      polygon.kind = core::KeepOutZone::Kind::Polygon;
+      polygon.vertices = {core::Vec2(1.0 / 3, 1.0 / 9), core::Vec2(5.0 / 3, 1.0 / 7), core::Vec2(-1.0 / 9, 7.0 / 3)};
+      return {std::vector<core::KeepOutZone>{circle, circle, polygon}};  // circles first, as they travel
+    }
     default:
       throw std::logic_error(p.key + ": a type this test cannot vary yet");
   }
@@ -91,6 +100,13 @@ struct Bits {
   std::string operator()(const std::vector<core::Vec2>& vs) const {
     std::string out;
     for (const core::Vec2& v : vs) out += (*this)(v);
+    return out;
+  }
+  std::string operator()(const std::vector<core::KeepOutZone>& zs) const {
+    std::string out;
+    for (const core::KeepOutZone& z : zs)
+      out += (z.kind == core::KeepOutZone::Kind::Circle ? "circle" : "polygon") + (*this)(z.centre) +
+             (*this)(z.radius) + (*this)(z.vertices) + ";";
     return out;
   }
   std::string operator()(bool b) const { return b ? "true" : "false"; }
@@ -211,10 +227,30 @@ TEST_CASE("every name field refuses an unknown name, and the vertices odd counts
         bound(w).set(m, dds::WireValue(std::vector<double>{0, 0, 4, kNaN, 0, 4}));
         CHECK(receive(m, out) == field + "[3]: must be finite, got nan");
         ++checked;
+      } else if (p.type == params::Type::ZoneList && w == "keep_out_circles") {
+        bound(w).set(m, dds::WireValue(std::vector<double>{1, 2, 3, 4}));
+        CHECK(receive(m, out) == field + ": must hold cx, cy, r triples (a count divisible by 3), got 4 numbers");
+        bound(w).set(m, dds::WireValue(std::vector<double>{0, 0, -1}));
+        CHECK(receive(m, out) == field + "[2]: radius must be > 0, got -1");
+        bound(w).set(m, dds::WireValue(std::vector<double>{0, kInf, 1}));
+        CHECK(receive(m, out) == field + "[1]: must be finite, got inf");
+        ++checked;
+      } else if (p.type == params::Type::ZoneList) {
+        bound(w).set(m, dds::WireValue(std::vector<double>{2, 0, 0, 1, 1}));
+        CHECK(receive(m, out) == field +
+                                     "[0]: must be a polygon's vertex count (an integer >= 3, its 2 n numbers "
+                                     "following), got 2");
+        bound(w).set(m, dds::WireValue(std::vector<double>{3, 0, 0, 1, 0}));
+        CHECK_THAT(receive(m, out), Catch::Matchers::StartsWith(field + "[0]: must be a polygon's vertex count"));
+        bound(w).set(m, dds::WireValue(std::vector<double>{3, 0, 0, 1, 0, 0, kNaN}));
+        CHECK(receive(m, out) == field + "[6]: must be finite, got nan");
+        bound(w).set(m, dds::WireValue(std::vector<double>{4, 0, 0, 1, 1, 1, 0, 0, 1}));
+        CHECK(receive(m, out) == field + "[0]: polygon edges 0 and 2 cross (the polygon must be simple)");
+        ++checked;
       }
     }
   }
-  CHECK(checked >= 5);  // shape_kind, path_kind, law, integrator, vertices
+  CHECK(checked >= 7);  // shape_kind, path_kind, law, integrator, vertices, keep_out_circles and _polygons
 }
 
 }  // namespace shapeform
