@@ -13,6 +13,7 @@
 #include "app/json.hpp"
 #include "core/enum_names.hpp"
 #include "core/params.hpp"
+#include "core/safety.hpp"
 #include "record/recorder.hpp"
 
 namespace shapeform {
@@ -27,6 +28,7 @@ struct Args {
   std::string seed, steps;  // checked by the config loader (as swarm.seed and sim.steps)
   double dt = 0.0;
   bool verbose = false;
+  bool separation = false;
   std::string kernel = "auto";
   int outline = 0;
   int threads = 1;
@@ -54,6 +56,9 @@ void add_options(app::App& app, Args& a) {
   cli.add_option("--positions", a.positions_path, "write per-step positions (step,agent,x1,x2) to this CSV file")
       ->check(app::writable_file());
   cli.add_flag("--verbose", a.verbose, "print the effective configuration on stderr");
+  cli.add_flag("--separation", a.separation,
+               "track the smallest pairwise distance at every step into `safety` (O(N^2) per step; always on "
+               "with safety.min_separation > 0 or safety.keep_out)");
   cli.add_option("--kernel", a.kernel,
                  "auto | agent (each agent through agent_step, as agent processes) | batch (paper law + Euler, "
                  "vehicle.model integrator: each pair once, vectorised for this CPU); auto = batch from 64 agents "
@@ -134,12 +139,19 @@ sim::SimOptions sim_options(const Args& a, const config::Config& cfg, int agents
   opt.kernel = a.kernel == "agent"   ? core::Kernel::Agent
                : a.kernel == "batch" ? core::Kernel::Batch
                                      : sim::auto_kernel(agents, cfg.vehicle);
+  if (a.kernel == "batch" && core::filters(cfg.command))
+    throw std::runtime_error("--kernel batch: the batched kernel steps agents without the safety filter, and "
+                             "safety.min_separation is " + core::params::format_number(cfg.command.min_separation) +
+                             " with " + std::to_string(cfg.command.keep_out.size()) +
+                             " keep-out zones: use --kernel agent or auto, or set safety.min_separation=0 and "
+                             "safety.keep_out=[]");
   if (a.kernel == "batch" && cfg.vehicle.model != core::VehicleModel::Integrator)
     throw std::runtime_error("--kernel batch: the batched kernel moves agents as the integrator model only, and "
                              "vehicle.model is " + std::string(core::to_string(cfg.vehicle.model)) +
                              ": use --kernel agent or auto");
   opt.vehicle = cfg.vehicle;
   opt.heading_seed = cfg.swarm.seed;
+  opt.separation = a.separation;
   opt.batch.threads = a.threads;
   return opt;
 }
@@ -193,6 +205,34 @@ nlohmann::json result_json(const Args& a, const config::Config& cfg, const sim::
   }
   if (a.outline > 0)
     j["outline"] = outline_json(cmd, a.outline_time >= 0 ? a.outline_time : r.model_time, a.outline, r.final_positions);
+  if (opt.separation || core::filters(cmd)) {
+    // Run-long figures (not metrics of one snapshot): the smallest distance over every step, the
+    // filter's counts, and who holds whom at the end.
+    const sim::SeparationRecord& s = r.separation;
+    nlohmann::json by = nlohmann::json::array();
+    for (std::size_t i = 0; i < r.blocked_by.size(); ++i) {
+      const std::int64_t b = r.blocked_by[i];
+      if (b == -1) continue;
+      by.push_back(b >= 0 ? nlohmann::json{{"agent", i}, {"neighbour", b}} : nlohmann::json{{"agent", i}, {"zone", -2 - b}});
+    }
+    j["safety"] = {
+        {"filter", core::filters(cmd)},
+        {"min_separation_setting", cmd.min_separation},
+        {"keep_out_zones", cmd.keep_out.size()},
+        {"run_min_separation", s.min ? nlohmann::json(*s.min) : nlohmann::json(nullptr)},
+        {"run_min_step", s.min ? nlohmann::json(s.step) : nlohmann::json(nullptr)},
+        {"run_min_time", s.min ? nlohmann::json(s.model_time) : nlohmann::json(nullptr)},
+        {"zone_entries", s.zone_entries},
+        {"interventions", r.safety.interventions},
+        {"sidesteps", r.safety.sidesteps},
+        {"broken", r.safety.broken},
+        {"held", r.safety.held},
+        {"vehicle_outside", r.safety.outside},
+        {"blocked_agents", r.blocked_agents},
+        {"blocked_by", by},
+    };
+  }
+  j["converged_step"] = r.converged_step ? nlohmann::json(*r.converged_step) : nlohmann::json(nullptr);
   auto& fp = j["final_positions"] = nlohmann::json::array();
   for (const auto& p : r.final_positions) fp.push_back({p.x(), p.y()});
   if (opt.vehicle.model == core::VehicleModel::Unicycle) {

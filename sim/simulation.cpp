@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <ostream>
 #include <stdexcept>
 
@@ -39,6 +40,16 @@ void record_step(record::Recorder& rec, double wall, long k, std::uint64_t epoch
 }
 }  // namespace
 
+namespace {
+/// The smallest pairwise distance of x (infinity below two agents).
+double smallest_distance(const std::vector<core::Vec2>& x) {
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < x.size(); ++i)
+    for (std::size_t j = i + 1; j < x.size(); ++j) best = std::min(best, (x[i] - x[j]).squaredNorm());
+  return std::sqrt(best);
+}
+}  // namespace
+
 core::Kernel auto_kernel(int agents, const core::VehicleParams& vehicle) {
   return agents >= 64 && vehicle.model == core::VehicleModel::Integrator ? core::Kernel::Batch : core::Kernel::Agent;
 }
@@ -66,14 +77,28 @@ SimResult run_simulation(const core::CompiledCommand& cmd, std::vector<core::Vec
   const std::int64_t start_ns = util::steady_ns();
   const auto wall_s = [start_ns] { return static_cast<double>(util::steady_ns() - start_ns) * 1e-9; };
   if (opt.recorder) opt.recorder->write_command(wall_s(), swarm.time(), opt.epoch, "", "shapeform_sim", cmd);
+  SimResult r;
+  const bool separation = opt.separation || core::filters(cmd);
+  const std::vector<core::ConvexZone> zones = core::convex_pieces(cmd.keep_out);
   for (long k = 0;; ++k) {
     const auto& x = swarm.positions();
+    if (separation && x.size() >= 2) {
+      const double d = smallest_distance(x);
+      if (!r.separation.min || d < *r.separation.min) r.separation = {d, k, swarm.time(), r.separation.zone_entries};
+    }
+    for (const core::Vec2& xi : x)
+      for (const core::ConvexZone& z : zones) r.separation.zone_entries += core::inside(z, xi) ? 1 : 0;
     // The O(N^2) metrics are only needed per step when they are written.
     const bool full = opt.metrics_csv != nullptr || opt.recorder != nullptr;
     const core::Metrics m = core::compute_metrics(cmd, x, swarm.time(), full);
     err.push_back(m.shape_error_mean.value_or(0.0));
     gap.push_back(core::uniformity(cmd, m));
-    verdict.add(swarm.time(), m.shape_error_mean, gap.back(), core::spread(x));
+    // Agents the safety filter holds from the law's step are not where the law sends them: no verdict.
+    if (swarm.blocked_agents() > 0)
+      verdict.blocked();
+    else
+      verdict.add(swarm.time(), m.shape_error_mean, gap.back(), core::spread(x));
+    if (verdict.converged() && !r.converged_step) r.converged_step = k;
     if (opt.recorder) record_step(*opt.recorder, wall_s(), k, opt.epoch, cmd, swarm.time(), x, m, verdict.converged());
     if (opt.metrics_csv) *opt.metrics_csv << k << ',' << util::format_g10(swarm.time()) << ',' << metric_csv_values(m) << '\n';
     if (opt.positions_csv)
@@ -83,8 +108,10 @@ SimResult run_simulation(const core::CompiledCommand& cmd, std::vector<core::Vec
     if (k + 1 == steps) last = x;
     swarm.step();
   }
-  SimResult r;
   r.metrics = core::compute_metrics(cmd, swarm.positions(), swarm.time());
+  r.safety = swarm.safety_counts();
+  r.blocked_agents = swarm.blocked_agents();
+  r.blocked_by = swarm.blocked_by();
   r.settle_step = core::settle_index(err, gap, opt.settle);
   r.final_positions = swarm.positions();
   r.final_vehicles = swarm.vehicles();

@@ -32,6 +32,18 @@ struct SimOptions {
   core::BatchOptions batch;                   ///< how the batched kernel runs (instruction set, threads)
   core::VehicleParams vehicle;                ///< what every agent drives (default: the integrator)
   std::uint64_t heading_seed = 1;             ///< seeds the start headings (core::start_heading)
+  /// Track the smallest pairwise distance at every step (SimResult::separation; O(N^2) per step). On
+  /// whatever this says when the command's steps are filtered (core::filters).
+  bool separation = false;
+};
+
+/// The run-long safety figures: the smallest pairwise distance over every step (not a metric of one
+/// snapshot, so it lives here and in the simulator's JSON summary, beside the filter's counts).
+struct SeparationRecord {
+  std::optional<double> min;  ///< the smallest distance between two agents at any step (start included)
+  long step = 0;              ///< the first step it happened at
+  double model_time = 0.0;    ///< and its model time
+  long zone_entries = 0;      ///< agent-steps found inside a keep-out zone (start included)
 };
 
 /// The kernel "auto" picks: the batched one from 64 agents on, where it pays and applies (agents
@@ -49,6 +61,13 @@ struct SimResult {
   double max_step = 0.0;  ///< largest displacement of any agent in the last step (chatter)
   bool converged = false;  ///< the verdict at the final step (core::ConvergenceDetector over every step)
   core::ConvergenceDetector::Why why = core::ConvergenceDetector::Why::NoData;
+  SeparationRecord separation;  ///< tracked when SimOptions::separation or the filter is on
+  core::SafetyCounts safety;    ///< what the safety filter did (core::Swarm::safety_counts)
+  int blocked_agents = 0;       ///< agents the filter held from the law's step at the final step
+  /// per agent at the final step: the neighbour id or -2 - zone that held it, -1 when not held
+  std::vector<std::int64_t> blocked_by;
+  /// The first step at which the verdict said converged (nullopt: never).
+  std::optional<long> converged_step;
 };
 
 /// Runs `steps` synchronous steps from `start` (the start itself is step 0 of every series).

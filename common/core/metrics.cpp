@@ -187,6 +187,7 @@ const char* to_string(ConvergenceDetector::Why w) {
     case ConvergenceDetector::Why::Unsteady: return "unsteady";
     case ConvergenceDetector::Why::Growing: return "growing";
     case ConvergenceDetector::Why::Holding: return "holding";
+    case ConvergenceDetector::Why::Blocked: return "blocked";
   }
   return "?";
 }
@@ -201,6 +202,11 @@ void ConvergenceDetector::reset() {
   spreads_.clear();
   converged_ = false;
   why_ = Why::NoData;
+}
+
+void ConvergenceDetector::blocked() {
+  reset();
+  why_ = Why::Blocked;
 }
 
 void ConvergenceDetector::add(double t, const std::optional<double>& shape_error,

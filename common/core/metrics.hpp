@@ -98,7 +98,7 @@ class ConvergenceDetector {
  public:
   using Params = ConvergenceParams;
   /// What the verdict waits for (the first condition that failed last).
-  enum class Why { Converged, NoData, OffShape, Uneven, Unsteady, Growing, Holding };
+  enum class Why { Converged, NoData, OffShape, Uneven, Unsteady, Growing, Holding, Blocked };
   explicit ConvergenceDetector(Params p = Params()) : p_(p) {}
   /// Judges samples against cmd from now on (and resets). Before any command the on-shape bound and
   /// the growth check are off (the steadiness and uniformity conditions alone).
@@ -107,6 +107,9 @@ class ConvergenceDetector {
   /// window; spread: the formation's spread (nullopt: growth not judged).
   void add(double t, const std::optional<double>& shape_error, const std::optional<double>& gap_cv,
            const std::optional<double>& spread = std::nullopt);
+  /// A sample at which the safety filter holds agents from where the law sends them (core::Swarm::
+  /// blocked_agents): never converged then; the window restarts.
+  void blocked();
   bool converged() const { return converged_; }
   Why why() const { return why_; }
   /// The on-shape bound in force (infinity before set_command).
@@ -126,7 +129,7 @@ class ConvergenceDetector {
 };
 
 /// "converged", "no data", "off the shape", "uneven", "unsteady", "growing", "holding" (the span not
-/// yet complete).
+/// yet complete), "blocked" (the safety filter holds agents from their slots).
 const char* to_string(ConvergenceDetector::Why w);
 
 }  // namespace shapeform::core

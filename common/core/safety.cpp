@@ -317,6 +317,18 @@ Vec2 closest_feasible(const Vec2& w, const std::vector<HalfPlane>& h, const Vec2
   return p;
 }
 
+bool filters(const Command& cmd) { return cmd.min_separation > 0.0 || !cmd.keep_out.empty(); }
+
+SafetyParams safety_params(const Command& cmd, const VehicleParams& vehicle) {
+  SafetyParams p;
+  p.min_separation = cmd.min_separation;
+  p.workspace = cmd.workspace;
+  const double law = cmd.max_speed > 0.0 ? cmd.max_speed * cmd.dt : 0.0;
+  const double own = vehicle.max_speed > 0.0 ? vehicle.max_speed * cmd.dt * vehicle.seconds_per_model_time : 0.0;
+  p.max_step = law > 0.0 && own > 0.0 ? std::min(law, own) : std::max(law, own);
+  return p;
+}
+
 bool SafetyOutcome::in_cell(const Vec2& p) const {
   for (const HalfPlane& h : cell)
     if (!h.contains(p, tol(h.b))) return false;
@@ -355,6 +367,12 @@ SafetyOutcome safety_filter(const SafetyParams& p, SafetyState& state, std::int3
     source.push_back(-1 - static_cast<std::int64_t>(z.zone));
     if (in) ++out.inside_zones;
   }
+  if (p.workspace > 0.0) {  // the workspace's four sides (x is inside: the law keeps it there)
+    for (const Vec2& n : {Vec2(1, 0), Vec2(-1, 0), Vec2(0, 1), Vec2(0, -1)}) {
+      out.cell.push_back({n, std::max(p.workspace, n.dot(x))});
+      source.push_back(std::numeric_limits<std::int64_t>::min());
+    }
+  }
   const Vec2 step = wanted - x;
   const double len = step.norm();
   Vec2 goal = wanted;
@@ -388,8 +406,9 @@ SafetyOutcome safety_filter(const SafetyParams& p, SafetyState& state, std::int3
     const double slack = out.cell[k].b - out.cell[k].n.dot(out.x);
     if (slack <= 1e-9 * (1.0 + std::abs(out.cell[k].b)) && slack < least) {
       least = slack;
+      const bool wall = source[k] == std::numeric_limits<std::int64_t>::min();
       out.blocking_id = source[k] >= 0 ? static_cast<std::int32_t>(source[k]) : -1;
-      out.blocking_zone = source[k] >= 0 ? -1 : static_cast<int>(-1 - source[k]);
+      out.blocking_zone = source[k] >= 0 || wall ? -1 : static_cast<int>(-1 - source[k]);
     }
   }
   return out;

@@ -41,6 +41,7 @@
 #include <string>
 #include <vector>
 
+#include "command.hpp"
 #include "types.hpp"
 #include "vehicle.hpp"
 
@@ -62,7 +63,17 @@ struct SafetyParams {
   double stuck_fraction = 0.1;  ///< a step cut below this fraction of the law's is held
   double stuck_min_step = 1e-3; ///< shape units: a law step shorter than this does not ask to move
   double sidestep_deg = 60.0;   ///< clockwise turn of the wanted step while sidestepping
+  double workspace = 0.0;       ///< half-width of the workspace [-w, w]^2 the step stays in; 0: none
 };
+
+/// Whether a command's steps go through the filter: safety.min_separation > 0 or a keep-out zone.
+/// Otherwise the law's steps are taken bit for bit.
+bool filters(const Command& cmd);
+
+/// The filter's settings for a command and the vehicle that moves the agent: d and the workspace from
+/// the command, the speed disc the tighter of the command's max_speed * dt and the vehicle's
+/// max_speed * dt * seconds_per_model_time (each 0 = none).
+SafetyParams safety_params(const Command& cmd, const VehicleParams& vehicle);
 
 /// A half-plane n . p <= b (|n| = 1).
 struct HalfPlane {

@@ -1,0 +1,397 @@
+// The safety filter (core/safety.hpp): the exact 2-D QP against brute force, the buffered Voronoi
+// half-planes and their stale margins, keep-out zones, a neighbour on top, and the deadlock sidestep.
+#include "core/safety.hpp"
+
+#include <catch2/catch.hpp>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+
+using namespace shapeform::core;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+Vec2 random_vec(std::mt19937_64& rng, double scale) {
+  std::uniform_real_distribution<double> u(-scale, scale);
+  const double a = u(rng);
+  const double b = u(rng);
+  return {a, b};
+}
+
+bool feasible(const Vec2& p, const std::vector<HalfPlane>& h, const Vec2& c, double r, double tol) {
+  for (const HalfPlane& k : h)
+    if (k.n.dot(p) > k.b + tol) return false;
+  return r <= 0.0 || (p - c).norm() <= r + tol;
+}
+
+/// The brute-force answer: every candidate of the KKT conditions (w; its projection on each line and on
+/// the circle; each pair of lines' intersection; each line's intersections with the circle; c), the
+/// feasible one nearest w.
+Vec2 brute_force(const Vec2& w, const std::vector<HalfPlane>& h, const Vec2& c, double r) {
+  std::vector<Vec2> cand = {w, c};
+  for (const HalfPlane& k : h) cand.push_back(w - (k.n.dot(w) - k.b) * k.n);
+  if (r > 0.0 && (w - c).norm() > 0.0) cand.push_back(c + r * (w - c).normalized());
+  for (std::size_t i = 0; i < h.size(); ++i) {
+    for (std::size_t j = i + 1; j < h.size(); ++j) {
+      const double det = h[i].n.x() * h[j].n.y() - h[i].n.y() * h[j].n.x();
+      if (std::abs(det) < 1e-12) continue;
+      cand.emplace_back((h[i].b * h[j].n.y() - h[j].b * h[i].n.y()) / det,
+                        (h[i].n.x() * h[j].b - h[j].n.x() * h[i].b) / det);
+    }
+    if (r > 0.0) {
+      const Vec2 foot = c - (h[i].n.dot(c) - h[i].b) * h[i].n;
+      const double q = r * r - (foot - c).squaredNorm();
+      if (q >= 0.0) {
+        const Vec2 u(-h[i].n.y(), h[i].n.x());
+        cand.push_back(foot + std::sqrt(q) * u);
+        cand.push_back(foot - std::sqrt(q) * u);
+      }
+    }
+  }
+  Vec2 best = c;
+  for (const Vec2& p : cand)
+    if (feasible(p, h, c, r, 1e-9) && (p - w).norm() < (best - w).norm()) best = p;
+  return best;
+}
+
+/// A random instance: c, half-planes that all hold c (some through it), a disc (sometimes none), w.
+struct Instance {
+  Vec2 c, w;
+  std::vector<HalfPlane> h;
+  double r;
+};
+Instance random_instance(std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Instance in;
+  in.c = random_vec(rng, 3.0);
+  const int m = static_cast<int>(u(rng) * 12);
+  for (int k = 0; k < m; ++k) {
+    const double a = 2 * kPi * u(rng);
+    HalfPlane hp;
+    hp.n = Vec2(std::cos(a), std::sin(a));
+    hp.b = hp.n.dot(in.c) + (u(rng) < 0.2 ? 0.0 : 2.0 * u(rng));
+    in.h.push_back(hp);
+  }
+  in.r = u(rng) < 0.3 ? 0.0 : 0.1 + 2.0 * u(rng);
+  in.w = in.c + random_vec(rng, 4.0);
+  return in;
+}
+
+/// Whether p is inside a simple polygon (ray casting; on the boundary either way).
+bool in_polygon(const std::vector<Vec2>& v, const Vec2& p) {
+  bool in = false;
+  for (std::size_t i = 0, j = v.size() - 1; i < v.size(); j = i++)
+    if ((v[i].y() > p.y()) != (v[j].y() > p.y()) &&
+        p.x() < (v[j].x() - v[i].x()) * (p.y() - v[i].y()) / (v[j].y() - v[i].y()) + v[i].x())
+      in = !in;
+  return in;
+}
+
+/// How deep p is inside a zone (0 outside or on its boundary).
+double depth(const KeepOutZone& z, const Vec2& p) {
+  if (z.kind == KeepOutZone::Kind::Circle) return std::max(0.0, z.radius - (p - z.centre).norm());
+  if (!in_polygon(z.vertices, p)) return 0.0;
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < z.vertices.size(); ++i) {
+    const Vec2 a = z.vertices[i], b = z.vertices[(i + 1) % z.vertices.size()];
+    const double t = std::clamp((p - a).dot(b - a) / (b - a).squaredNorm(), 0.0, 1.0);
+    best = std::min(best, (a + t * (b - a) - p).norm());
+  }
+  return best;
+}
+
+KeepOutZone circle(double x, double y, double r) {
+  KeepOutZone z;
+  z.centre = Vec2(x, y);
+  z.radius = r;
+  return z;
+}
+KeepOutZone polygon(std::vector<Vec2> v) {
+  KeepOutZone z;
+  z.kind = KeepOutZone::Kind::Polygon;
+  z.vertices = std::move(v);
+  return z;
+}
+
+/// An L-shaped (non-convex) polygon, clockwise.
+KeepOutZone l_shape() {
+  return polygon({Vec2(0, 0), Vec2(0, 3), Vec2(1, 3), Vec2(1, 1), Vec2(3, 1), Vec2(3, 0)});
+}
+
+}  // namespace
+
+TEST_CASE("safety: the QP's answer is the brute force's (random instances)", "[safety]") {
+  std::mt19937_64 rng(11);
+  int moved = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    const Instance in = random_instance(rng);
+    const Vec2 p = closest_feasible(in.w, in.h, in.c, in.r);
+    const Vec2 q = brute_force(in.w, in.h, in.c, in.r);
+    INFO("trial " << trial);
+    REQUIRE(feasible(p, in.h, in.c, in.r, 1e-9));
+    CHECK((p - in.w).norm() <= (q - in.w).norm() + 1e-9);  // no feasible candidate is nearer
+    CHECK((p - q).norm() <= 1e-6);                          // the optimum is unique
+    moved += (p - in.w).norm() > 1e-9 ? 1 : 0;
+  }
+  CHECK(moved > 5000);  // most instances do constrain w
+}
+
+TEST_CASE("safety: no sampled feasible point is nearer w than the QP's answer", "[safety]") {
+  std::mt19937_64 rng(12);
+  for (int trial = 0; trial < 300; ++trial) {
+    const Instance in = random_instance(rng);
+    const Vec2 p = closest_feasible(in.w, in.h, in.c, in.r);
+    const double best = (p - in.w).norm();
+    for (int s = 0; s < 2000; ++s) {
+      const Vec2 q = in.c + random_vec(rng, 5.0);
+      if (feasible(q, in.h, in.c, in.r, 0.0)) REQUIRE((q - in.w).norm() >= best - 1e-9);
+    }
+  }
+}
+
+TEST_CASE("safety: a feasible wanted point is returned bit for bit", "[safety]") {
+  const std::vector<HalfPlane> h = {{Vec2(1, 0), 1.0}};
+  const Vec2 w(0.1 / 3, -0.7);
+  const Vec2 p = closest_feasible(w, h, Vec2::Zero(), 0.0);
+  CHECK(p.x() == w.x());
+  CHECK(p.y() == w.y());
+}
+
+TEST_CASE("safety: the buffered Voronoi half-planes of two agents are d apart and hold both agents", "[safety]") {
+  std::mt19937_64 rng(13);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int trial = 0; trial < 2000; ++trial) {
+    const double d = 0.05 + u(rng);
+    const Vec2 xi = random_vec(rng, 3.0);
+    const double a = 2 * kPi * u(rng);
+    const Vec2 xj = xi + (d + 3.0 * u(rng)) * Vec2(std::cos(a), std::sin(a));
+    bool bi = true, bj = true;
+    const HalfPlane hi = separation_half_plane(0, xi, {1, xj, 0.0, 0.0}, d, bi);
+    const HalfPlane hj = separation_half_plane(1, xj, {0, xi, 0.0, 0.0}, d, bj);
+    CHECK_FALSE(bi);
+    CHECK_FALSE(bj);
+    CHECK(hi.contains(xi, 1e-12));
+    CHECK(hj.contains(xj, 1e-12));
+    CHECK(hi.n.dot(hj.n) == Approx(-1.0));
+    // The lines' distance is d: any point of one and any point of the other are >= d apart.
+    CHECK(-hj.b - hi.b == Approx(d).margin(1e-12));
+    // Random points of both half-planes, near the agents: never closer than d.
+    for (int s = 0; s < 50; ++s) {
+      const Vec2 p = xi + random_vec(rng, 2.0), q = xj + random_vec(rng, 2.0);
+      if (hi.contains(p) && hj.contains(q)) CHECK((p - q).norm() >= d - 1e-12);
+    }
+  }
+}
+
+TEST_CASE("safety: a stale sample's margin shrinks the half-plane by max_speed * age", "[safety]") {
+  const Vec2 xi(0, 0), xj(3, 0);
+  bool broken = false;
+  const HalfPlane fresh = separation_half_plane(0, xi, {1, xj, 0.0, 2.0}, 1.0, broken);
+  CHECK(fresh.b == Approx(1.0));  // (3 - 1) / 2
+  const HalfPlane stale = separation_half_plane(0, xi, {1, xj, 0.25, 2.0}, 1.0, broken);
+  CHECK(stale.b == Approx(0.5));  // less 2 * 0.25
+  // A margin past the agent's half of the gap leaves "do not approach": the line through x.
+  const HalfPlane old = separation_half_plane(0, xi, {1, xj, 2.0, 2.0}, 1.0, broken);
+  CHECK(old.b == 0.0);
+  CHECK_FALSE(broken);
+  // An unknown speed or age (NaN, inf) too.
+  const HalfPlane unknown =
+      separation_half_plane(0, xi, {1, xj, std::numeric_limits<double>::infinity(), 1.0}, 1.0, broken);
+  CHECK(unknown.b == 0.0);
+}
+
+TEST_CASE("safety: stale neighbours moving at their bound toward the agent are never reached", "[safety]") {
+  // The neighbour's true position may be anywhere within max_speed * age of its sample; the agent's
+  // step stays out of reach of every such position by d.
+  std::mt19937_64 rng(14);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int trial = 0; trial < 2000; ++trial) {
+    const double d = 0.2 + u(rng), speed = u(rng), age = u(rng);
+    const Vec2 x = random_vec(rng, 2.0);
+    const Vec2 sample = x + (d + 2.0 * speed * age + 4.0 * u(rng)) * Vec2(1, 0);
+    SafetyParams p;
+    p.min_separation = d;
+    SafetyState st;
+    const Vec2 wanted = x + random_vec(rng, 4.0);
+    const SafetyOutcome f = safety_filter(p, st, 0, x, wanted, {{1, sample, age, speed}}, {});
+    // The neighbour, moved by up to speed * age, then taking its own half step: stays beyond the midline.
+    const double mid = 0.5 * (x.x() + sample.x());
+    CHECK(f.x.x() <= mid - 0.5 * d - speed * age + 1e-9);
+  }
+}
+
+TEST_CASE("safety: two agents on one point are told apart by their ids and step away from each other", "[safety]") {
+  SafetyParams p;
+  p.min_separation = 1.0;
+  p.max_step = 0.3;
+  SafetyState s0, s1;
+  const Vec2 x(2, 2);
+  const SafetyOutcome a = safety_filter(p, s0, 0, x, x + Vec2(0.1, 0), {{1, x, 0, 0}}, {});
+  const SafetyOutcome b = safety_filter(p, s1, 1, x, x + Vec2(0.1, 0), {{0, x, 0, 0}}, {});
+  CHECK(a.broken == 1);
+  CHECK(b.broken == 1);
+  CHECK(a.x.x() == Approx(x.x() - 0.3));  // the largest step the speed disc allows, away
+  CHECK(b.x.x() == Approx(x.x() + 0.3));
+  CHECK((a.x - b.x).norm() > 0.5);
+}
+
+TEST_CASE("safety: a neighbour closer than d: the agent steps straight away, never closer", "[safety]") {
+  SafetyParams p;
+  p.min_separation = 1.0;
+  p.max_step = 0.2;
+  SafetyState st;
+  const Vec2 x(0, 0), on_top(0.3, 0.0);
+  // The law wants to go right through it.
+  const SafetyOutcome f = safety_filter(p, st, 0, x, Vec2(2, 0), {{1, on_top, 0, 0}}, {});
+  CHECK(f.broken == 1);
+  CHECK(f.intervened);
+  CHECK(f.x.x() == Approx(-0.2));
+  CHECK(f.x.y() == Approx(0.0).margin(1e-12));
+  CHECK((f.x - on_top).norm() > (x - on_top).norm());
+}
+
+TEST_CASE("safety: keep_out_problems names what is wrong with a zone", "[safety]") {
+  CHECK(keep_out_problems(circle(0, 0, 1)).empty());
+  CHECK(keep_out_problems(circle(0, 0, 0)) == std::vector<std::string>{"circle radius must be > 0"});
+  CHECK(keep_out_problems(l_shape()).empty());
+  CHECK(keep_out_problems(polygon({Vec2(0, 0), Vec2(1, 0)})) ==
+        std::vector<std::string>{"polygon needs >= 3 vertices, got 2"});
+  CHECK(keep_out_problems(polygon({Vec2(0, 0), Vec2(1, 0), Vec2(2, 0)})) ==
+        std::vector<std::string>{"polygon vertices are all on one line (no area)"});
+  CHECK(keep_out_problems(polygon({Vec2(0, 0), Vec2(1, 1), Vec2(1, 0), Vec2(0, 1)})) ==
+        std::vector<std::string>{"polygon edges 0 and 2 cross (the polygon must be simple)"});
+  CHECK(keep_out_problems(polygon({Vec2(0, 0), Vec2(0, 0), Vec2(1, 0), Vec2(0, 1)})) ==
+        std::vector<std::string>{"polygon vertices 0 and 1 are equal"});
+}
+
+TEST_CASE("safety: a non-convex polygon's convex pieces cover it exactly", "[safety]") {
+  const KeepOutZone l = l_shape();
+  const std::vector<ConvexZone> pieces = convex_pieces({l});
+  CHECK(pieces.size() == 4);  // 6 vertices: 4 triangles
+  std::mt19937_64 rng(15);
+  for (int s = 0; s < 20000; ++s) {
+    const Vec2 p = Vec2(1.5, 1.5) + random_vec(rng, 2.0);
+    bool any = false;
+    for (const ConvexZone& z : pieces) any = any || inside(z, p);
+    CHECK(any == in_polygon(l.vertices, p));
+  }
+  const std::vector<ConvexZone> square = convex_pieces({polygon({Vec2(0, 0), Vec2(0, 1), Vec2(1, 1), Vec2(1, 0)})});
+  REQUIRE(square.size() == 1);  // convex: kept whole (turned counter-clockwise)
+  CHECK(square[0].vertices[1] == Vec2(1, 0));
+}
+
+TEST_CASE("safety: a step never enters a keep-out zone, nor crosses one on its way", "[safety]") {
+  const std::vector<KeepOutZone> zones = {circle(-3, 0, 1), l_shape(),
+                                          polygon({Vec2(-1, -4), Vec2(1, -4), Vec2(0, -2.5)})};
+  const std::vector<ConvexZone> pieces = convex_pieces(zones);
+  std::mt19937_64 rng(16);
+  SafetyParams p;
+  int intervened = 0;
+  for (int trial = 0; trial < 5000; ++trial) {
+    const Vec2 x = random_vec(rng, 5.0);
+    bool out = true;
+    for (const ConvexZone& z : pieces) out = out && !inside(z, x);
+    if (!out) continue;
+    SafetyState st;
+    const SafetyOutcome f = safety_filter(p, st, 0, x, x + random_vec(rng, 3.0), {}, pieces);
+    intervened += f.intervened ? 1 : 0;
+    // The whole straight segment from x to the answer: outside every zone (on a boundary at most).
+    for (int k = 0; k <= 20; ++k) {
+      const Vec2 q = x + (k / 20.0) * (f.x - x);
+      for (const KeepOutZone& z : zones) CHECK(depth(z, q) <= 1e-9);
+    }
+  }
+  CHECK(intervened > 200);
+}
+
+TEST_CASE("safety: an agent inside a zone goes no deeper", "[safety]") {
+  const std::vector<ConvexZone> pieces = convex_pieces({circle(0, 0, 2)});
+  SafetyParams p;
+  SafetyState st;
+  const SafetyOutcome f = safety_filter(p, st, 0, Vec2(1, 0), Vec2(0, 0), {}, pieces);
+  CHECK(f.inside_zones == 1);
+  CHECK(f.x.norm() >= 1.0 - 1e-12);
+}
+
+TEST_CASE("safety: two agents head-on are held, sidestep to their right, pass, and keep d all along", "[safety]") {
+  // Each wants to reach the other's start; a symmetric deadlock for the plain filter.
+  SafetyParams p;
+  p.min_separation = 1.0;
+  p.max_step = 0.2;
+  Vec2 x[2] = {Vec2(-3, 0), Vec2(3, 0)};
+  const Vec2 goal[2] = {Vec2(3, 0), Vec2(-3, 0)};
+  SafetyState st[2];
+  int sidesteps = 0;
+  double closest = 1e9;
+  for (int k = 0; k < 400; ++k) {
+    Vec2 next[2];
+    for (int i = 0; i < 2; ++i) {
+      const Vec2 step = goal[i] - x[i];
+      const Vec2 wanted = x[i] + (step.norm() > 0.2 ? Vec2(0.2 * step.normalized()) : step);
+      const SafetyOutcome f = safety_filter(p, st[i], i, x[i], wanted, {{1 - i, x[1 - i], 0, 0}}, {});
+      sidesteps += f.sidestep_started ? 1 : 0;
+      next[i] = f.x;
+    }
+    x[0] = next[0];
+    x[1] = next[1];
+    closest = std::min(closest, (x[0] - x[1]).norm());
+  }
+  CHECK(closest >= 1.0 - 1e-9);
+  CHECK(sidesteps >= 2);
+  CHECK((x[0] - goal[0]).norm() < 1e-6);  // both arrived
+  CHECK((x[1] - goal[1]).norm() < 1e-6);
+}
+
+TEST_CASE("safety: without the sidestep the head-on pair stays held (the test above needs it)", "[safety]") {
+  SafetyParams p;
+  p.min_separation = 1.0;
+  p.max_step = 0.2;
+  p.stuck_steps = 0;  // no sidestep
+  Vec2 x[2] = {Vec2(-3, 0), Vec2(3, 0)};
+  SafetyState st[2];
+  for (int k = 0; k < 400; ++k) {
+    Vec2 next[2];
+    for (int i = 0; i < 2; ++i) {
+      const Vec2 wanted = x[i] + Vec2(i == 0 ? 0.2 : -0.2, 0);
+      next[i] = safety_filter(p, st[i], i, x[i], wanted, {{1 - i, x[1 - i], 0, 0}}, {}).x;
+    }
+    x[0] = next[0];
+    x[1] = next[1];
+  }
+  CHECK((x[0] - x[1]).norm() == Approx(1.0));
+  CHECK(st[0].held > 300);
+}
+
+TEST_CASE("safety: drive_safely lands every vehicle model in its cell (or stops a unicycle there)", "[safety]") {
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int inside_count = 0, trials = 0;
+  for (VehicleModel model : {VehicleModel::Integrator, VehicleModel::Unicycle}) {
+    for (Steering steering : {Steering::Exact, Steering::Linearised}) {
+      for (int trial = 0; trial < 1000; ++trial) {
+        VehicleParams vp;
+        vp.model = model;
+        vp.steering = steering;
+        vp.max_speed = 0.5 + u(rng);
+        vp.max_yaw_rate = 0.5 + 2 * u(rng);
+        VehicleState s = vehicle_start(random_vec(rng, 2.0), 2 * kPi * u(rng));
+        SafetyParams p;
+        p.min_separation = 0.5;
+        SafetyState st;
+        const Vec2 other = s.x + (0.6 + u(rng)) * Vec2(std::cos(7 * u(rng)), std::sin(7 * u(rng)));
+        const Vec2 wanted = s.x + random_vec(rng, 1.0);
+        const SafetyOutcome f = safety_filter(p, st, 0, s.x, wanted, {{1, other, 0, 0}}, {});
+        bool outside = true;
+        const StepResult r = drive_safely(vp, s, {wanted, Vec2::Zero(), false}, f, 1.0, 1000.0, outside);
+        CHECK_FALSE(outside);
+        CHECK(f.in_cell(r.x));
+        inside_count += f.in_cell(r.x) ? 1 : 0;
+        ++trials;
+      }
+    }
+  }
+  CHECK(inside_count == trials);
+}
