@@ -46,11 +46,11 @@ nlohmann::json table_json(const std::vector<core::params::Param<T>>& table, cons
             nlohmann::json list = nlohmann::json::array();
             for (const auto& z : v) {
               if (z.kind == core::KeepOutZone::Kind::Circle) {
-                list.push_back({{"circle", {z.centre.x(), z.centre.y(), z.radius}}});
+                list.push_back(nlohmann::json{{"circle", nlohmann::json::array({z.centre.x(), z.centre.y(), z.radius})}});
               } else {
                 nlohmann::json poly = nlohmann::json::array();
                 for (const auto& x : z.vertices) poly.push_back({x.x(), x.y()});
-                list.push_back({{"polygon", poly}});
+                list.push_back(nlohmann::json{{"polygon", poly}});
               }
             }
             return list;

@@ -147,10 +147,6 @@ std::vector<std::string> keep_out_problems(const KeepOutZone& z) {
       out.push_back("polygon vertices " + std::to_string(i) + " and " + std::to_string((i + 1) % v.size()) +
                     " are equal");
   if (!out.empty()) return out;
-  if (twice_area(v) == 0.0) {
-    out.push_back("polygon vertices are all on one line (no area)");
-    return out;
-  }
   const std::size_t n = v.size();
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t j = i + 2; j < n; ++j) {
@@ -161,6 +157,7 @@ std::vector<std::string> keep_out_problems(const KeepOutZone& z) {
         return out;
       }
     }
+  if (twice_area(v) == 0.0) out.push_back("polygon vertices are all on one line (no area)");
   return out;
 }
 

@@ -280,7 +280,7 @@ TEST_CASE("safety: a non-convex polygon's convex pieces cover it exactly", "[saf
   }
   const std::vector<ConvexZone> square = convex_pieces({polygon({Vec2(0, 0), Vec2(0, 1), Vec2(1, 1), Vec2(1, 0)})});
   REQUIRE(square.size() == 1);  // convex: kept whole (turned counter-clockwise)
-  CHECK(square[0].vertices[1] == Vec2(1, 0));
+  CHECK(square[0].vertices[1] == Vec2(1, 1));
 }
 
 TEST_CASE("safety: a step never enters a keep-out zone, nor crosses one on its way", "[safety]") {
