@@ -223,6 +223,7 @@ nlohmann::json result_json(const Args& a, const config::Config& cfg, const sim::
         {"run_min_step", s.min ? nlohmann::json(s.step) : nlohmann::json(nullptr)},
         {"run_min_time", s.min ? nlohmann::json(s.model_time) : nlohmann::json(nullptr)},
         {"zone_entries", s.zone_entries},
+        {"zone_depth", s.zone_depth},
         {"interventions", r.safety.interventions},
         {"sidesteps", r.safety.sidesteps},
         {"broken", r.safety.broken},

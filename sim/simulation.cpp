@@ -79,15 +79,22 @@ SimResult run_simulation(const core::CompiledCommand& cmd, std::vector<core::Vec
   if (opt.recorder) opt.recorder->write_command(wall_s(), swarm.time(), opt.epoch, "", "shapeform_sim", cmd);
   SimResult r;
   const bool separation = opt.separation || core::filters(cmd);
-  const std::vector<core::ConvexZone> zones = core::convex_pieces(cmd.keep_out);
   for (long k = 0;; ++k) {
     const auto& x = swarm.positions();
     if (separation && x.size() >= 2) {
       const double d = smallest_distance(x);
-      if (!r.separation.min || d < *r.separation.min) r.separation = {d, k, swarm.time(), r.separation.zone_entries};
+      if (!r.separation.min || d < *r.separation.min) {
+        r.separation.min = d;
+        r.separation.step = k;
+        r.separation.model_time = swarm.time();
+      }
     }
     for (const core::Vec2& xi : x)
-      for (const core::ConvexZone& z : zones) r.separation.zone_entries += core::inside(z, xi) ? 1 : 0;
+      for (const core::KeepOutZone& z : cmd.keep_out) {
+        const double in = core::depth(z, xi);
+        r.separation.zone_entries += in > 1e-9 ? 1 : 0;  // on the boundary, to rounding, is outside
+        r.separation.zone_depth = std::max(r.separation.zone_depth, in);
+      }
     // The O(N^2) metrics are only needed per step when they are written.
     const bool full = opt.metrics_csv != nullptr || opt.recorder != nullptr;
     const core::Metrics m = core::compute_metrics(cmd, x, swarm.time(), full);

@@ -43,7 +43,8 @@ struct SeparationRecord {
   std::optional<double> min;  ///< the smallest distance between two agents at any step (start included)
   long step = 0;              ///< the first step it happened at
   double model_time = 0.0;    ///< and its model time
-  long zone_entries = 0;      ///< agent-steps found inside a keep-out zone (start included)
+  long zone_entries = 0;      ///< agent-steps found inside a keep-out zone by more than 1e-9 (start included)
+  double zone_depth = 0.0;    ///< the deepest any agent was inside a keep-out zone
 };
 
 /// The kernel "auto" picks: the batched one from 64 agents on, where it pays and applies (agents

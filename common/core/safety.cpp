@@ -192,6 +192,20 @@ std::vector<ConvexZone> convex_pieces(const std::vector<KeepOutZone>& zones) {
   return out;
 }
 
+double depth(const KeepOutZone& z, const Vec2& p) {
+  if (z.kind == KeepOutZone::Kind::Circle) return std::max(0.0, z.radius - (p - z.centre).norm());
+  const std::vector<Vec2>& v = z.vertices;
+  bool in = false;  // ray casting: a crossing of the ray to +x1 per edge that straddles p's x2
+  double edge = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0, j = v.size() - 1; i < v.size(); j = i++) {
+    if ((v[i].y() > p.y()) != (v[j].y() > p.y()) &&
+        p.x() < (v[j].x() - v[i].x()) * (p.y() - v[i].y()) / (v[j].y() - v[i].y()) + v[i].x())
+      in = !in;
+    edge = std::min(edge, (segment_point(v[j], v[i], p) - p).norm());
+  }
+  return in ? edge : 0.0;
+}
+
 bool inside(const ConvexZone& z, const Vec2& p) {
   if (z.circle) return (p - z.centre).norm() <= z.radius;
   const std::size_t n = z.vertices.size();
@@ -216,7 +230,7 @@ HalfPlane separation_half_plane(std::int32_t self_id, const Vec2& x, const Safet
   const double dist = diff.norm();
   HalfPlane h;
   h.n = dist > 0.0 ? Vec2(diff / dist) : Vec2(self_id < j.id ? 1.0 : -1.0, 0.0);
-  broken = dist < d;
+  broken = dist < d * (1.0 - 1e-12);  // not a pair kept at d exactly, to rounding
   const double margin = j.max_speed * j.age_s;
   const double nx = h.n.dot(x);
   // The agent's half of the gap beyond d, less the neighbour's possible motion; a margin that is not
@@ -228,30 +242,62 @@ HalfPlane separation_half_plane(std::int32_t self_id, const Vec2& x, const Safet
 
 HalfPlane keep_out_half_plane(const ConvexZone& z, const Vec2& x, bool& in) {
   HalfPlane h;
-  in = inside(z, x);
-  if (in) {
+  if (z.circle) {
+    // The tangent at the circle's point nearest x (the direction to the centre is well defined as
+    // long as x is not the centre); inside, the line through x: no nearer the centre.
     const Vec2 to = z.centre - x;
     const double l = to.norm();
     h.n = l > 0.0 ? Vec2(to / l) : Vec2::UnitX();
-    h.b = h.n.dot(x);
+    h.b = h.n.dot(x) + std::max(0.0, l - z.radius);
+    in = l < z.radius * (1.0 - 1e-12);
     return h;
   }
-  Vec2 q;
-  if (z.circle) {
-    q = z.centre + z.radius * (x - z.centre) / (x - z.centre).norm();
-  } else {
-    double best = std::numeric_limits<double>::infinity();
-    const std::size_t n = z.vertices.size();
-    for (std::size_t i = 0; i < n; ++i) {
-      const Vec2 c = segment_point(z.vertices[i], z.vertices[(i + 1) % n], x);
-      const double dd = (c - x).squaredNorm();
-      if (dd < best) best = dd, q = c;
-    }
+  // The polygon's face x is most outside of (largest signed distance s to its line): the polygon lies
+  // behind every face's line, so the outer side of that one is safe, and holds x when s >= 0. Agents
+  // pushed onto a face by the filter sit at s = 0, where only a face's line is well conditioned. At a
+  // vertex (two faces at s = 0) either face's line would leave the other face's line open, and a
+  // convex piece of a larger polygon may share that face with the next piece (a diagonal inside the
+  // polygon): the line through the vertex along the sum of both faces' normals touches the piece at the
+  // vertex alone.
+  const std::size_t n = z.vertices.size();
+  const double tol_s = 1e-9 * (1.0 + x.norm());
+  std::vector<double> s_of(n);
+  std::vector<Vec2> m_of(n);
+  double s_max = -std::numeric_limits<double>::infinity();
+  Vec2 q = x;
+  double nearest = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec2& a = z.vertices[i];
+    const Vec2& b = z.vertices[(i + 1) % n];
+    const Vec2 e = b - a;
+    m_of[i] = Vec2(e.y(), -e.x()) / e.norm();  // outward (counter-clockwise polygon)
+    s_of[i] = m_of[i].dot(x - a);
+    s_max = std::max(s_max, s_of[i]);
+    const Vec2 c = segment_point(a, b, x);
+    const double dd = (c - x).norm();
+    if (dd < nearest) nearest = dd, q = c;
   }
-  const Vec2 to = q - x;
-  const double l = to.norm();
-  h.n = l > 0.0 ? Vec2(to / l) : Vec2::UnitX();
-  h.b = l > 0.0 ? h.n.dot(q) : h.n.dot(x);
+  in = s_max < -1e-12 * (1.0 + x.norm());
+  if (s_max > 0.0 && nearest > tol_s) {
+    // Clearly outside: the supporting line at the nearest point (beside a vertex it is less
+    // conservative than a face's).
+    h.n = (q - x) / nearest;
+    h.b = h.n.dot(q);
+    return h;
+  }
+  Vec2 m = Vec2::Zero();
+  std::size_t faces = 0, face = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    if (s_of[i] >= s_max - tol_s) m += m_of[i], ++faces, face = i;
+  if (faces == 1) {
+    h.n = -m_of[face];
+    // On or behind the face: its line; inside: no deeper than x.
+    h.b = std::max(h.n.dot(z.vertices[face]), h.n.dot(x));
+    return h;
+  }
+  const double l = m.norm();
+  h.n = l > 0.0 ? Vec2(-m / l) : Vec2(-m_of[face]);
+  h.b = h.n.dot(x);
   return h;
 }
 

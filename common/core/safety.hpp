@@ -101,6 +101,9 @@ std::vector<std::string> keep_out_problems(const KeepOutZone& z);
 /// excludes the zone. Zones with problems (keep_out_problems) are skipped.
 std::vector<ConvexZone> convex_pieces(const std::vector<KeepOutZone>& zones);
 
+/// How deep p is inside a zone: its distance to the zone's boundary when inside, 0 outside or on it.
+double depth(const KeepOutZone& z, const Vec2& p);
+
 /// Whether p is inside (or on) a piece.
 bool inside(const ConvexZone& z, const Vec2& p);
 /// The distance from p to a piece (0 inside).

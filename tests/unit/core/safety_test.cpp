@@ -91,7 +91,7 @@ bool in_polygon(const std::vector<Vec2>& v, const Vec2& p) {
 }
 
 /// How deep p is inside a zone (0 outside or on its boundary).
-double depth(const KeepOutZone& z, const Vec2& p) {
+double reference_depth(const KeepOutZone& z, const Vec2& p) {
   if (z.kind == KeepOutZone::Kind::Circle) return std::max(0.0, z.radius - (p - z.centre).norm());
   if (!in_polygon(z.vertices, p)) return 0.0;
   double best = std::numeric_limits<double>::infinity();
@@ -301,7 +301,10 @@ TEST_CASE("safety: a step never enters a keep-out zone, nor crosses one on its w
     // The whole straight segment from x to the answer: outside every zone (on a boundary at most).
     for (int k = 0; k <= 20; ++k) {
       const Vec2 q = x + (k / 20.0) * (f.x - x);
-      for (const KeepOutZone& z : zones) CHECK(depth(z, q) <= 1e-9);
+      for (const KeepOutZone& z : zones) {
+        CHECK(reference_depth(z, q) <= 1e-9);
+        CHECK(depth(z, q) == Approx(reference_depth(z, q)).margin(1e-12));
+      }
     }
   }
   CHECK(intervened > 200);
@@ -394,4 +397,46 @@ TEST_CASE("safety: drive_safely lands every vehicle model in its cell (or stops 
     }
   }
   CHECK(inside_count == trials);
+}
+
+TEST_CASE("safety: agents walked into zones for many steps (pushed onto their faces) never get in", "[safety]") {
+  // The filter puts agents exactly on a zone's face; from there the next steps must still keep out
+  // (a face's line, not a noisy direction to a nearest point at distance 0).
+  const std::vector<KeepOutZone> zones = {circle(-3, 0, 1), l_shape(),
+                                          polygon({Vec2(-1, -4), Vec2(1, -4), Vec2(0, -2.5)})};
+  const std::vector<ConvexZone> pieces = convex_pieces(zones);
+  std::mt19937_64 rng(18);
+  SafetyParams p;
+  p.max_step = 0.2;
+  int on_face = 0;
+  for (int trial = 0; trial < 500; ++trial) {
+    Vec2 x = random_vec(rng, 5.0);
+    bool out = true;
+    for (const KeepOutZone& z : zones) out = out && reference_depth(z, x) == 0.0;
+    if (!out) continue;
+    const Vec2 goal = random_vec(rng, 3.0);
+    SafetyState st;
+    for (int k = 0; k < 80; ++k) {
+      const Vec2 step = goal - x;
+      const Vec2 wanted = x + (step.norm() > 0.2 ? Vec2(0.2 * step.normalized()) : step);
+      const SafetyOutcome f = safety_filter(p, st, 0, x, wanted, {}, pieces);
+      for (int s = 1; s <= 10; ++s)
+        for (const KeepOutZone& z : zones) {
+          INFO("x " << x.transpose() << " -> " << f.x.transpose() << " wanted " << wanted.transpose() << " zone "
+                    << (&z - zones.data()));
+          REQUIRE(reference_depth(z, x + (s / 10.0) * (f.x - x)) <= 1e-9);
+        }
+      x = f.x;
+      for (const KeepOutZone& z : zones) {
+        bool touching = false;
+        for (std::size_t i = 0; i < z.vertices.size(); ++i) {
+          const Vec2 a = z.vertices[i], b = z.vertices[(i + 1) % z.vertices.size()];
+          const double t = std::clamp((x - a).dot(b - a) / (b - a).squaredNorm(), 0.0, 1.0);
+          touching = touching || (a + t * (b - a) - x).norm() < 1e-9;
+        }
+        on_face += touching ? 1 : 0;
+      }
+    }
+  }
+  CHECK(on_face > 100);  // the case this test is about did happen
 }
