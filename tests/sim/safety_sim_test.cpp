@@ -132,6 +132,11 @@ TEST_CASE("safety in the simulator: no pair ever comes closer than min_separatio
           REQUIRE(off.separation.min);
           unfiltered_below += *off.separation.min < kSeparation ? 1 : 0;
           if (on.converged) CHECK(on.blocked_agents == 0);
+          // The arc law forms every one of these shapes with the filter; no run the filter is on loses
+          // the verdict the unfiltered run had (the paper's law at N = 50 packs agents closer than the
+          // separation: it never converges there, and with the filter its verdict says "blocked").
+          if (law == "arc") CHECK(on.converged);
+          CHECK((on.converged || !off.converged));
           UNSCOPED_INFO(s.name << " N=" << n << " " << law << (unicycle ? " unicycle" : " integrator")
                                << ": min " << *on.separation.min << " (off: " << *off.separation.min
                                << "), converged " << on.converged << " at " << on.converged_step.value_or(-1)
@@ -145,7 +150,7 @@ TEST_CASE("safety in the simulator: no pair ever comes closer than min_separatio
   CHECK(filtered_runs == 40);
   // Without the filter most of these runs bring agents closer than the separation: the starts do force it.
   CHECK(unfiltered_below >= 15);
-  CHECK(converged >= 0);
+  CHECK(converged >= 20);
   WARN("runs converged with the filter: " << converged << " of " << filtered_runs
                                            << "; unfiltered runs below the separation: " << unfiltered_below);
 }

@@ -1375,3 +1375,37 @@ TEST_CASE("VehicleLink::namespace_of replaces every {id} by the id", "[config][v
   const Config c = load_string("schema_version: 1\nvehicle:\n  namespace: 'site_b/bot_{id}'\n");
   CHECK(c.vehicle_link.namespace_of(21) == "site_b/bot_21");
 }
+
+TEST_CASE("safety.min_separation and safety.keep_out: read, written back, and refused naming the key, the value "
+          "and the line",
+          "[config][safety]") {
+  CHECK(load_string("schema_version: 1\n").command.min_separation == 0.0);
+  CHECK(load_string("schema_version: 1\n").command.keep_out.empty());
+  const Config c = load_string(R"(schema_version: 1
+safety:
+  min_separation: 0.25
+  keep_out: [{polygon: [[0, 0], [1, 0], [0, 1]]}, {circle: [5, 0, 1.5]}]
+)");
+  CHECK(c.command.min_separation == 0.25);
+  REQUIRE(c.command.keep_out.size() == 2);
+  // circles first, as they travel on the wire
+  CHECK(c.command.keep_out[0].kind == shapeform::core::KeepOutZone::Kind::Circle);
+  CHECK(c.command.keep_out[0].centre == shapeform::core::Vec2(5, 0));
+  CHECK(c.command.keep_out[0].radius == 1.5);
+  CHECK(c.command.keep_out[1].vertices.size() == 3);
+  CHECK(load_string(to_yaml(c)).command.keep_out == c.command.keep_out);
+  CHECK(load("", {"safety.keep_out=[{circle: [1, 2, 3]}]"}).command.keep_out.size() == 1);
+  CHECK(problem_of("schema_version: 1\nsafety:\n  min_separation: -1\n") ==
+        "safety.min_separation: must be >= 0, got -1 (line 3)");
+  CHECK(problem_of("schema_version: 1\nsafety:\n  keep_out: [{circle: [0, 0, 0]}]\n") ==
+        "safety.keep_out[0].circle[2]: must be > 0, got 0 (line 3)");
+  CHECK(problem_of("schema_version: 1\nsafety:\n  keep_out: [{circle: [0, 0]}]\n") ==
+        "safety.keep_out[0].circle: expected [cx, cy, r] (centre and radius), got a list (line 3)");
+  CHECK(problem_of("schema_version: 1\nsafety:\n  keep_out: [{square: [0, 0]}]\n") ==
+        "safety.keep_out[0]: unknown zone \"square\", expected {circle: [cx, cy, r]} or {polygon: [[x, y], ...]}, "
+        "got \"square\" (line 3)");
+  CHECK(problem_of("schema_version: 1\nsafety:\n  keep_out: [{polygon: [[0, 0], [1, 1], [1, 0], [0, 1]]}]\n") ==
+        "safety.keep_out[0].polygon: polygon edges 0 and 2 cross (the polygon must be simple), got a list (line 3)");
+  CHECK(problem_of("schema_version: 1\nsafety:\n  keep_out: {circle: [0, 0, 1]}\n") ==
+        "safety.keep_out: expected a list of zones, got a map (line 3)");
+}

@@ -72,7 +72,8 @@ TEST_CASE("the command table: unique keys and wire names, defaults from the stru
     INFO(p.key);
     CHECK(keys.insert(p.key).second);
     CHECK_FALSE(p.wire.empty());
-    CHECK(p.wire.size() == (p.type == params::Type::Vec2 ? 2u : 1u));
+    // a pair (x, y) and the keep-out zones (circles, polygons) travel as two fields
+    CHECK(p.wire.size() == (p.type == params::Type::Vec2 || p.type == params::Type::ZoneList ? 2u : 1u));
     for (const auto& w : p.wire) CHECK(wires.insert(w).second);
     CHECK_FALSE(p.doc.empty());
     CHECK(params::find_key(p.key) == &p);
