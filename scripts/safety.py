@@ -2,11 +2,11 @@
 """Measures the safety filter (safety.min_separation, docs/SAFETY.md) in shapeform_sim from starts that
 force crossings and head-on meetings: the smallest separation over every step, how often and how fast the
 shape still forms, against the same runs without the filter. Writes results.json, table.md and
-figures/safety.png into an output folder (default runs/<UTC time>-safety); --write-docs puts the table
-into docs/SAFETY.md (between its GENERATED markers) and the figure into docs/figures/ instead.
+figures/safety.png into an output folder (default runs/<UTC time>-safety); --write-docs also puts the
+table into docs/SAFETY.md (between its GENERATED markers) and the figure into docs/figures/.
 
   scripts/safety.py [--build build] [--sizes 12,50,200] [--seeds 20] [--steps 400] [--jobs 1]
-                    [--out DIR | --write-docs]
+                    [--out DIR] [--write-docs]
 """
 import argparse
 import concurrent.futures
@@ -164,7 +164,7 @@ def figure(rows, path):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0],
                                  usage="scripts/safety.py [--build build] [--sizes 12,50,200] [--seeds 20] "
-                                       "[--steps 400] [--jobs 1] [--out DIR | --write-docs]")
+                                       "[--steps 400] [--jobs 1] [--out DIR] [--write-docs]")
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
     ap.add_argument("--sizes", default="12,50,200", help="swarm sizes, comma-separated")
     ap.add_argument("--seeds", type=int, default=20, help="seeds per case (1..seeds)")
@@ -173,7 +173,7 @@ def main():
     ap.add_argument("--vehicles", default=",".join(v[0] for v in VEHICLES))
     ap.add_argument("--jobs", type=int, default=1, help="runs at a time")
     ap.add_argument("--out", help="output folder (default runs/<UTC time>-safety)")
-    ap.add_argument("--write-docs", action="store_true", help="write into docs/SAFETY.md and docs/figures/")
+    ap.add_argument("--write-docs", action="store_true", help="also write into docs/SAFETY.md and docs/figures/")
     a = ap.parse_args()
     sizes = [int(s) for s in a.sizes.split(",")]
     vehicles = [v for v in VEHICLES if v[0] in a.vehicles.split(",")]
@@ -193,17 +193,6 @@ def main():
                f"(smallest {min(r['min_on'] for r in rows):.6f}); without the filter "
                f"{sum(r['min_off'] < SEPARATION for r in rows)} runs below it "
                f"(smallest {min(r['min_off'] for r in rows):.6f}).\n")
-    if a.write_docs:
-        figure(rows, os.path.join(ROOT, "docs", "figures", "safety.png"))
-        with open(DOC) as f:
-            text = f.read()
-        head, rest = text.split(BEGIN)
-        _, tail = rest.split(END)
-        cmdline = "scripts/safety.py " + " ".join(sys.argv[1:])
-        with open(DOC, "w") as f:
-            f.write(head + BEGIN + f"`{cmdline}`: " + summary + "\n" + md + END + tail)
-        print(f"safety: wrote {DOC}", file=sys.stderr)
-        return 0
     out = a.out or os.path.join(ROOT, "runs", datetime.datetime.utcnow().strftime("%Y%m%dT%H%M%SZ") + "-safety")
     os.makedirs(out, exist_ok=True)
     with open(os.path.join(out, "results.json"), "w") as f:
@@ -213,6 +202,16 @@ def main():
     figure(rows, os.path.join(out, "figures", "safety.png"))
     print(summary + md)
     print(f"safety: wrote {out}", file=sys.stderr)
+    if a.write_docs:
+        figure(rows, os.path.join(ROOT, "docs", "figures", "safety.png"))
+        with open(DOC) as f:
+            text = f.read()
+        head, rest = text.split(BEGIN)
+        _, tail = rest.split(END)
+        cmdline = " ".join(["scripts/safety.py"] + sys.argv[1:])
+        with open(DOC, "w") as f:
+            f.write(head + BEGIN + f"`{cmdline}`: " + summary + "\n" + md + END + tail)
+        print(f"safety: wrote {DOC}", file=sys.stderr)
     return 0
 
 

@@ -230,7 +230,7 @@ HalfPlane separation_half_plane(std::int32_t self_id, const Vec2& x, const Safet
   const double dist = diff.norm();
   HalfPlane h;
   h.n = dist > 0.0 ? Vec2(diff / dist) : Vec2(self_id < j.id ? 1.0 : -1.0, 0.0);
-  broken = dist < d * (1.0 - 1e-12);  // not a pair kept at d exactly, to rounding
+  broken = dist < d - 1e-9 * (1.0 + d);  // by more than rounding: a pair the filter keeps at d is not broken
   const double margin = j.max_speed * j.age_s;
   const double nx = h.n.dot(x);
   // The agent's half of the gap beyond d, less the neighbour's possible motion; a margin that is not
