@@ -97,6 +97,29 @@ class SimOutput(unittest.TestCase):
                            "--set", "vehicle.model=double_integrator").stdout)
         self.assertEqual(j["kernel"], "agent")
 
+    def test_safety_summary(self):
+        # Off (the default): no safety object unless asked for with --separation.
+        j = json.loads(sim("--config", scenario("arc_circle"), "--steps", "20").stdout)
+        self.assertNotIn("safety", j)
+        j = json.loads(sim("--config", scenario("arc_circle"), "--steps", "20", "--separation").stdout)
+        self.assertFalse(j["safety"]["filter"])
+        self.assertEqual(j["safety"]["interventions"], 0)
+        # On: the smallest separation over every step, when, and the filter's counts; auto never batches it.
+        j = json.loads(sim("--config", scenario("circle"), "--agents", "64", "--steps", "100", "--set",
+                           "safety.min_separation=0.3", "--set", "safety.keep_out=[{circle: [0, 0, 1]}]").stdout)
+        s = j["safety"]
+        self.assertEqual(j["kernel"], "agent")
+        self.assertTrue(s["filter"])
+        # The uniform start has pairs closer than 0.3: they step apart (counted), never closer than at the start.
+        self.assertLess(s["run_min_separation"], 0.3)
+        self.assertEqual((s["run_min_step"], s["run_min_time"]), (0, 0))
+        self.assertGreater(s["broken"], 0)
+        self.assertEqual(s["keep_out_zones"], 1)
+        for key in ("run_min_step", "run_min_time", "zone_entries", "zone_depth", "interventions", "sidesteps",
+                    "broken", "held", "vehicle_outside", "blocked_agents", "blocked_by"):
+            self.assertIn(key, s)
+        self.assertIn(j["verdict"], ("converged", "blocked", "holding", "unsteady", "uneven", "off the shape"))
+
 
 class BadInput(unittest.TestCase):
     def assert_rejected(self, args, *needles):
@@ -129,6 +152,10 @@ class BadInput(unittest.TestCase):
         self.assert_rejected(["--kernel", "batch", "--set", "vehicle.model=unicycle"], "--kernel batch",
                              "integrator model only", "vehicle.model is unicycle")
         self.assert_rejected(["--set", "vehicle.model=car"], "vehicle.model", "car", "unicycle")
+        self.assert_rejected(["--kernel", "batch", "--set", "safety.min_separation=0.3"], "--kernel batch",
+                             "safety.min_separation is 0.3", "--kernel agent")
+        self.assert_rejected(["--set", "safety.keep_out=[{circle: [0, 0, -1]}]"], "safety.keep_out[0].circle[2]",
+                             "must be > 0", "got -1")
 
     def test_bad_init_and_yaml_files(self):
         with tempfile.TemporaryDirectory() as d:
