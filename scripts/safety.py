@@ -6,7 +6,7 @@ figures/safety.png into an output folder (default runs/<UTC time>-safety); --wri
 table into docs/SAFETY.md (between its GENERATED markers) and the figure into docs/figures/.
 
   scripts/safety.py [--build build] [--sizes 12,50,200] [--seeds 20] [--steps 400] [--jobs 1]
-                    [--out DIR] [--write-docs]
+                    [--out DIR] [--replot DIR] [--write-docs]
 """
 import argparse
 import concurrent.futures
@@ -106,6 +106,11 @@ def one(build, n, seed, k, law, vehicle, steps):
             "outside": s_on["vehicle_outside"], "blocked": s_on["blocked_agents"]}
 
 
+def read_text(path):
+    with open(path) as f:
+        return f.read()
+
+
 def median(v):
     v = sorted(v)
     return None if not v else (v[len(v) // 2] if len(v) % 2 else 0.5 * (v[len(v) // 2 - 1] + v[len(v) // 2]))
@@ -146,37 +151,29 @@ def figure(rows, path):
         if r["start"] not in names:
             names.append(r["start"])
     for i, name in enumerate(names):
-        on = [r["min_on"] for r in rows if r["start"] == name]
-        off = [r["min_off"] for r in rows if r["start"] == name]
-        ax.scatter([i - 0.15] * len(on), on, s=8, color="tab:blue", label="filter" if i == 0 else None)
-        ax.scatter([i + 0.15] * len(off), off, s=8, color="tab:red", label="no filter" if i == 0 else None)
-    ax.axhline(SEPARATION, color="k", lw=0.8, ls="--", label=f"safety.min_separation = {SEPARATION}")
+        def at(filtered, vehicles):
+            return [max(r["min_on" if filtered else "min_off"], 1e-7) for r in rows
+                    if r["start"] == name and (r["vehicle"] in vehicles)]
+        others = [v[0] for v in VEHICLES if v[0] != "double_integrator"]
+        for dx, filtered, vehicles, color, label in (
+                (-0.24, True, others, "tab:blue", "filter: integrator, unicycles"),
+                (-0.08, True, ["double_integrator"], "tab:orange", "filter: double integrator (no braking margin)"),
+                (0.16, False, others + ["double_integrator"], "tab:red", "no filter")):
+            v = at(filtered, vehicles)
+            ax.scatter([i + dx] * len(v), v, s=8, color=color, label=label if i == 0 else None)
+    ax.set_yscale("log")
+    ax.set_ylim(1e-7, 5)
     ax.set_xticks(range(len(names)))
     ax.set_xticklabels(names, rotation=15, fontsize=8)
     ax.set_ylabel("smallest pairwise distance over the run")
-    ax.set_yscale("symlog", linthresh=0.01)
     ax.legend(fontsize=8)
     fig.tight_layout()
     os.makedirs(os.path.dirname(path), exist_ok=True)
     fig.savefig(path, dpi=110)
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0],
-                                 usage="scripts/safety.py [--build build] [--sizes 12,50,200] [--seeds 20] "
-                                       "[--steps 400] [--jobs 1] [--out DIR] [--write-docs]")
-    ap.add_argument("--build", default=os.path.join(ROOT, "build"))
-    ap.add_argument("--sizes", default="12,50,200", help="swarm sizes, comma-separated")
-    ap.add_argument("--seeds", type=int, default=20, help="seeds per case (1..seeds)")
-    ap.add_argument("--steps", type=int, default=400)
-    ap.add_argument("--laws", default="paper,arc")
-    ap.add_argument("--vehicles", default=",".join(v[0] for v in VEHICLES))
-    ap.add_argument("--jobs", type=int, default=1, help="runs at a time")
-    ap.add_argument("--out", help="output folder (default runs/<UTC time>-safety)")
-    ap.add_argument("--write-docs", action="store_true", help="also write into docs/SAFETY.md and docs/figures/")
-    a = ap.parse_args()
-    sizes = [int(s) for s in a.sizes.split(",")]
-    vehicles = [v for v in VEHICLES if v[0] in a.vehicles.split(",")]
+def measure(a, sizes, vehicles):
+    """Every case, filtered and not: the rows of results.json."""
     jobs = [(n, seed, k, law, v) for n in sizes for k in range(5) for law in a.laws.split(",") for v in vehicles
             for seed in range(1, a.seeds + 1)]
     rows = []
@@ -187,6 +184,32 @@ def main():
             r = rows[-1]
             print(f"safety: {i + 1}/{len(futs)} {r['start']} N={r['n']} {r['law']} {r['vehicle']} seed {r['seed']}: "
                   f"min {r['min_on']:.4f} (off {r['min_off']:.4f})", file=sys.stderr, flush=True)
+    return rows
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0],
+                                 usage="scripts/safety.py [--build build] [--sizes 12,50,200] [--seeds 20] "
+                                       "[--steps 400] [--jobs 1] [--out DIR] [--replot DIR] [--write-docs]")
+    ap.add_argument("--build", default=os.path.join(ROOT, "build"))
+    ap.add_argument("--sizes", default="12,50,200", help="swarm sizes, comma-separated")
+    ap.add_argument("--seeds", type=int, default=20, help="seeds per case (1..seeds)")
+    ap.add_argument("--steps", type=int, default=400)
+    ap.add_argument("--laws", default="paper,arc")
+    ap.add_argument("--vehicles", default=",".join(v[0] for v in VEHICLES))
+    ap.add_argument("--jobs", type=int, default=1, help="runs at a time")
+    ap.add_argument("--out", help="output folder (default runs/<UTC time>-safety)")
+    ap.add_argument("--replot", metavar="DIR", help="redo the table and figure from DIR/results.json, no runs")
+    ap.add_argument("--write-docs", action="store_true", help="also write into docs/SAFETY.md and docs/figures/")
+    a = ap.parse_args()
+    sizes = [int(s) for s in a.sizes.split(",")]
+    vehicles = [v for v in VEHICLES if v[0] in a.vehicles.split(",")]
+    if a.replot:
+        with open(os.path.join(a.replot, "results.json")) as f:
+            rows = json.load(f)
+        a.out = a.out or a.replot
+    else:
+        rows = measure(a, sizes, vehicles)
     md = table(rows)
     below = [r for r in rows if r["min_on"] < SEPARATION - 1e-9]
     summary = (f"{len(rows)} runs, safety.min_separation = {SEPARATION}: {len(below)} filtered runs below it "
@@ -200,6 +223,11 @@ def main():
     with open(os.path.join(out, "table.md"), "w") as f:
         f.write(summary + "\n" + md)
     figure(rows, os.path.join(out, "figures", "safety.png"))
+    command = os.path.join(out, "command.txt")  # the command that measured, kept across --replot
+    if not a.replot:
+        with open(command, "w") as f:
+            f.write(" ".join(["scripts/safety.py"] + [x for x in sys.argv[1:] if x != "--write-docs"]) + "\n")
+    cmdline = read_text(command).strip() if os.path.exists(command) else "scripts/safety.py"
     print(summary + md)
     print(f"safety: wrote {out}", file=sys.stderr)
     if a.write_docs:
@@ -208,7 +236,6 @@ def main():
             text = f.read()
         head, rest = text.split(BEGIN)
         _, tail = rest.split(END)
-        cmdline = " ".join(["scripts/safety.py"] + sys.argv[1:])
         with open(DOC, "w") as f:
             f.write(head + BEGIN + f"`{cmdline}`: " + summary + "\n" + md + END + tail)
         print(f"safety: wrote {DOC}", file=sys.stderr)
