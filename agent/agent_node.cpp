@@ -17,6 +17,7 @@
 #include "agent_logic.hpp"
 #include "app/json.hpp"
 #include "core/params.hpp"
+#include "core/safety.hpp"
 #include "dds/convert.hpp"
 #include "dds/node.hpp"
 #include "dds/state_input.hpp"
@@ -398,6 +399,13 @@ void AgentNode::drain_commands() {
   const std::string issuer = dds::describe_issuer(s.issuer_name, s.id.issuer);
   util::log_info("following command epoch " + std::to_string(s.id.epoch) + " of " + issuer + ": " + shape +
                  (s.command.tracking.enabled ? " (tracking)" : ""));
+  // Not silently: a team that sets a separation believes its vehicles are kept apart.
+  if (core::filters(s.command))
+    util::log_warn("command epoch " + std::to_string(s.id.epoch) + " sets safety.min_separation = " +
+                   core::params::format_number(s.command.min_separation) + " and " +
+                   std::to_string(s.command.keep_out.size()) +
+                   " keep-out zones: agent processes do not apply the safety filter yet, only shapeform_sim "
+                   "does (docs/SAFETY.md)");
   if (opt_.json)
     emit({{"event", "command"}, {"epoch", s.id.epoch}, {"issuer", dds::to_string(s.id.issuer)},
           {"publisher", issuer}, {"shape", shape}, {"tracking", s.command.tracking.enabled}});

@@ -38,8 +38,8 @@ bool segments_meet(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d) {
     return v > 0.0 ? 1 : (v < 0.0 ? -1 : 0);
   };
   const auto on = [](const Vec2& p, const Vec2& q, const Vec2& r) {  // r on [p, q], collinear given
-    return std::min(p.x(), q.x()) <= r.x() && r.x() <= std::max(p.x(), q.x()) && std::min(p.y(), q.y()) <= r.y() &&
-           r.y() <= std::max(p.y(), q.y());
+    return std::min(p.x(), q.x()) <= r.x() && r.x() <= std::max(p.x(), q.x()) &&
+           std::min(p.y(), q.y()) <= r.y() && r.y() <= std::max(p.y(), q.y());
   };
   const int d1 = side(a, b, c), d2 = side(a, b, d), d3 = side(c, d, a), d4 = side(c, d, b);
   if (d1 * d2 < 0 && d3 * d4 < 0) return true;
@@ -64,7 +64,8 @@ bool in_triangle(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& p) {
 
 /// The convex hull of points, counter-clockwise (Andrew's monotone chain).
 std::vector<Vec2> hull(std::vector<Vec2> v) {
-  std::sort(v.begin(), v.end(), [](const Vec2& a, const Vec2& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
+  std::sort(v.begin(), v.end(),
+            [](const Vec2& a, const Vec2& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
   std::vector<Vec2> h(2 * v.size());
   std::size_t k = 0;
   for (std::size_t i = 0; i < v.size(); ++i) {
@@ -316,9 +317,8 @@ Vec2 closest_feasible(const Vec2& w, const std::vector<HalfPlane>& h, const Vec2
   for (const HalfPlane& k : h)
     if (k.b - k.n.dot(c) <= reach + tol(k.b)) act.push_back(&k);
   // Tightest first: the constraints most likely to bind come early, so later ones rarely move p.
-  std::sort(act.begin(), act.end(), [&c](const HalfPlane* a, const HalfPlane* b) {
-    return a->b - a->n.dot(c) < b->b - b->n.dot(c);
-  });
+  std::sort(act.begin(), act.end(),
+            [&c](const HalfPlane* a, const HalfPlane* b) { return a->b - a->n.dot(c) < b->b - b->n.dot(c); });
   for (std::size_t k = 0; k < act.size(); ++k) {
     const HalfPlane& hk = *act[k];
     if (hk.contains(p, tol(hk.b))) continue;
@@ -367,7 +367,8 @@ SafetyParams safety_params(const Command& cmd, const VehicleParams& vehicle) {
   p.min_separation = cmd.min_separation;
   p.workspace = cmd.workspace;
   const double law = cmd.max_speed > 0.0 ? cmd.max_speed * cmd.dt : 0.0;
-  const double own = vehicle.max_speed > 0.0 ? vehicle.max_speed * cmd.dt * vehicle.seconds_per_model_time : 0.0;
+  const double own =
+      vehicle.max_speed > 0.0 ? vehicle.max_speed * cmd.dt * vehicle.seconds_per_model_time : 0.0;
   p.max_step = law > 0.0 && own > 0.0 ? std::min(law, own) : std::max(law, own);
   return p;
 }
@@ -457,8 +458,8 @@ SafetyOutcome safety_filter(const SafetyParams& p, SafetyState& state, std::int3
   return out;
 }
 
-StepResult drive_safely(const VehicleParams& p, VehicleState& s, const StepResult& law, const SafetyOutcome& f,
-                        double dt, double workspace, bool& outside) {
+StepResult drive_safely(const VehicleParams& p, VehicleState& s, const StepResult& law,
+                        const SafetyOutcome& f, double dt, double workspace, bool& outside) {
   outside = false;
   const Vec2 x = s.x;
   const auto command = [&](const Vec2& point) { return StepResult{point, (point - x) / dt, law.clamped}; };
@@ -481,7 +482,8 @@ StepResult drive_safely(const VehicleParams& p, VehicleState& s, const StepResul
   for (int k = 0; k <= 8; ++k) {
     const Vec2 aim = k == 8 ? x : Vec2(x + std::ldexp(1.0, -k) * (f.x - x));
     // A double integrator lands at x + h (v0 + v1) / 2: command v1 = 2 (aim - x) / h - v0.
-    const Vec2 point = p.model == VehicleModel::DoubleIntegrator ? Vec2(x + 2.0 * (aim - x) - h * s.velocity) : aim;
+    const Vec2 point =
+        p.model == VehicleModel::DoubleIntegrator ? Vec2(x + 2.0 * (aim - x) - h * s.velocity) : aim;
     trial = s;
     r = drive(p, trial, command(point), dt, workspace);
     const double v = violation(r.x);

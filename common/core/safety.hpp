@@ -57,13 +57,13 @@ struct SafetyNeighbour {
 
 /// The filter's settings (from the command: Command::min_separation, Command::keep_out, the speed limit).
 struct SafetyParams {
-  double min_separation = 0.0;  ///< d, shape units; 0: no separation kept (zones alone, if any)
-  double max_step = 0.0;        ///< radius of the speed disc: the longest step, shape units; 0: none
-  int stuck_steps = 5;          ///< K: held steps in a row before a sidestep, and the sidestep's length
-  double stuck_fraction = 0.1;  ///< a step cut below this fraction of the law's is held
-  double stuck_min_step = 1e-3; ///< shape units: a law step shorter than this does not ask to move
-  double sidestep_deg = 60.0;   ///< clockwise turn of the wanted step while sidestepping
-  double workspace = 0.0;       ///< half-width of the workspace [-w, w]^2 the step stays in; 0: none
+  double min_separation = 0.0;   ///< d, shape units; 0: no separation kept (zones alone, if any)
+  double max_step = 0.0;         ///< radius of the speed disc: the longest step, shape units; 0: none
+  int stuck_steps = 5;           ///< K: held steps in a row before a sidestep, and the sidestep's length
+  double stuck_fraction = 0.1;   ///< a step cut below this fraction of the law's is held
+  double stuck_min_step = 1e-3;  ///< shape units: a law step shorter than this does not ask to move
+  double sidestep_deg = 60.0;    ///< clockwise turn of the wanted step while sidestepping
+  double workspace = 0.0;        ///< half-width of the workspace [-w, w]^2 the step stays in; 0: none
 };
 
 /// Whether a command's steps go through the filter: safety.min_separation > 0 or a keep-out zone.
@@ -135,13 +135,13 @@ struct SafetyState {
 
 /// What the filter did on one step.
 struct SafetyOutcome {
-  Vec2 x = Vec2::Zero();    ///< the safe new position
-  bool intervened = false;  ///< x is not the wanted position
-  bool sidestep = false;    ///< the wanted step was turned (a deadlock sidestep is under way)
+  Vec2 x = Vec2::Zero();          ///< the safe new position
+  bool intervened = false;        ///< x is not the wanted position
+  bool sidestep = false;          ///< the wanted step was turned (a deadlock sidestep is under way)
   bool sidestep_started = false;  ///< this step began a sidestep (a deadlock resolution, counted)
-  bool held = false;        ///< the law asks to move and the step was cut below stuck_fraction of it
-  int broken = 0;           ///< neighbours already closer than d: the agent stepped away from them
-  int inside_zones = 0;     ///< keep-out pieces the agent was already in (it went no deeper)
+  bool held = false;              ///< the law asks to move and the step was cut below stuck_fraction of it
+  int broken = 0;                 ///< neighbours already closer than d: the agent stepped away from them
+  int inside_zones = 0;           ///< keep-out pieces the agent was already in (it went no deeper)
   /// The neighbour whose half-plane binds at x (the nearest binding one), -1 when none does; with a
   /// zone binding instead, blocking_zone is its index.
   std::int32_t blocking_id = -1;
@@ -168,7 +168,7 @@ SafetyOutcome safety_filter(const SafetyParams& p, SafetyState& state, std::int3
 /// x) / h - v0), then the same toward points halfway, a quarter, ... of the way, then standing still;
 /// the first that lands in the cell is taken, else the one that lands nearest it. Sets `outside` when
 /// none landed in the cell.
-StepResult drive_safely(const VehicleParams& p, VehicleState& s, const StepResult& law, const SafetyOutcome& f,
-                        double dt, double workspace, bool& outside);
+StepResult drive_safely(const VehicleParams& p, VehicleState& s, const StepResult& law,
+                        const SafetyOutcome& f, double dt, double workspace, bool& outside);
 
 }  // namespace shapeform::core

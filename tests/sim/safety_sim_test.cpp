@@ -69,11 +69,16 @@ std::vector<Start> starts(int n) {
       // every pair (theta, -theta) meets head-on on the x1 axis
       {"circle folded onto a line", on_circle(n, 5.0), {"shape.kind=line", "shape.m=0", "shape.c=0"}},
       // every agent's closest point of the new line is the origin
-      {"line turned by 90 degrees", line, {"shape.kind=line", "shape.m=0", "shape.c=0", "shape.rotation_deg=90"}},
+      {"line turned by 90 degrees",
+       line,
+       {"shape.kind=line", "shape.m=0", "shape.c=0", "shape.rotation_deg=90"}},
       {"shrinking circle", on_circle(n, 7.0), {"shape.kind=circle", "shape.r0=3"}},
-      {"dense random start", dense(n, 0.3 * std::sqrt(n), kSeparation, 7), {"shape.kind=circle", "shape.r0=4"}},
+      {"dense random start",
+       dense(n, 0.3 * std::sqrt(n), kSeparation, 7),
+       {"shape.kind=circle", "shape.r0=4"}},
       // the groups meet head-on on the vertical line between them
-      {"two groups meet head-on", two_groups(n),
+      {"two groups meet head-on",
+       two_groups(n),
        {"shape.kind=line", "shape.m=0", "shape.c=0", "shape.rotation_deg=90"}},
   };
 }
@@ -89,8 +94,8 @@ sim::SimResult run(const std::string& law, const Start& s, const std::vector<std
   sets.insert(sets.end(), vehicle.begin(), vehicle.end());
   sets.push_back("safety.min_separation=" + std::to_string(d));
   sets.push_back("sim.steps=" + std::to_string(steps));
-  const config::Config cfg =
-      config::load(kSourceDir + "/config/scenarios/" + (law == "arc" ? "arc_circle" : "circle") + ".yaml", sets);
+  const config::Config cfg = config::load(
+      kSourceDir + "/config/scenarios/" + (law == "arc" ? "arc_circle" : "circle") + ".yaml", sets);
   sim::SimOptions opt;
   const auto& cv = cfg.supervisor.converge;
   opt.settle = {cv.band_abs, cv.band_rel, cv.gap_cv_max};
@@ -152,7 +157,7 @@ TEST_CASE("safety in the simulator: no pair ever comes closer than min_separatio
   CHECK(unfiltered_below >= 15);
   CHECK(converged >= 20);
   WARN("runs converged with the filter: " << converged << " of " << filtered_runs
-                                           << "; unfiltered runs below the separation: " << unfiltered_below);
+                                          << "; unfiltered runs below the separation: " << unfiltered_below);
 }
 
 TEST_CASE("safety in the simulator: off (0), every bit is the law's, and the batched kernel stays as it was",
@@ -161,9 +166,9 @@ TEST_CASE("safety in the simulator: off (0), every bit is the law's, and the bat
     const Start s = starts(12)[2];
     const sim::SimResult a = run(law, s, {}, 0.0, 200);
     // The plain run, without the safety keys at all.
-    const config::Config cfg = config::load(
-        kSourceDir + "/config/scenarios/" + (law == "arc" ? "arc_circle" : "circle") + ".yaml",
-        {"shape.kind=circle", "shape.r0=3", "sim.steps=200"});
+    const config::Config cfg =
+        config::load(kSourceDir + "/config/scenarios/" + (law == "arc" ? "arc_circle" : "circle") + ".yaml",
+                     {"shape.kind=circle", "shape.r0=3", "sim.steps=200"});
     CHECK_FALSE(core::filters(cfg.command));
     const sim::SimResult b = sim::run_simulation(cfg.command, s.x, 200);
     REQUIRE(a.final_positions.size() == b.final_positions.size());
@@ -191,7 +196,8 @@ TEST_CASE("safety in the simulator: a keep-out zone on the way is never entered,
           "[{circle: [5, 0, 1]}, {polygon: [[-3.5, 3.8], [-1.5, 3.8], [-2.5, 5.2]]}, "
           "{polygon: [[-3, -5], [-3, -3.5], [-2.4, -3.5], [-2.4, -4.6], [-1.5, -4.6], [-1.5, -5]]}]";
       const std::vector<std::string> vehicle = unicycle ? kUnicycle : std::vector<std::string>{};
-      Start s{"shrinking circle through zones", on_circle(12, 7.0),
+      Start s{"shrinking circle through zones",
+              on_circle(12, 7.0),
               {"shape.kind=circle", "shape.r0=3", "safety.keep_out=" + zones}};
       const sim::SimResult r = run(law, s, vehicle, kSeparation, 500);
       CHECK(r.separation.zone_entries == 0);
@@ -199,9 +205,9 @@ TEST_CASE("safety in the simulator: a keep-out zone on the way is never entered,
       CHECK(*r.separation.min >= kSeparation - 1e-9);
       CHECK(r.safety.interventions > 0);
       // Without the filter the same agents do cross the zones.
-      const config::Config cfg = config::load(
-          kSourceDir + "/config/scenarios/" + (law == "arc" ? "arc_circle" : "circle") + ".yaml",
-          {"shape.kind=circle", "shape.r0=3", "safety.keep_out=" + zones});
+      const config::Config cfg =
+          config::load(kSourceDir + "/config/scenarios/" + (law == "arc" ? "arc_circle" : "circle") + ".yaml",
+                       {"shape.kind=circle", "shape.r0=3", "safety.keep_out=" + zones});
       const std::vector<core::ConvexZone> pieces = core::convex_pieces(cfg.command.keep_out);
       core::CompiledCommand free = cfg.command;
       free.keep_out.clear();

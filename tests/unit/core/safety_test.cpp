@@ -2,8 +2,8 @@
 // half-planes and their stale margins, keep-out zones, a neighbour on top, and the deadlock sidestep.
 #include "core/safety.hpp"
 
-#include <catch2/catch.hpp>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -133,7 +133,7 @@ TEST_CASE("safety: the QP's answer is the brute force's (random instances)", "[s
     INFO("trial " << trial);
     REQUIRE(feasible(p, in.h, in.c, in.r, 1e-9));
     CHECK((p - in.w).norm() <= (q - in.w).norm() + 1e-9);  // no feasible candidate is nearer
-    CHECK((p - q).norm() <= 1e-6);                          // the optimum is unique
+    CHECK((p - q).norm() <= 1e-6);                         // the optimum is unique
     moved += (p - in.w).norm() > 1e-9 ? 1 : 0;
   }
   CHECK(moved > 5000);  // most instances do constrain w
@@ -160,7 +160,8 @@ TEST_CASE("safety: a feasible wanted point is returned bit for bit", "[safety]")
   CHECK(p.y() == w.y());
 }
 
-TEST_CASE("safety: the buffered Voronoi half-planes of two agents are d apart and hold both agents", "[safety]") {
+TEST_CASE("safety: the buffered Voronoi half-planes of two agents are d apart and hold both agents",
+          "[safety]") {
   std::mt19937_64 rng(13);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   for (int trial = 0; trial < 2000; ++trial) {
@@ -223,7 +224,8 @@ TEST_CASE("safety: stale neighbours moving at their bound toward the agent are n
   }
 }
 
-TEST_CASE("safety: two agents on one point are told apart by their ids and step away from each other", "[safety]") {
+TEST_CASE("safety: two agents on one point are told apart by their ids and step away from each other",
+          "[safety]") {
   SafetyParams p;
   p.min_separation = 1.0;
   p.max_step = 0.3;
@@ -278,7 +280,8 @@ TEST_CASE("safety: a non-convex polygon's convex pieces cover it exactly", "[saf
     for (const ConvexZone& z : pieces) any = any || inside(z, p);
     CHECK(any == in_polygon(l.vertices, p));
   }
-  const std::vector<ConvexZone> square = convex_pieces({polygon({Vec2(0, 0), Vec2(0, 1), Vec2(1, 1), Vec2(1, 0)})});
+  const std::vector<ConvexZone> square =
+      convex_pieces({polygon({Vec2(0, 0), Vec2(0, 1), Vec2(1, 1), Vec2(1, 0)})});
   REQUIRE(square.size() == 1);  // convex: kept whole (turned counter-clockwise)
   CHECK(square[0].vertices[1] == Vec2(1, 1));
 }
@@ -319,7 +322,8 @@ TEST_CASE("safety: an agent inside a zone goes no deeper", "[safety]") {
   CHECK(f.x.norm() >= 1.0 - 1e-12);
 }
 
-TEST_CASE("safety: two agents head-on are held, sidestep to their right, pass, and keep d all along", "[safety]") {
+TEST_CASE("safety: two agents head-on are held, sidestep to their right, pass, and keep d all along",
+          "[safety]") {
   // Each wants to reach the other's start; a symmetric deadlock for the plain filter.
   SafetyParams p;
   p.min_separation = 1.0;
@@ -368,7 +372,8 @@ TEST_CASE("safety: without the sidestep the head-on pair stays held (the test ab
   CHECK(st[0].held > 300);
 }
 
-TEST_CASE("safety: drive_safely lands every vehicle model in its cell (or stops a unicycle there)", "[safety]") {
+TEST_CASE("safety: drive_safely lands every vehicle model in its cell (or stops a unicycle there)",
+          "[safety]") {
   std::mt19937_64 rng(17);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   int inside_count = 0, trials = 0;
@@ -399,7 +404,8 @@ TEST_CASE("safety: drive_safely lands every vehicle model in its cell (or stops 
   CHECK(inside_count == trials);
 }
 
-TEST_CASE("safety: agents walked into zones for many steps (pushed onto their faces) never get in", "[safety]") {
+TEST_CASE("safety: agents walked into zones for many steps (pushed onto their faces) never get in",
+          "[safety]") {
   // The filter puts agents exactly on a zone's face; from there the next steps must still keep out
   // (a face's line, not a noisy direction to a nearest point at distance 0).
   const std::vector<KeepOutZone> zones = {circle(-3, 0, 1), l_shape(),
@@ -422,8 +428,8 @@ TEST_CASE("safety: agents walked into zones for many steps (pushed onto their fa
       const SafetyOutcome f = safety_filter(p, st, 0, x, wanted, {}, pieces);
       for (int s = 1; s <= 10; ++s)
         for (const KeepOutZone& z : zones) {
-          INFO("x " << x.transpose() << " -> " << f.x.transpose() << " wanted " << wanted.transpose() << " zone "
-                    << (&z - zones.data()));
+          INFO("x " << x.transpose() << " -> " << f.x.transpose() << " wanted " << wanted.transpose()
+                    << " zone " << (&z - zones.data()));
           REQUIRE(reference_depth(z, x + (s / 10.0) * (f.x - x)) <= 1e-9);
         }
       x = f.x;
