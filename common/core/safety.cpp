@@ -374,6 +374,7 @@ SafetyParams safety_params(const Command& cmd, const VehicleParams& vehicle) {
 }
 
 bool SafetyOutcome::in_cell(const Vec2& p) const {
+  if (still) return (p - from).norm() <= 1e-12 * (1.0 + from.norm());
   for (const HalfPlane& h : cell)
     if (!h.contains(p, tol(h.b))) return false;
   return max_step <= 0.0 || (p - from).norm() <= max_step * (1.0 + 1e-12) + 1e-15;
@@ -392,6 +393,11 @@ SafetyOutcome safety_filter(const SafetyParams& p, SafetyState& state, std::int3
   out.cell.reserve(nbrs.size() + zones.size());
   Vec2 away = Vec2::Zero();
   double nearest_broken = std::numeric_limits<double>::infinity();
+  // A stale sample's half-plane is not enough: the two agents' views differ, so their lines are not
+  // parallel. The step then stays in the disc of radius (|x_j^ - x| - margin - d) / 2 about x as well:
+  // with the neighbour doing the same (or keeping to its exact half-plane), each moves at most half the
+  // true gap beyond d, whatever the angle (|x_j^ - x| <= D + margin).
+  double reach = std::numeric_limits<double>::infinity();
   if (d > 0.0) {
     for (const SafetyNeighbour& j : nbrs) {
       bool broken = false;
@@ -401,6 +407,11 @@ SafetyOutcome safety_filter(const SafetyParams& p, SafetyState& state, std::int3
         away -= h.n;
         nearest_broken = std::min(nearest_broken, (j.x - x).norm());
       }
+      const double margin = j.max_speed * j.age_s;
+      if (!broken && margin != 0.0)
+        reach = std::min(reach, std::isfinite(margin) && margin > 0.0
+                                    ? std::max(0.0, 0.5 * ((j.x - x).norm() - margin - d))
+                                    : 0.0);
       out.cell.push_back(h);
       source.push_back(j.id);
     }
@@ -417,6 +428,13 @@ SafetyOutcome safety_filter(const SafetyParams& p, SafetyState& state, std::int3
       source.push_back(std::numeric_limits<std::int64_t>::min());
     }
   }
+  if (reach < std::numeric_limits<double>::infinity())
+    out.max_step = p.max_step > 0.0 ? std::min(p.max_step, reach) : reach;
+  const bool frozen = reach == 0.0;  // a stale neighbour too near to move at all: stand still
+  out.still = frozen;
+  const auto solve = [&](const Vec2& goal) {
+    return frozen ? x : closest_feasible(goal, out.cell, x, out.max_step);
+  };
   const Vec2 step = wanted - x;
   const double len = step.norm();
   Vec2 goal = wanted;
@@ -425,14 +443,14 @@ SafetyOutcome safety_filter(const SafetyParams& p, SafetyState& state, std::int3
     // whole missing separation), straight away from them, then kept in the cell.
     const double l = away.norm();
     const Vec2 dir = l > 0.0 ? Vec2(away / l) : Vec2(-out.cell.front().n);
-    goal = x + (p.max_step > 0.0 ? p.max_step : d - nearest_broken) * dir;
+    goal = x + (out.max_step > 0.0 ? out.max_step : d - nearest_broken) * dir;
     state.held = 0;
   } else if (state.sidestep_left > 0) {
     goal = x + turn_right(step, p.sidestep_deg);
     out.sidestep = true;
     --state.sidestep_left;
   }
-  out.x = closest_feasible(goal, out.cell, x, p.max_step);
+  out.x = solve(goal);
   if (out.broken == 0 && !out.sidestep) {
     out.held = len > p.stuck_min_step && (out.x - x).norm() < p.stuck_fraction * len;
     state.held = out.held ? state.held + 1 : 0;
@@ -440,7 +458,7 @@ SafetyOutcome safety_filter(const SafetyParams& p, SafetyState& state, std::int3
       state.held = 0;
       state.sidestep_left = p.stuck_steps - 1;  // this step is the first
       out.sidestep = out.sidestep_started = true;
-      out.x = closest_feasible(x + turn_right(step, p.sidestep_deg), out.cell, x, p.max_step);
+      out.x = solve(x + turn_right(step, p.sidestep_deg));
     }
   }
   out.intervened = !(out.x == wanted);

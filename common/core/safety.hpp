@@ -24,9 +24,14 @@
 /// programme always has a solution. A neighbour closer than d is counted (`broken`), and the agent
 /// takes the largest safe step away from it instead of the law's.
 ///
-/// Stale states (agent processes): margin_j bounds j's motion since its sample; the guarantee then
-/// rests on every agent's speed bound being honest and on ages being measured, and is measured, not
-/// proven, here (docs/SAFETY.md).
+/// Stale states (agent processes): a sample of age a from a neighbour whose speed is at most v may be
+/// v a off (margin_j = max_speed_j * age_j). The half-planes then come from two different views and
+/// are no longer parallel, so they are not enough (an antipodal swap of 16 agents seeing one-step-old
+/// states came to 0.9 d with them alone: safety_test.cpp). The step also stays in the disc of radius
+/// (|x_j^ - x_i| - margin_j - d) / 2 about x_i: since |x_j^ - x_i| <= D + margin_j, each agent moves at
+/// most half the true gap beyond d, whatever its neighbour's view, so the pair keeps d (with a fresh
+/// neighbour keeping its exact half-plane, too). This holds when every speed bound is honest and every
+/// age is measured; the price is that an agent within d + margin of a stale neighbour stands still.
 ///
 /// Deadlock: a step cut to below `stuck_fraction` of the law's while the law asks for more than
 /// `stuck_min_step` is "held"; after `stuck_steps` held steps in a row the agent turns its wanted step
@@ -150,7 +155,8 @@ struct SafetyOutcome {
   /// vehicle's motion can be checked against it (drive_safely).
   std::vector<HalfPlane> cell;
   Vec2 from = Vec2::Zero();
-  double max_step = 0.0;
+  double max_step = 0.0;  ///< the disc's radius (0: none); with stale neighbours, their discs' too
+  bool still = false;     ///< a stale neighbour too near for any step: the cell is `from` alone
   /// Whether p is in the cell (to rounding).
   bool in_cell(const Vec2& p) const;
 };
