@@ -244,6 +244,22 @@ class FleetFileTest(unittest.TestCase):
         ("schema_version: 1\nhosts: [\n", r"yaml: not valid YAML"),
     ]
 
+    def test_shipped_fleet_files(self):
+        """Every example fleet (config/fleets/*.yaml) is a valid file, listed in config/fleets/README.md."""
+        folder = source("config", "fleets")
+        with open(os.path.join(folder, "README.md")) as f:
+            readme = f.read()
+        files = sorted(n for n in os.listdir(folder) if n.endswith(".yaml"))
+        self.assertIn("robots_lan.yaml", files)
+        for name in files:
+            with self.subTest(fleet=name):
+                out, err = io.StringIO(), io.StringIO()
+                with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+                    status = fleet_reader.main([os.path.join(folder, name)])
+                self.assertEqual(status, 0, err.getvalue())
+                self.assertRegex(out.getvalue(), r"^fleet %s \d+\n" % re.escape(name[:-5]))
+                self.assertIn("`%s`" % name, readme, "config/fleets/README.md lists it")
+
     def test_bad_fleet_files_exit_2(self):
         run_dir = os.path.join(harness.CONFIG["work"], "test_bad_fleet_files_exit_2")
         shutil.rmtree(run_dir, ignore_errors=True)
