@@ -299,7 +299,11 @@ int AgentNode::run() {
     if (opt_.json) emit({{"event", "stop"}, {"ticks", ticks_}, {"signal", util::stop_signal()}, {"refused", true}});
     return 2;  // a bad command line: the id is in use
   }
-  // Leave cleanly: dispose our instances so the others drop us at once (the entities go with node_).
+  // Leave cleanly: robots are told to stop (a real one would otherwise drive on until its driver's own
+  // timeout), and our instances disposed so the others drop us at once (the entities go with node_).
+  for (const auto& l : logics_)
+    if (l->external()) l->stop_vehicle();
+  command_robots();
   if (batch_) {
     msg::AgentStateBatch gone;  // its one instance: every id it carried
     gone.first_id(ids_.front());

@@ -486,8 +486,8 @@ cleanup() {
     fi
   done
   [ $bad -gt 5 ] && say "... $bad agents exited abnormally in all"
-  # The robots last: once their agents are gone each stops by its watchdog, and their poses are
-  # recorded to the end.
+  # The robots last: their agents, leaving, commanded them zero (a killed agent's robot stops by its
+  # watchdog), and their poses are recorded to the end.
   settle "${ssh_vehicle_pids[@]+"${ssh_vehicle_pids[@]}"}"
   stop_pids "${vehicle_pids[@]+"${vehicle_pids[@]}"}"
   for i in "${!vehicle_pids[@]}"; do

@@ -11,6 +11,7 @@
 
 #include "dds/node.hpp"
 #include "dds/participant.hpp"
+#include "core/params.hpp"
 #include "dds/vehicle_io.hpp"
 #include "robot.hpp"
 #include "util/clock.hpp"
@@ -165,7 +166,7 @@ int run_vehicles(const std::vector<std::int32_t>& ids, const std::vector<core::V
   const config::VehicleLink& link = cfg.vehicle_link;
   util::log_info(std::to_string(ids.size()) + " simulated robot(s) " + std::string(core::to_string(cfg.vehicle.model)) +
                  ", poses on rt/" + link.namespace_of(ids.front()) + "/" + link.pose_topic + " ... at " +
-                 std::to_string(cfg.vehicle_sim.pose_rate_hz) + " Hz, " +
+                 core::params::format_number(cfg.vehicle_sim.pose_rate_hz) + " Hz, " +
                  dds::describe(dds::with_identity(cfg.transport, "vehicle")));
   if (opt.json) emit({{"event", "start"}, {"ids", ids}, {"namespace", link.ns}, {"pose_topic", link.pose_topic},
                       {"cmd_topic", link.cmd_topic}});

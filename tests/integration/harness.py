@@ -268,6 +268,36 @@ class SwarmTestCase(unittest.TestCase):
         self.assertEqual(dead, [], "processes that stopped")
 
 
+def launcher():
+    """scripts/launch_swarm.sh of the source tree."""
+    return os.path.join(CONFIG["source"], "scripts", "launch_swarm.sh")
+
+
+class LauncherTestCase(SwarmTestCase):
+    """Tests that run scripts/launch_swarm.sh, which may make test hosts (a fleet's lab) of its own."""
+
+    def setUp(self):
+        super().setUp()
+        self.labs = []  # test hosts a launch of this test may make
+
+    def tearDown(self):
+        # The launcher first, with time to stop its hosts' processes and remove its lab by itself; a lab
+        # still there (the launcher killed) is removed here.
+        for p in self.procs:
+            p.stop(grace=30.0)
+        try:
+            super().tearDown()
+        finally:
+            for lab in self.labs:
+                netlab.NetLab(lab, 1, "10.0.0").down()
+
+    def use_lab(self, name):
+        """A lab a launch of this test makes: one left by an earlier run that was itself killed is removed
+        first (ours by name), and whatever is left of it after the test is removed."""
+        netlab.NetLab(name, 1, "10.0.0").down()
+        self.labs.append(name)
+
+
 class LanSwarmTestCase(SwarmTestCase):
     """Processes on HOSTS test hosts (network namespaces on one private bridge, scripts/netlab.sh), each
     with the lan profile bound to its host's address. The lab is named after the test's domain and its

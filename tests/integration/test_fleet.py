@@ -54,40 +54,16 @@ def source(*parts):
     return os.path.join(harness.CONFIG["source"], *parts)
 
 
-def launcher():
-    return source("scripts", "launch_swarm.sh")
-
-
-class FleetTest(harness.SwarmTestCase):
+class FleetTest(harness.LauncherTestCase):
 
     def launch(self, fleet, args, name="launcher", env=None):
         """The launcher with --fleet FILE, its own --runs folder (RUN_DIR/runs_NAME) and the test's domain."""
-        argv = ["bash", launcher(), "--build", os.path.dirname(harness.CONFIG["bin"]), "--fleet", fleet,
+        argv = ["bash", harness.launcher(), "--build", os.path.dirname(harness.CONFIG["bin"]), "--fleet", fleet,
                 "--runs", os.path.join(self.run_dir, "runs_" + name), "--domain", str(self.domain)] + list(args)
         p = harness.Proc(name, argv, self.run_dir, env=env)
         self.procs.append(p)
         return p
 
-    def setUp(self):
-        super().setUp()
-        self.labs = []  # test hosts a launch of this test may make
-
-    def tearDown(self):
-        # The launcher first, with time to stop its hosts' processes and remove its lab by itself; a lab
-        # still there (the launcher killed) is removed here.
-        for p in self.procs:
-            p.stop(grace=30.0)
-        try:
-            super().tearDown()
-        finally:
-            for lab in self.labs:
-                harness.netlab.NetLab(lab, 1, "10.0.0").down()
-
-    def use_lab(self, name):
-        """A lab a launch of this test makes: one left by an earlier run that was itself killed is removed
-        first (ours by name), and whatever is left of it after the test is removed."""
-        harness.netlab.NetLab(name, 1, "10.0.0").down()
-        self.labs.append(name)
 
     def assert_nothing_left(self, proc, lab=None):
         self.assertEqual(harness.processes_in_group(proc.pid), [], "processes left in the launcher's group")
@@ -244,6 +220,22 @@ class FleetFileTest(unittest.TestCase):
         ("schema_version: 1\nhosts: [\n", r"yaml: not valid YAML"),
     ]
 
+    def test_shipped_fleet_files(self):
+        """Every example fleet (config/fleets/*.yaml) is a valid file, listed in config/fleets/README.md."""
+        folder = source("config", "fleets")
+        with open(os.path.join(folder, "README.md")) as f:
+            readme = f.read()
+        files = sorted(n for n in os.listdir(folder) if n.endswith(".yaml"))
+        self.assertIn("robots_lan.yaml", files)
+        for name in files:
+            with self.subTest(fleet=name):
+                out, err = io.StringIO(), io.StringIO()
+                with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+                    status = fleet_reader.main([os.path.join(folder, name)])
+                self.assertEqual(status, 0, err.getvalue())
+                self.assertRegex(out.getvalue(), r"^fleet %s \d+\n" % re.escape(name[:-5]))
+                self.assertIn("`%s`" % name, readme, "config/fleets/README.md lists it")
+
     def test_bad_fleet_files_exit_2(self):
         run_dir = os.path.join(harness.CONFIG["work"], "test_bad_fleet_files_exit_2")
         shutil.rmtree(run_dir, ignore_errors=True)
@@ -274,7 +266,7 @@ class FleetFileTest(unittest.TestCase):
                  ([write("good.yaml", self.GOOD), "-n", "3"], r"^launch_swarm: -n: not with --fleet")]
         for k, (args, message) in enumerate(cases):
             with self.subTest(args=args):
-                p = harness.Proc("launcher_%d" % k, ["bash", launcher(), "--build", os.path.dirname(harness.CONFIG["bin"]),
+                p = harness.Proc("launcher_%d" % k, ["bash", harness.launcher(), "--build", os.path.dirname(harness.CONFIG["bin"]),
                                                      "--runs", runs, "--domain", str(harness.CONFIG["domain"]),
                                                      "--scenario", "circle", "--fleet"] + args, run_dir)
                 try:

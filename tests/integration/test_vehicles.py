@@ -320,6 +320,16 @@ class VehiclesTest(harness.SwarmTestCase):
                                  for i in range(3)), 10, "every agent's status to count saturated commands")
         self.assert_all_alive([sup, robots, group])
 
+        # The agents stopped (SIGTERM) while their robots drive: the last command each robot gets is zero,
+        # so a real robot stops at once rather than at its driver's timeout.
+        commands = self.start_echo("rt/robot_0/cmd_vel", "cmd_vel_0")
+        harness.poll(lambda: nonzero(commands.events("sample")[-3:]), 10, "robot 0 to be driven")
+        group.signal(signal.SIGTERM)
+        self.assertEqual(group.wait(20), 0, "the agents stop cleanly")
+        # (The echo may print the last sample a moment after the agents exit.)
+        harness.poll(lambda: not nonzero(commands.events("sample")[-1:]), 5,
+                     "the agent's last command to robot 0 to be zero")
+
 
 if __name__ == "__main__":
     harness.main()

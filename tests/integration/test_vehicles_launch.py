@@ -40,10 +40,6 @@ supervisor: h3
 """
 
 
-def launcher():
-    return os.path.join(harness.CONFIG["source"], "scripts", "launch_swarm.sh")
-
-
 def angle_diff(a, b):
     return abs(math.remainder(a - b, 2 * math.pi))
 
@@ -58,25 +54,10 @@ def get_frame(url):
         return None
 
 
-class VehiclesLaunchTest(harness.SwarmTestCase):
-
-    def setUp(self):
-        super().setUp()
-        self.labs = []
-
-    def tearDown(self):
-        # The launcher first, with time to stop its processes and remove its lab by itself; a lab still
-        # there (the launcher killed) is removed here.
-        for p in self.procs:
-            p.stop(grace=30.0)
-        try:
-            super().tearDown()
-        finally:
-            for lab in self.labs:
-                harness.netlab.NetLab(lab, 1, "10.0.0").down()
+class VehiclesLaunchTest(harness.LauncherTestCase):
 
     def launch(self, args, name="launcher"):
-        argv = ["bash", launcher(), "--build", os.path.dirname(harness.CONFIG["bin"]),
+        argv = ["bash", harness.launcher(), "--build", os.path.dirname(harness.CONFIG["bin"]),
                 "--runs", os.path.join(self.run_dir, "runs_" + name), "--domain", str(self.domain),
                 "--vehicles", "sim", "--json"] + list(args) + [a for s in UNICYCLE for a in ("--set", s)]
         return self.start(name, argv)
@@ -169,7 +150,7 @@ class VehiclesLaunchTest(harness.SwarmTestCase):
         if why:
             self.fail("test hosts cannot be made here: " + why)  # a failure, never a silent skip
         harness.netlab.NetLab(LAB, 1, "10.0.0").down()
-        self.labs.append(LAB)
+        self.use_lab(LAB)
         fleet = self.write("fleet.yaml", FLEET)
         p = self.launch(["--fleet", fleet, "--scenario", "circle", "--timeout", "90"])
         run, summary, by_id = self.check_run(p, "circle")

@@ -1211,6 +1211,19 @@ TEST_CASE("command_settings round-trips every shipped scenario's command through
   }
 }
 
+TEST_CASE("config/robots: the robots' scenarios load as docs/ROBOTS.md says (ros2, one law step per tick)") {
+  int files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(kSourceDir + "/config/robots")) {
+    INFO(entry.path().string());
+    const Config c = load(entry.path().string());
+    ++files;
+    CHECK(c.vehicle_link.ros2());
+    CHECK(c.vehicle.max_speed > 0.0);
+    CHECK(c.vehicle.seconds_per_model_time * c.agent.rate_hz * c.command.dt == Approx(1.0));
+  }
+  CHECK(files >= 1);
+}
+
 TEST_CASE("command_settings round-trips held commands, rotations, expressions and polygons") {
   const std::vector<std::vector<std::string>> cases = {
       {"dynamics.hold=true", "shape.rotation_deg=33.3", "shape.centre=[0.1, -2]"},

@@ -38,9 +38,9 @@ dds::PoseSample a_pose() {
 }
 
 /// from_msg's verdict on m: the reason ("" when accepted); a refused message leaves `out` as it was.
-template <class Msg>
+template <class Msg, class Out = dds::PoseSample>
 std::string refusal(const Msg& m) {
-  dds::PoseSample out;
+  Out out;
   out.frame_id = "untouched";
   std::string why;
   const bool ok = dds::from_msg(m, out, why);
@@ -50,13 +50,7 @@ std::string refusal(const Msg& m) {
 }
 
 std::string twist_refusal(const dds::ros2::TwistStamped& m) {
-  dds::VelocitySample out;
-  out.frame_id = "untouched";
-  std::string why;
-  const bool ok = dds::from_msg(m, out, why);
-  CHECK(ok == why.empty());
-  if (!ok) CHECK(out.frame_id == "untouched");
-  return why;
+  return refusal<dds::ros2::TwistStamped, dds::VelocitySample>(m);
 }
 
 }  // namespace
