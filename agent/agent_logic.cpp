@@ -106,11 +106,13 @@ AgentLogic::AgentLogic(std::int32_t id, core::Vec2 start, std::shared_ptr<Neighb
 
 void AgentLogic::set_vehicle(const core::VehicleParams& p, double heading) {
   vehicle_ = p;
+  safety_params_ = core::safety_params(cmd_, vehicle_);
   vehicle_state_ = core::vehicle_start(x_, heading);
 }
 
 void AgentLogic::set_external_vehicle(const core::VehicleParams& p, ExternalVehicle ext) {
   vehicle_ = p;
+  safety_params_ = core::safety_params(cmd_, vehicle_);
   external_ = std::move(ext);
 }
 
@@ -185,6 +187,10 @@ void AgentLogic::adopt() {
   waited_ = 0;
   x_prev_ = x_;
   arc_prev_.reset();
+  safety_params_ = core::safety_params(cmd_, vehicle_);
+  zones_ = core::convex_pieces(cmd_.keep_out);
+  safety_state_ = {};
+  safety_ = {};
   if (lockstep_) {
     // A late joiner starts at the step the swarm is at, so nobody waits for its past.
     long k0 = 0;
@@ -210,6 +216,7 @@ void AgentLogic::on_state(std::int32_t id, const core::Vec2& x, std::uint64_t se
 }
 
 void AgentLogic::drop_stale(std::int64_t now_ns) {
+  now_ns_ = now_ns;
   table_->drop_stale(now_ns, has_command());
   if (target_ && now_ns - target_seen_ns_ > kTargetTimeout_ns) target_.reset();
 }
@@ -310,11 +317,57 @@ core::Vec2 AgentLogic::seen_now(const CentreFrame& f, const Snapshot& s,
   return s.x + (static_cast<double>(behind) * cmd_.dt) * f.velocity;
 }
 
+core::StepResult AgentLogic::filtered(const core::StepResult& r, std::optional<core::SafetyOutcome>& f) {
+  if (!core::filters(cmd_)) return r;
+  const dds::CommandId followed = arbiter_.id();
+  const long k = step_of(t_);
+  // A neighbour may have moved max_step per step since its state: lockstep states of this very step are
+  // exact (age 0, the simulator's synchronous update); any other is as old as the time since it was
+  // received, in periods, plus the step the neighbour may take while this agent steps.
+  const double max_speed = safety_params_.max_step / cmd_.dt;
+  snbrs_.clear();
+  for (const auto& e : table_->entries()) {
+    if (e.id == id_) continue;
+    const Snapshot* use = &e.cur;
+    if (lockstep_ && e.cur.command == followed && step_of(e.cur.model_time) > k && e.prev.command == followed)
+      use = &e.prev;
+    const bool exact = lockstep_ && use->command == followed && step_of(use->model_time) == k;
+    const double steps =
+        exact ? 0.0 : static_cast<double>(std::max<std::int64_t>(now_ns_ - e.last_seen_ns, 0)) * 1e-9 / period_s_ + 1.0;
+    snbrs_.push_back({e.id, use->x, steps * cmd_.dt, max_speed});
+  }
+  f = core::safety_filter(safety_params_, safety_state_, id_, x_, r.x, snbrs_, zones_);
+  safety_.interventions += f->intervened ? 1 : 0;
+  safety_.sidesteps += f->sidestep_started ? 1 : 0;
+  safety_.broken += static_cast<std::uint64_t>(f->broken);
+  safety_.blocked = f->held || f->sidestep;
+  safety_.blocked_by = !safety_.blocked          ? -1
+                       : f->blocking_id >= 0     ? f->blocking_id
+                       : f->blocking_zone >= 0   ? -2 - f->blocking_zone
+                                                 : -1;
+  return {f->x, (f->x - x_) / cmd_.dt, r.clamped};
+}
+
+void AgentLogic::book_gap() {
+  double gap = -1.0;
+  for (const auto& e : table_->entries())
+    if (e.id != id_) {
+      const double g = (e.cur.x - x_).norm();
+      if (gap < 0.0 || g < gap) gap = g;
+    }
+  if (gap >= 0.0 && (safety_.min_gap < 0.0 || gap < safety_.min_gap)) {
+    safety_.min_gap = gap;
+    safety_.min_gap_time = t_;
+  }
+}
+
 void AgentLogic::take_step(const core::StepResult& law) {
+  std::optional<core::SafetyOutcome> f;
+  const core::StepResult safe = filtered(law, f);
   if (external_) {
-    // A robot outside: command it toward the law's new position; it moves by itself, and the next
-    // pose says where it got to.
-    command_ = core::vehicle_command(vehicle_, vehicle_state_, law.x, cmd_.dt, external_->period_s);
+    // A robot outside: command it toward the (filtered) law's new position; it moves by itself, and the
+    // next pose says where it got to.
+    command_ = core::vehicle_command(vehicle_, vehicle_state_, safe.x, cmd_.dt, external_->period_s);
     if (command_.saturated) ++saturated_;
     if (law.clamped) ++clamped_;
     vehicle_state_.velocity = command_.world;
@@ -326,7 +379,9 @@ void AgentLogic::take_step(const core::StepResult& law) {
     return;
   }
   // The integrator without a speed limit returns the law's step bit for bit.
-  const core::StepResult r = core::drive(vehicle_, vehicle_state_, law, cmd_.dt, cmd_.workspace);
+  bool outside = false;
+  const core::StepResult r = f ? core::drive_safely(vehicle_, vehicle_state_, law, *f, cmd_.dt, cmd_.workspace, outside)
+                               : core::drive(vehicle_, vehicle_state_, law, cmd_.dt, cmd_.workspace);
   if (r.clamped) ++clamped_;
   arc_prev_ = cmd_.law == core::Law::Arc ? arc() : std::nullopt;
   x_prev_ = x_;
@@ -334,6 +389,7 @@ void AgentLogic::take_step(const core::StepResult& law) {
   v_ = r.v;
   t_ += cmd_.dt;
   target_age_ += cmd_.dt;
+  book_gap();
 }
 
 bool AgentLogic::shares_step_with(const AgentLogic& first) const {

@@ -14,6 +14,7 @@
 
 #include "core/compiled_command.hpp"
 #include "core/law.hpp"
+#include "core/safety.hpp"
 #include "core/vehicle.hpp"
 #include "protocol/command_arbiter.hpp"
 #include "protocol/samples.hpp"
@@ -36,6 +37,20 @@ struct AgentCounters {
   std::uint64_t departed = 0;          ///< neighbours dropped because they left (disposed)
   std::uint64_t samples_rejected = 0;  ///< states, commands or targets refused by validation
   std::uint64_t steps_clamped = 0;     ///< steps the law would have taken out of the workspace (or not finite)
+};
+
+/// What the safety filter (core::safety_filter, docs/SAFETY.md) did for one agent since the command it
+/// follows was adopted; all zero while the command does not filter (core::filters).
+struct SafetyFigures {
+  std::uint64_t interventions = 0;  ///< steps whose position the filter moved
+  std::uint64_t sidesteps = 0;      ///< deadlock sidesteps begun
+  std::uint64_t broken = 0;         ///< (step, neighbour) pairs found closer than safety.min_separation
+  /// The smallest distance from this agent, after a step, to a neighbour as last heard (-1: none yet),
+  /// and the model time of that step. Measured whether or not the command filters.
+  double min_gap = -1.0;
+  double min_gap_time = 0.0;
+  bool blocked = false;          ///< held or sidestepping on the last step (not where the law sends it)
+  std::int64_t blocked_by = -1;  ///< what held it: a neighbour id (>= 0), keep-out zone k as -2 - k, -1 none
 };
 
 /// The latest states heard by one process, shared by the agents it hosts: one entry per agent id
@@ -134,7 +149,8 @@ class AgentLogic {
   void count_rejected() { ++rejected_; }
 
   /// Drops neighbours unheard since now_ns - timeout, and a tracking target unheard for
-  /// kTargetTimeout_ns (the supervisor is gone): the centre then follows the command's own path on the
+  /// kTargetTimeout_ns; now_ns is also the tick's time for the next step (how old the neighbours'
+  /// states are, for the safety filter) (the supervisor is gone): the centre then follows the command's own path on the
   /// agent's model clock instead of flying off along the last target's velocity.
   void drop_stale(std::int64_t now_ns);
   static constexpr std::int64_t kTargetTimeout_ns = 1'000'000'000;
@@ -167,6 +183,12 @@ class AgentLogic {
   /// for all (the heard agents not hosted here plus the hosted ones at their positions now), then each
   /// agent's own step, as step() would book it. agents: the process's hosted agents, one table.
   static void step_shared(const std::vector<AgentLogic*>& agents);
+
+  /// The loop period, s: the safety filter takes a neighbour state received a seconds ago as
+  /// a / period_s + 1 of its steps old (the steps it may have taken since, and one more while this agent
+  /// steps), each at most the command's and the vehicle's speed bound (core::safety_params).
+  void set_period(double period_s) { period_s_ = period_s; }
+  const SafetyFigures& safety() const { return safety_; }
 
   /// The vehicle this agent drives (the robot's own: agent config), from its start position with this
   /// heading (rad). Call before the first step; without it the agent moves as the law steps it.
@@ -249,6 +271,11 @@ class AgentLogic {
   /// Drives the vehicle by the law's step r and books the result (position, velocity, model time,
   /// counters).
   void take_step(const core::StepResult& r);
+  /// The law's step r through the safety filter (the neighbours as last heard, each with its age), or r
+  /// itself when the command does not filter; books the filter's figures. f is set when it filtered.
+  core::StepResult filtered(const core::StepResult& r, std::optional<core::SafetyOutcome>& f);
+  /// Books the smallest distance from the new position to a neighbour as last heard.
+  void book_gap();
   std::int32_t id_;
   core::Vec2 x_;  ///< the vehicle's controlled point (vehicle_state_.x)
   core::Vec2 v_ = core::Vec2::Zero();
@@ -278,6 +305,13 @@ class AgentLogic {
   core::VehicleCommand command_;        ///< the external vehicle's command now
   std::uint64_t poses_refused_ = 0;
   std::uint64_t saturated_ = 0;
+  double period_s_ = 0.05;
+  std::int64_t now_ns_ = 0;                    ///< the tick's time (drop_stale)
+  core::SafetyParams safety_params_;           ///< of the command in force and the vehicle
+  std::vector<core::ConvexZone> zones_;        ///< the command's keep-out zones in convex pieces
+  core::SafetyState safety_state_;
+  std::vector<core::SafetyNeighbour> snbrs_;   ///< reused every step
+  SafetyFigures safety_;
 };
 
 /// Whether this process may publish its agent ids when another participant publishes one of them (two

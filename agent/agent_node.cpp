@@ -261,6 +261,7 @@ AgentNode::AgentNode(const std::vector<std::int32_t>& ids, const std::vector<cor
   for (std::size_t k = 0; k < ids.size(); ++k) {
     logics_.push_back(std::make_unique<AgentLogic>(ids[k], starts[k], table_, cfg.agent.lockstep, max_wait_ticks));
     AgentLogic& l = *logics_.back();
+    l.set_period(1.0 / cfg.agent.rate_hz);
     if (!link.ros2()) {
       l.set_vehicle(cfg.vehicle, core::start_heading(cfg.vehicle, ids[k], cfg.swarm.seed));
       continue;
@@ -403,13 +404,23 @@ void AgentNode::drain_commands() {
   const std::string issuer = dds::describe_issuer(s.issuer_name, s.id.issuer);
   util::log_info("following command epoch " + std::to_string(s.id.epoch) + " of " + issuer + ": " + shape +
                  (s.command.tracking.enabled ? " (tracking)" : ""));
-  // Not silently: a team that sets a separation believes its vehicles are kept apart.
-  if (core::filters(s.command))
-    util::log_warn("command epoch " + std::to_string(s.id.epoch) + " sets safety.min_separation = " +
-                   core::params::format_number(s.command.min_separation) + " and " +
-                   std::to_string(s.command.keep_out.size()) +
-                   " keep-out zones: agent processes do not apply the safety filter yet, only shapeform_sim "
-                   "does (docs/SAFETY.md)");
+  // The filter's margins against stale neighbours are their speed bound times the states' ages.
+  if (core::filters(s.command)) {
+    const core::SafetyParams sp = core::safety_params(s.command, cfg_.vehicle);
+    if (sp.max_step <= 0.0)
+      util::log_warn("command epoch " + std::to_string(s.id.epoch) +
+                     " filters steps with no speed bound (dynamics.max_speed = 0 and vehicle.max_speed = 0): the "
+                     "safety filter cannot allow for the neighbours' motion since their states were sent; set "
+                     "dynamics.max_speed (docs/SAFETY.md)");
+    else if (s.command.min_separation > 0.0 && 4.0 * sp.max_step > s.command.min_separation)
+      util::log_warn("command epoch " + std::to_string(s.id.epoch) + ": a step may be " +
+                     core::params::format_number(sp.max_step) + " long (dynamics.max_speed x integration.dt) against "
+                     "safety.min_separation = " + core::params::format_number(s.command.min_separation) +
+                     ": agents keep about d + 4 steps from one another and may stand still near each other; "
+                     "lower dynamics.max_speed to at most " +
+                     core::params::format_number(s.command.min_separation / (4.0 * s.command.dt)) +
+                     " (docs/SAFETY.md)");
+  }
   if (opt_.json)
     emit({{"event", "command"}, {"epoch", s.id.epoch}, {"issuer", dds::to_string(s.id.issuer)},
           {"publisher", issuer}, {"shape", shape}, {"tracking", s.command.tracking.enabled}});
@@ -648,6 +659,14 @@ void AgentNode::publish_status(bool json) {
     st.samples_received = k.samples_received;
     st.samples_lost = k.samples_lost;
     st.epoch = l->command_id().epoch;
+    const SafetyFigures& f = l->safety();
+    st.min_gap = f.min_gap;
+    st.min_gap_time = f.min_gap_time;
+    st.filter_interventions = f.interventions;
+    st.deadlock_sidesteps = f.sidesteps;
+    st.promises_broken = f.broken;
+    st.blocked = f.blocked;
+    st.blocked_by = static_cast<std::int32_t>(f.blocked_by);
     status_writer_.write(dds::to_msg(st));
     if (opt_.json && json)
       emit({{"event", "status"}, {"id", st.id}, {"neighbours_heard", st.neighbours_heard}, {"epoch", st.epoch},
@@ -656,7 +675,9 @@ void AgentNode::publish_status(bool json) {
             {"vehicle", dds::to_string(st.vehicle)}, {"heading", l->vehicle().heading},
             {"poses_refused", st.poses_refused}, {"commands_saturated", st.commands_saturated},
             {"control_latency_p50_us", st.control_latency_p50_us},
-            {"control_latency_p99_us", st.control_latency_p99_us}});
+            {"control_latency_p99_us", st.control_latency_p99_us}, {"min_gap", st.min_gap},
+            {"filter_interventions", st.filter_interventions}, {"deadlock_sidesteps", st.deadlock_sidesteps},
+            {"promises_broken", st.promises_broken}, {"blocked", st.blocked}, {"blocked_by", st.blocked_by}});
   }
   ages_us_.clear();
 }

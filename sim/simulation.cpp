@@ -48,6 +48,19 @@ double smallest_distance(const std::vector<core::Vec2>& x) {
     for (std::size_t j = i + 1; j < x.size(); ++j) best = std::min(best, (x[i] - x[j]).squaredNorm());
   return std::sqrt(best);
 }
+
+/// The run's safety figures into the metrics of a step (core::Metrics' run fields).
+void run_figures(core::Metrics& m, const SeparationRecord& sep, const core::Swarm& swarm) {
+  if (sep.min) {
+    m.min_separation_run = *sep.min;
+    m.min_separation_run_time = sep.model_time;
+  }
+  const core::SafetyCounts& c = swarm.safety_counts();
+  m.filter_interventions = static_cast<int>(c.interventions);
+  m.deadlock_sidesteps = static_cast<int>(c.sidesteps);
+  m.promises_broken = static_cast<int>(c.broken);
+  m.agents_blocked = swarm.blocked_agents();
+}
 }  // namespace
 
 core::Kernel auto_kernel(int agents, const core::VehicleParams& vehicle) {
@@ -97,7 +110,8 @@ SimResult run_simulation(const core::CompiledCommand& cmd, std::vector<core::Vec
       }
     // The O(N^2) metrics are only needed per step when they are written.
     const bool full = opt.metrics_csv != nullptr || opt.recorder != nullptr;
-    const core::Metrics m = core::compute_metrics(cmd, x, swarm.time(), full);
+    core::Metrics m = core::compute_metrics(cmd, x, swarm.time(), full);
+    if (separation) run_figures(m, r.separation, swarm);
     err.push_back(m.shape_error_mean.value_or(0.0));
     gap.push_back(core::uniformity(cmd, m));
     // Agents the safety filter holds from the law's step are not where the law sends them: no verdict.
@@ -116,6 +130,7 @@ SimResult run_simulation(const core::CompiledCommand& cmd, std::vector<core::Vec
     swarm.step();
   }
   r.metrics = core::compute_metrics(cmd, swarm.positions(), swarm.time());
+  if (separation) run_figures(r.metrics, r.separation, swarm);
   r.safety = swarm.safety_counts();
   r.blocked_agents = swarm.blocked_agents();
   r.blocked_by = swarm.blocked_by();

@@ -292,7 +292,7 @@ void SupervisorNode::drain_statuses(std::int64_t now) {
     dds::StatusSample s;
     std::string why;
     if (r.valid_data && dds::from_msg(r.msg, s, why) && owned(s.id, r.source, now))
-      monitor_.on_status(s.id, s.neighbours_heard, s.samples_rejected);
+      monitor_.on_status(s);
   }
 }
 

@@ -37,11 +37,50 @@ void SwarmMonitor::on_state(std::int32_t id, const core::Vec2& x, const core::Ve
   if (command.epoch > max_epoch_seen_) max_epoch_seen_ = command.epoch;
 }
 
-void SwarmMonitor::on_status(std::int32_t id, int neighbours_heard, std::uint64_t samples_rejected) {
-  const auto it = agents_.find(id);
+void SwarmMonitor::on_status(const dds::StatusSample& s) {
+  const auto it = agents_.find(s.id);
   if (it == agents_.end()) return;  // status before any state: wait for a state
-  it->second.neighbours_heard = neighbours_heard;
-  it->second.samples_rejected = samples_rejected;
+  it->second.neighbours_heard = s.neighbours_heard;
+  it->second.samples_rejected = s.samples_rejected;
+  it->second.status = s;
+}
+
+void SwarmMonitor::run_figures(core::Metrics& m, std::int64_t now_ns) const {
+  if (id_.none()) return;
+  std::optional<std::pair<double, double>> low = sampled_min_;
+  int interventions = 0, sidesteps = 0, broken = 0, blocked = 0, breaches = 0, beyond = 0;
+  bool reported = false;
+  for (const auto& [id, a] : agents_) {
+    const dds::StatusSample& st = a.status;
+    if (st.epoch != id_.epoch) continue;  // figures of another command (or no status yet)
+    reported = true;
+    if (st.min_gap >= 0.0 && (!low || st.min_gap < low->first)) low = std::make_pair(st.min_gap, st.min_gap_time);
+    interventions += static_cast<int>(st.filter_interventions);
+    sidesteps += static_cast<int>(st.deadlock_sidesteps);
+    broken += static_cast<int>(st.promises_broken);
+    breaches += static_cast<int>(st.fence_breaches);
+    if (alive(a, now_ns)) {
+      blocked += st.blocked ? 1 : 0;
+      beyond += st.beyond_fence ? 1 : 0;
+    }
+  }
+  if (low) {
+    m.min_separation_run = low->first;
+    m.min_separation_run_time = low->second;
+  }
+  if (!reported) return;
+  m.filter_interventions = interventions;
+  m.deadlock_sidesteps = sidesteps;
+  m.promises_broken = broken;
+  m.agents_blocked = blocked;
+  m.fence_breaches = breaches;
+  m.agents_beyond_fence = beyond;
+}
+
+int SwarmMonitor::blocked_count(std::int64_t now_ns) const {
+  int n = 0;
+  for (const auto& [id, a] : agents_) n += alive(a, now_ns) && a.status.epoch == id_.epoch && a.status.blocked ? 1 : 0;
+  return n;
 }
 
 void SwarmMonitor::on_departed(std::int32_t id) {
@@ -54,6 +93,7 @@ void SwarmMonitor::set_command(const core::CompiledCommand& cmd, dds::CommandId 
   id_ = id;
   detector_.set_command(cmd);  // judged against this command's shape from now on
   last_.reset();
+  sampled_min_.reset();
   hist_t_.clear();
   hist_err_.clear();
   hist_gap_.clear();
@@ -118,6 +158,7 @@ SwarmMonitor::Sample SwarmMonitor::measure(double model_time, std::int64_t now_n
     for (const auto& [id, p] : alive_positions(now_ns, model_time)) x.push_back(p);
     s.metrics = core::compute_metrics(*command_, x, model_time);
     s.spread = core::spread(x);
+    run_figures(s.metrics, now_ns);
   } else {
     s.metrics.agents = s.alive;
   }
@@ -129,7 +170,17 @@ SwarmMonitor::Sample SwarmMonitor::measure(double model_time, std::int64_t now_n
 SwarmMonitor::Sample SwarmMonitor::update(double model_time, std::int64_t now_ns) {
   Sample s = measure(model_time, now_ns);
   if (command_) {
-    if (s.alive > 0 && s.following == s.alive) {
+    const std::optional<double>& low = s.metrics.min_separation;
+    if (low && s.following == s.alive && (!sampled_min_ || *low < sampled_min_->first)) {
+      sampled_min_ = std::make_pair(*low, model_time);
+      run_figures(s.metrics, now_ns);
+    }
+    if (s.alive > 0 && s.following == s.alive && blocked_count(now_ns) > 0) {
+      detector_.blocked();  // the safety filter holds agents from their slots: never converged now
+      hist_t_.push_back(model_time);
+      hist_err_.push_back(s.metrics.shape_error_mean.value_or(0.0));
+      hist_gap_.push_back(core::uniformity(*command_, s.metrics));
+    } else if (s.alive > 0 && s.following == s.alive) {
       const auto uniform = core::uniformity(*command_, s.metrics);
       detector_.add(model_time, s.metrics.shape_error_mean, uniform, s.spread);
       hist_t_.push_back(model_time);

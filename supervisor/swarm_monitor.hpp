@@ -23,6 +23,7 @@ struct AgentView {
   // From the agent's status topic (absent until the first status).
   std::optional<int> neighbours_heard;
   std::uint64_t samples_rejected = 0;
+  dds::StatusSample status;  ///< the latest status (its safety figures are of the command status.epoch)
   dds::SourceId source;                    ///< the participant that publishes it (unknown: all zeros)
   std::vector<dds::SourceId> duplicates;   ///< other participants seen publishing its id (reported)
 };
@@ -47,7 +48,7 @@ class SwarmMonitor {
   /// A state of agent id (source: the participant that published it, see claim()).
   void on_state(std::int32_t id, const core::Vec2& x, const core::Vec2& prev_x, dds::CommandId command,
                 double model_time, std::int64_t now_ns, const dds::SourceId& source = {});
-  void on_status(std::int32_t id, int neighbours_heard, std::uint64_t samples_rejected);
+  void on_status(const dds::StatusSample& s);
   void on_departed(std::int32_t id);
 
   /// A new command is in force from now (its epoch's model clock starts at 0): the metrics measure
@@ -77,6 +78,13 @@ class SwarmMonitor {
   /// `at` when given.
   std::vector<std::pair<std::int32_t, core::Vec2>> alive_positions(std::int64_t now_ns,
                                                                    std::optional<double> at = std::nullopt) const;
+
+  /// The run's safety figures of the current command (core::Metrics' run fields) from the agents'
+  /// latest statuses of it and the metrics samples since the command; the fence and filter figures
+  /// stay null until an agent reports one.
+  void run_figures(core::Metrics& m, std::int64_t now_ns) const;
+  /// Alive agents whose latest status says the safety filter holds them (blocked).
+  int blocked_count(std::int64_t now_ns) const;
 
   /// The metrics of the alive agents at model time t. No command: all null.
   struct Sample {
@@ -111,6 +119,8 @@ class SwarmMonitor {
   std::optional<Sample> last_;
   std::vector<double> hist_t_, hist_err_;
   std::vector<std::optional<double>> hist_gap_;
+  /// The smallest metrics sample's min_separation since the command, and its model time.
+  std::optional<std::pair<double, double>> sampled_min_;
 };
 
 }  // namespace shapeform::supervisor

@@ -129,6 +129,7 @@ Recording load_recording(const fs::path& given) {
     m.epoch = epoch_of(metrics, i);
     m.agents_alive = static_cast<int>(metrics.number(i, "agents_alive"));
     for (const core::MetricInfo& info : core::kMetricTable) {
+      if (!metrics.has(std::string(info.name))) continue;  // a recording older than the metric: null
       if (const auto v = metrics.optional_number(i, std::string(info.name))) info.set(m.metrics, *v);
     }
     m.converged = metrics.number(i, "converged") != 0;

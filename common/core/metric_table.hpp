@@ -27,7 +27,15 @@
   X(ring_error, "shape units", "tracking a circle: mean | |x_i - C(t)| - scale r0 |")                    \
   X(curve_error_mean, "shape units", "mean distance to the true closest point of the shape")             \
   X(curve_error_max, "shape units", "largest distance to the true closest point of the shape")           \
-  X(arc_gap_cv, "1", "std/mean of the arc-length gaps between consecutive agents")
+  X(arc_gap_cv, "1", "std/mean of the arc-length gaps between consecutive agents")                       \
+  X(min_separation_run, "shape units", "run: smallest distance of two agents at any step since the command")  \
+  X(min_separation_run_time, "model time", "run: the model time min_separation_run happened")           \
+  X(filter_interventions, "count", "run: agent-steps the safety filter moved (docs/SAFETY.md)")          \
+  X(deadlock_sidesteps, "count", "run: deadlock sidesteps begun by the safety filter")                   \
+  X(promises_broken, "count", "run: (agent, neighbour, step) found closer than safety.min_separation")    \
+  X(agents_blocked, "count", "agents the safety filter holds from where the law sends them")            \
+  X(fence_breaches, "count", "run: excursions of agents beyond the fence (safety.fence)")               \
+  X(agents_beyond_fence, "count", "agents beyond the fence now")
 
 namespace shapeform::core {
 

@@ -24,6 +24,16 @@ struct Metrics {
   std::optional<double> curve_error_mean;  ///< mean distance to the true closest point of the shape
   std::optional<double> curve_error_max;   ///< max distance to the true closest point
   std::optional<double> arc_gap_cv;        ///< std/mean of arc-length gaps between consecutive agents
+  // The run's figures (not of one snapshot: compute_metrics leaves them null; the simulator and the
+  // supervisor fill them from the safety filter's counts and every step's positions since the command).
+  std::optional<double> min_separation_run;       ///< smallest distance of two agents at any step
+  std::optional<double> min_separation_run_time;  ///< model time of that step
+  std::optional<int> filter_interventions;        ///< agent-steps the safety filter moved
+  std::optional<int> deadlock_sidesteps;          ///< deadlock sidesteps begun
+  std::optional<int> promises_broken;             ///< (agent, neighbour, step) found closer than min_separation
+  std::optional<int> agents_blocked;              ///< agents the filter holds from where the law sends them now
+  std::optional<int> fence_breaches;              ///< excursions beyond the fence
+  std::optional<int> agents_beyond_fence;         ///< agents beyond the fence now
 };
 
 /// Single-linkage distance under which agents count as one cluster.

@@ -244,6 +244,15 @@ msg::AgentStatus to_msg(const StatusSample& s) {
   m.commands_saturated(s.commands_saturated);
   m.control_latency_p50_us(s.control_latency_p50_us);
   m.control_latency_p99_us(s.control_latency_p99_us);
+  m.min_gap(s.min_gap);
+  m.min_gap_time(s.min_gap_time);
+  m.filter_interventions(s.filter_interventions);
+  m.deadlock_sidesteps(s.deadlock_sidesteps);
+  m.promises_broken(s.promises_broken);
+  m.blocked(s.blocked);
+  m.blocked_by(s.blocked_by);
+  m.beyond_fence(s.beyond_fence);
+  m.fence_breaches(s.fence_breaches);
   return m;
 }
 
@@ -261,7 +270,14 @@ bool from_msg(const msg::AgentStatus& m, StatusSample& out, std::string& why) {
                      m.samples_rejected(), m.samples_received(), m.samples_lost(), m.age_p50_us(),
                      m.age_p99_us(),    m.cpu_percent(),     m.rss_mb(),        m.epoch(),
                      static_cast<VehicleHealth>(m.vehicle()), m.poses_refused(), m.commands_saturated(),
-                     m.control_latency_p50_us(), m.control_latency_p99_us()};
+                     m.control_latency_p50_us(), m.control_latency_p99_us(),
+                     m.min_gap(),       m.min_gap_time(),    m.filter_interventions(), m.deadlock_sidesteps(),
+                     m.promises_broken(), m.blocked(),       m.blocked_by(),    m.beyond_fence(),
+                     m.fence_breaches()};
+  if (!std::isfinite(out.min_gap) || (out.min_gap < 0.0 && out.min_gap != -1.0) || !std::isfinite(out.min_gap_time)) {
+    why = "status.min_gap: must be >= 0 or -1 (none) with a finite min_gap_time, got " + std::to_string(out.min_gap);
+    return false;
+  }
   return true;
 }
 

@@ -152,6 +152,16 @@ struct StatusSample {
   std::uint64_t commands_saturated = 0;
   double control_latency_p50_us = -1.0;  ///< -1: no command in the period
   double control_latency_p99_us = -1.0;
+  // The safety filter, since the command followed (agent::SafetyFigures)
+  double min_gap = -1.0;  ///< -1: none
+  double min_gap_time = 0.0;
+  std::uint64_t filter_interventions = 0;
+  std::uint64_t deadlock_sidesteps = 0;
+  std::uint64_t promises_broken = 0;
+  bool blocked = false;
+  std::int32_t blocked_by = -1;
+  bool beyond_fence = false;
+  std::uint64_t fence_breaches = 0;
 };
 
 /// A velocity command to a vehicle as geometry_msgs/Twist carries it: the body frame of REP 103 (x along

@@ -67,6 +67,14 @@ MetricsRow full_row() {
   row.metrics.curve_error_mean = 0.25;
   row.metrics.curve_error_max = 0.75;
   row.metrics.arc_gap_cv = 0.03125;
+  row.metrics.min_separation_run = 0.5;
+  row.metrics.min_separation_run_time = 12.5;
+  row.metrics.filter_interventions = 7;
+  row.metrics.deadlock_sidesteps = 2;
+  row.metrics.promises_broken = 0;
+  row.metrics.agents_blocked = 1;
+  row.metrics.fence_breaches = 3;
+  row.metrics.agents_beyond_fence = 0;
   row.converged = true;
   return row;
 }
@@ -87,7 +95,9 @@ TEST_CASE("open creates the directory and writes every header", "[record]") {
         std::vector<std::string>{"wall_s,model_time,epoch,agents_alive,shape_error_mean,"
                                  "shape_error_max,gap_cv,nn_cv,min_separation,clusters,extent,"
                                  "centroid_error,ring_error,curve_error_mean,curve_error_max,"
-                                 "arc_gap_cv,converged"});
+                                 "arc_gap_cv,min_separation_run,min_separation_run_time,filter_interventions,"
+                                 "deadlock_sidesteps,promises_broken,agents_blocked,fence_breaches,"
+                                 "agents_beyond_fence,converged"});
   CHECK(read_lines(dir / "positions.csv") ==
         std::vector<std::string>{"wall_s,model_time,step,epoch,agent,x1,x2"});
   CHECK(read_lines(dir / "commands.csv") ==
@@ -120,12 +130,12 @@ TEST_CASE("metrics rows: values, empty fields for undefined values", "[record]")
 
   const auto lines = read_lines(tmp.path() / "metrics.csv");
   REQUIRE(lines.size() == 4);
-  CHECK(lines[1] == "12.25,300,4,20,0.1,0.5,0.05,0.125,1.5,1,8,1e-05,2,0.25,0.75,0.03125,1");
-  CHECK(lines[2] == "1.5,10,3,1,,,,,,,,,,,,,0");
-  CHECK(lines[3] == "1.5,,3,1,,,,,,2,,,-0.75,,,,0");
+  CHECK(lines[1] == "12.25,300,4,20,0.1,0.5,0.05,0.125,1.5,1,8,1e-05,2,0.25,0.75,0.03125,0.5,12.5,7,2,0,1,3,0,1");
+  CHECK(lines[2] == "1.5,10,3,1,,,,,,,,,,,,,,,,,,,,,0");
+  CHECK(lines[3] == "1.5,,3,1,,,,,,2,,,-0.75,,,,,,,,,,,,0");
   // Every row has as many fields as the header.
   for (const std::string& line : lines) {
-    CHECK(std::count(line.begin(), line.end(), ',') == 16);
+    CHECK(std::count(line.begin(), line.end(), ',') == 24);
   }
 }
 

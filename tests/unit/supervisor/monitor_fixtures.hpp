@@ -28,4 +28,13 @@ inline void ring(supervisor::SwarmMonitor& m, int n, double radius, std::uint64_
   }
 }
 
+/// A status of agent id hearing `heard` neighbours, following `epoch`.
+inline dds::StatusSample status(std::int32_t id, int heard, std::uint64_t epoch = 1) {
+  dds::StatusSample s;
+  s.id = id;
+  s.neighbours_heard = heard;
+  s.epoch = epoch;
+  return s;
+}
+
 }  // namespace shapeform::test

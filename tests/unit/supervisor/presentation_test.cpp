@@ -22,7 +22,7 @@ SwarmMonitor swarm(std::int64_t now) {
   SwarmMonitor m(kS, {});
   m.set_command(circle(), 1, 0);
   m.on_state(0, Vec2(4, 0), Vec2(4, 0), 1, 10.0, now);
-  m.on_status(0, 3, 0);
+  m.on_status(test::status(0, 3));
   m.on_state(1, Vec2(0, 5), Vec2(0, 5), 1, 10.0, now - kS / 2);
   m.on_state(2, Vec2(-4, 0), Vec2(-4, 0), 0, 0.0, now);
   m.on_state(3, Vec2(0, -4), Vec2(0, -4), 1, 10.0, now);

@@ -56,13 +56,13 @@ TEST_CASE("wait agents: N alive, each hearing N - 1 others", "[supervisor][waits
   const Wait w(supervisor::WaitAgents{3, 5.0}, 0, {});
   r.follow(3, 4.0, {}, 0.0, 0);
   CHECK_FALSE(w.outcome(r.monitor, r.authority, 0));  // no status yet: hearing unknown
-  for (int id = 0; id < 3; ++id) r.monitor.on_status(id, 1, 0);
+  for (int id = 0; id < 3; ++id) r.monitor.on_status(status(id, 1));
   CHECK_FALSE(w.outcome(r.monitor, r.authority, 0));  // each hears only one other
   const auto late = w.outcome(r.monitor, r.authority, 5 * kS);
   REQUIRE(late);
   CHECK_FALSE(late->ok);
   CHECK(late->text == "wait agents: timed out after 5 s with 0 of 3 agents");  // unheard for 5 s: dead
-  for (int id = 0; id < 3; ++id) r.monitor.on_status(id, 2, 0);
+  for (int id = 0; id < 3; ++id) r.monitor.on_status(status(id, 2));
   const auto done = w.outcome(r.monitor, r.authority, 0);
   REQUIRE(done);
   CHECK(done->ok);
