@@ -675,7 +675,7 @@ void AgentNode::publish_status(bool json) {
             {"vehicle", dds::to_string(st.vehicle)}, {"heading", l->vehicle().heading},
             {"poses_refused", st.poses_refused}, {"commands_saturated", st.commands_saturated},
             {"control_latency_p50_us", st.control_latency_p50_us},
-            {"control_latency_p99_us", st.control_latency_p99_us}, {"min_gap", st.min_gap},
+            {"control_latency_p99_us", st.control_latency_p99_us}, {"age_p99_us", st.age_p99_us}, {"min_gap", st.min_gap},
             {"filter_interventions", st.filter_interventions}, {"deadlock_sidesteps", st.deadlock_sidesteps},
             {"promises_broken", st.promises_broken}, {"blocked", st.blocked}, {"blocked_by", st.blocked_by}});
   }

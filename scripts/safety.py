@@ -106,6 +106,93 @@ def one(build, n, seed, k, law, vehicle, steps):
             "outside": s_on["vehicle_outside"], "blocked": s_on["blocked_agents"]}
 
 
+PROC_SPEED = 0.1  # dynamics.max_speed on processes: the speed bound the stale margins rest on (docs/SAFETY.md)
+
+
+def launch(build, law, start, sets, separation, out, rate):
+    """One run of agent processes (scripts/launch_swarm.sh) from `start`: the supervisor's JSON summary,
+    with the agents' data age p99 (their status events) added as age_p99_ms."""
+    os.makedirs(out, exist_ok=True)
+    init = os.path.join(out, "init_%d.csv" % len(os.listdir(out)))
+    with open(init, "w") as f:
+        f.write("".join(f"{x!r},{y!r}\n" for x, y in start))
+    cmd = ["bash", os.path.join(ROOT, "scripts", "launch_swarm.sh"), "--build", build, "--runs", out,
+           "--scenario", LAWS[law], "--init", init, "--rate", str(rate), "--json",
+           # The arc law until it converges; the paper's law (which the separation often keeps from
+           # converging, docs/SAFETY.md) for the simulator's 400 iterations.
+           *(["--timeout", "90"] if law == "arc" else ["--steps", "400", "--timeout", "60"]),
+           *procs.sets_args(sets + [f"safety.min_separation={separation}", f"dynamics.max_speed={PROC_SPEED}"])]
+    r = procs.run(cmd, check=False)
+    lines = procs.json_lines(r.stdout)
+    summary = [e for e in lines if e.get("event") == "summary"]
+    if not summary:
+        raise RuntimeError("launch_swarm.sh gave no summary (exit %d): %s" % (r.returncode, r.stderr[-2000:]))
+    run = [e for e in lines if e.get("event") == "run"][0]["dir"]
+    ages = []
+    for name in os.listdir(run):
+        if name.startswith("agent_") and name.endswith(".out"):
+            for e in procs.json_lines(read_text(os.path.join(run, name))):
+                if e.get("event") == "status" and e.get("age_p99_us", -1) >= 0 and e.get("epoch", 0) >= 1:
+                    ages.append(e["age_p99_us"] * 1e-3)
+    j = summary[-1]
+    j["age_p99_ms"] = max(ages) if ages else None
+    return j
+
+
+def one_processes(build, n, seed, k, law, out, rate):
+    name, start, shape = starts(n, seed)[k]
+    on = launch(build, law, start, shape, SEPARATION, out, rate)
+    off = launch(build, law, start, shape, 0, out, rate)
+    val = lambda j, key: j.get(key) if j.get(key) is not None else float("nan")  # noqa: E731
+    return {"start": name, "n": n, "seed": seed, "law": law, "vehicle": "integrator (processes)",
+            "min_on": val(on, "min_separation_run"), "min_off": val(off, "min_separation_run"),
+            "converged_on": on["converged"], "converged_off": off["converged"],
+            "time_on": on["model_time"] if on["converged"] else None,
+            "time_off": off["model_time"] if off["converged"] else None,
+            "verdict_on": on.get("verdict"), "interventions": on.get("filter_interventions") or 0,
+            "sidesteps": on.get("deadlock_sidesteps") or 0, "blocked": on.get("agents_blocked") or 0,
+            "age_p99_ms": on.get("age_p99_ms")}
+
+
+def table_processes(rows, rate):
+    out = [f"| start | N | law | min separation (filter) | min separation (no filter) | converged (filter / none) "
+           f"| median model time to converge (filter / none) | sidesteps per run | agents blocked at the end | "
+           f"data age p99, ms (period {1000 / rate:.0f} ms) |",
+           "|---|---|---|---|---|---|---|---|---|---|"]
+    keys = []
+    for r in rows:
+        if (r["start"], r["n"], r["law"]) not in keys:
+            keys.append((r["start"], r["n"], r["law"]))
+    fmt = lambda v: "–" if v is None else f"{v:.0f}"  # noqa: E731
+    for k in keys:
+        g = [r for r in rows if (r["start"], r["n"], r["law"]) == k]
+        ages = [r["age_p99_ms"] for r in g if r["age_p99_ms"] is not None]
+        age = f"{max(ages):.1f}" if ages else "–"
+        out.append(f"| {k[0]} | {k[1]} | {k[2]} | {min(r['min_on'] for r in g):.4f} | "
+                   f"{min(r['min_off'] for r in g):.4f} | {sum(r['converged_on'] for r in g)}/{len(g)} / "
+                   f"{sum(r['converged_off'] for r in g)}/{len(g)} | "
+                   f"{fmt(median([r['time_on'] for r in g if r['time_on'] is not None]))} / "
+                   f"{fmt(median([r['time_off'] for r in g if r['time_off'] is not None]))} | "
+                   f"{sum(r['sidesteps'] for r in g) / len(g):.1f} | {sum(r['blocked'] for r in g)} | "
+                   f"{age} |")
+    return "\n".join(out) + "\n"
+
+
+def measure_processes(a, sizes):
+    """Every case on agent processes, filtered and not, one run at a time (they share the host's cores)."""
+    out = a.out or os.path.join(ROOT, "runs", datetime.datetime.utcnow().strftime("%Y%m%dT%H%M%SZ") + "-safety-processes")
+    jobs = [(n, seed, k, law) for n in sizes for k in range(5) for law in a.laws.split(",")
+            for seed in range(1, a.seeds + 1)]
+    rows = []
+    for i, (n, seed, k, law) in enumerate(jobs):
+        rows.append(one_processes(a.build, n, seed, k, law, os.path.join(out, "launches"), a.rate))
+        r = rows[-1]
+        print(f"safety: {i + 1}/{len(jobs)} processes {r['start']} N={n} {law} seed {seed}: min {r['min_on']:.4f} "
+              f"(off {r['min_off']:.4f}), converged {r['converged_on']} / {r['converged_off']}, "
+              f"data age p99 {r['age_p99_ms']} ms", file=sys.stderr, flush=True)
+    return rows, out
+
+
 def read_text(path):
     with open(path) as f:
         return f.read()
@@ -201,7 +288,13 @@ def main():
     ap.add_argument("--out", help="output folder (default runs/<UTC time>-safety)")
     ap.add_argument("--replot", metavar="DIR", help="redo the table and figure from DIR/results.json, no runs")
     ap.add_argument("--write-docs", action="store_true", help="also write into docs/SAFETY.md and docs/figures/")
+    ap.add_argument("--processes", action="store_true",
+                    help="agent processes (scripts/launch_swarm.sh, the integrator, free running) instead of the "
+                         "simulator: default sizes 12,50 and 2 seeds")
+    ap.add_argument("--rate", type=float, default=50.0, help="with --processes: the agents' loop rate, Hz")
     a = ap.parse_args()
+    if a.processes:
+        return main_processes(a)
     sizes = [int(s) for s in a.sizes.split(",")]
     vehicles = [v for v in VEHICLES if v[0] in a.vehicles.split(",")]
     if a.replot:
@@ -235,9 +328,46 @@ def main():
         with open(DOC) as f:
             text = f.read()
         head, rest = text.split(BEGIN)
-        _, tail = rest.split(END)
+        _, tail = rest.split(END, 1)
         with open(DOC, "w") as f:
             f.write(head + BEGIN + f"`{cmdline}`: " + summary + "\n" + md + END + tail)
+        print(f"safety: wrote {DOC}", file=sys.stderr)
+    return 0
+
+
+def main_processes(a):
+    sizes = [int(s) for s in (a.sizes if a.sizes != "12,50,200" else "12,50").split(",")]
+    if a.seeds == 20:
+        a.seeds = 2
+    if a.replot:
+        with open(os.path.join(a.replot, "results.json")) as f:
+            rows = json.load(f)
+        out = a.replot
+    else:
+        rows, out = measure_processes(a, sizes)
+    md = table_processes(rows, a.rate)
+    below = [r for r in rows if r["min_on"] < SEPARATION - 1e-9]
+    ages = [r["age_p99_ms"] for r in rows if r["age_p99_ms"] is not None]
+    summary = (f"{len(rows)} cases on agent processes at {a.rate:g} Hz, safety.min_separation = {SEPARATION}, "
+               f"dynamics.max_speed = {PROC_SPEED}: {len(below)} filtered runs below it (smallest "
+               f"{min(r['min_on'] for r in rows):.4f}); without the filter {sum(r['min_off'] < SEPARATION for r in rows)} "
+               f"below it (smallest {min(r['min_off'] for r in rows):.4f}); data age p99 at most "
+               f"{max(ages) if ages else float('nan'):.1f} ms.\n")
+    os.makedirs(out, exist_ok=True)
+    with open(os.path.join(out, "results.json"), "w") as f:
+        json.dump(rows, f, indent=1)
+    with open(os.path.join(out, "table.md"), "w") as f:
+        f.write(summary + "\n" + md)
+    cmdline = " ".join(["scripts/safety.py"] + [x for x in sys.argv[1:] if x != "--write-docs"])
+    print(summary + md)
+    if a.write_docs:
+        begin, end = BEGIN.replace("-->", "(processes) -->"), END
+        with open(DOC) as f:
+            text = f.read()
+        head, rest = text.split(begin)
+        _, tail = rest.split(end, 1)
+        with open(DOC, "w") as f:
+            f.write(head + begin + f"`{cmdline}`: " + summary + "\n" + md + end + tail)
         print(f"safety: wrote {DOC}", file=sys.stderr)
     return 0
 
