@@ -19,6 +19,15 @@ enum class Law {
 std::string_view to_string(Law l);
 bool parse_law(std::string_view name, Law& out);
 
+/// What an agent found beyond the geofence does (`safety.breach_action`; docs/SAFETY.md, "Geofence").
+enum class BreachAction {
+  Hold,   ///< the agent stops and the supervisor holds the whole swarm (as the console's `hold`)
+  Stop,   ///< that agent stops until the next command
+  Return  ///< the agent heads straight back to core::fence_return_point, then follows the law again
+};
+std::string_view to_string(BreachAction a);
+bool parse_breach_action(std::string_view name, BreachAction& out);
+
 /// Tracking: the shape's centre follows a path; the shape is drawn around C(t).
 struct Tracking {
   bool enabled = false;
@@ -28,6 +37,7 @@ struct Tracking {
 
 /// The full command an agent follows (what the supervisor publishes).
 struct Command {
+  using BreachAction = core::BreachAction;  ///< also spelled Command::BreachAction
   ShapeSpec shape;
   Tracking tracking;
   Gains gains;
@@ -45,6 +55,15 @@ struct Command {
   double min_separation = 0.0;
   /// Regions no agent enters (core::safety_filter keeps every step out of them).
   std::vector<KeepOutZone> keep_out;
+  /// The geofence: a convex polygon the agents stay inside (counter-clockwise or clockwise), in shape
+  /// units, world frame; empty: the workspace box [-workspace, workspace]^2 is the fence. Checked by
+  /// core::fence_problems (fence.hpp).
+  std::vector<Vec2> fence;
+  /// Shape units: the filter keeps every step this far inside the fence; an agent beyond the fence
+  /// itself is a breach (core::beyond_fence > 0).
+  double fence_margin = 0.0;
+  /// What an agent found beyond the fence does.
+  BreachAction breach_action = BreachAction::Hold;
   Law law = Law::Paper;
   ArcParams arc;
   /// Held (the console's hold / stop): every agent keeps its position (velocity 0) and its model

@@ -7,6 +7,12 @@ std::string_view to_string(Law l) { return params::name_of(params::kLawNames, l)
 
 bool parse_law(std::string_view name, Law& out) { return params::parse_name(params::kLawNames, name, out); }
 
+std::string_view to_string(BreachAction a) { return params::name_of(params::kBreachActionNames, a); }
+
+bool parse_breach_action(std::string_view name, BreachAction& out) {
+  return params::parse_name(params::kBreachActionNames, name, out);
+}
+
 std::string_view to_string(ShapeKind kind) { return params::name_of(params::kShapeKindNames, kind); }
 
 bool parse_shape_kind(std::string_view name, ShapeKind& out) {

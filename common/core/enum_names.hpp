@@ -18,6 +18,8 @@ inline constexpr Name<CentrePath::Kind> kPathKindNames[] = {{CentrePath::Kind::F
 inline constexpr Name<Integrator> kIntegratorNames[] = {{Integrator::Euler, "euler"},
                                                         {Integrator::RK4, "rk4"}};
 inline constexpr Name<Law> kLawNames[] = {{Law::Paper, "paper"}, {Law::Arc, "arc"}};
+inline constexpr Name<BreachAction> kBreachActionNames[] = {
+    {BreachAction::Hold, "hold"}, {BreachAction::Stop, "stop"}, {BreachAction::Return, "return"}};
 inline constexpr Name<VehicleModel> kVehicleModelNames[] = {{VehicleModel::Integrator, "integrator"},
                                                             {VehicleModel::DoubleIntegrator, "double_integrator"},
                                                             {VehicleModel::Unicycle, "unicycle"}};

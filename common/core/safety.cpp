@@ -5,6 +5,8 @@
 #include <limits>
 #include <numeric>
 
+#include "fence.hpp"
+
 namespace shapeform::core {
 
 namespace {
@@ -360,12 +362,14 @@ Vec2 closest_feasible(const Vec2& w, const std::vector<HalfPlane>& h, const Vec2
   return p;
 }
 
-bool filters(const Command& cmd) { return cmd.min_separation > 0.0 || !cmd.keep_out.empty(); }
+bool filters(const Command& cmd) {
+  return cmd.min_separation > 0.0 || !cmd.keep_out.empty() || !cmd.fence.empty() || cmd.fence_margin > 0.0;
+}
 
 SafetyParams safety_params(const Command& cmd, const VehicleParams& vehicle) {
   SafetyParams p;
   p.min_separation = cmd.min_separation;
-  p.workspace = cmd.workspace;
+  p.fence = fence_half_planes(cmd);
   const double law = cmd.max_speed > 0.0 ? cmd.max_speed * cmd.dt : 0.0;
   const double own =
       vehicle.max_speed > 0.0 ? vehicle.max_speed * cmd.dt * vehicle.seconds_per_model_time : 0.0;
@@ -422,11 +426,11 @@ SafetyOutcome safety_filter(const SafetyParams& p, SafetyState& state, std::int3
     source.push_back(-1 - static_cast<std::int64_t>(z.zone));
     if (in) ++out.inside_zones;
   }
-  if (p.workspace > 0.0) {  // the workspace's four sides (x is inside: the law keeps it there)
-    for (const Vec2& n : {Vec2(1, 0), Vec2(-1, 0), Vec2(0, 1), Vec2(0, -1)}) {
-      out.cell.push_back({n, std::max(p.workspace, n.dot(x))});
-      source.push_back(std::numeric_limits<std::int64_t>::min());
-    }
+  // The fence's sides shrunk by its margin; one that x breaks (an agent outside: pushed by a vehicle's
+  // momentum, placed there, a fence moved under it) becomes "go no further out", so x stays in the cell.
+  for (const HalfPlane& h : p.fence) {
+    out.cell.push_back({h.n, std::max(h.b, h.n.dot(x))});
+    source.push_back(std::numeric_limits<std::int64_t>::min());
   }
   if (reach < std::numeric_limits<double>::infinity())
     out.max_step = p.max_step > 0.0 ? std::min(p.max_step, reach) : reach;

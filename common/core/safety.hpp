@@ -1,7 +1,8 @@
 #pragma once
 /// The safety filter of one agent's step (issue 27): the law's wanted new position moved as little as
-/// possible so that the agent keeps `safety.min_separation` from every neighbour it hears and stays out
-/// of every keep-out zone (`safety.keep_out`).
+/// possible so that the agent keeps `safety.min_separation` from every neighbour it hears, stays out
+/// of every keep-out zone (`safety.keep_out`) and inside the geofence shrunk by its margin
+/// (`safety.fence`, `safety.fence_margin`; fence.hpp).
 ///
 /// Method: buffered Voronoi cells (Zhou, Wang, Bandyopadhyay, Schwager, "Fast, on-line collision
 /// avoidance for dynamic vehicles using buffered Voronoi cells", RA-L 2017). Agent i at x_i hearing
@@ -47,6 +48,7 @@
 #include <vector>
 
 #include "command.hpp"
+#include "half_plane.hpp"
 #include "types.hpp"
 #include "vehicle.hpp"
 
@@ -68,24 +70,21 @@ struct SafetyParams {
   double stuck_fraction = 0.1;   ///< a step cut below this fraction of the law's is held
   double stuck_min_step = 1e-3;  ///< shape units: a law step shorter than this does not ask to move
   double sidestep_deg = 60.0;    ///< clockwise turn of the wanted step while sidestepping
-  double workspace = 0.0;        ///< half-width of the workspace [-w, w]^2 the step stays in; 0: none
+  /// The fence shrunk by its margin (core::fence_half_planes: the workspace box's 4 sides, or one per
+  /// fence edge) that the step stays in; empty: none. A side that x itself breaks becomes "go no
+  /// further out" (n . p <= n . x), so an agent outside is never pushed further out and always has a step.
+  std::vector<HalfPlane> fence;
 };
 
-/// Whether a command's steps go through the filter: safety.min_separation > 0 or a keep-out zone.
-/// Otherwise the law's steps are taken bit for bit.
+/// Whether a command's steps go through the filter: safety.min_separation > 0, a keep-out zone, a
+/// fence polygon or a fence margin > 0. Otherwise the law's steps are taken bit for bit (the law alone
+/// keeps to the workspace box: core::keep_inside).
 bool filters(const Command& cmd);
 
-/// The filter's settings for a command and the vehicle that moves the agent: d and the workspace from
-/// the command, the speed disc the tighter of the command's max_speed * dt and the vehicle's
-/// max_speed * dt * seconds_per_model_time (each 0 = none).
+/// The filter's settings for a command and the vehicle that moves the agent: d and the fence (shrunk by
+/// its margin: fence_half_planes) from the command, the speed disc the tighter of the command's max_speed *
+/// dt and the vehicle's max_speed * dt * seconds_per_model_time (each 0 = none).
 SafetyParams safety_params(const Command& cmd, const VehicleParams& vehicle);
-
-/// A half-plane n . p <= b (|n| = 1).
-struct HalfPlane {
-  Vec2 n = Vec2::UnitX();
-  double b = 0.0;
-  bool contains(const Vec2& p, double tol = 0.0) const { return n.dot(p) <= b + tol; }
-};
 
 /// A convex piece of a keep-out zone: a circle, or a convex polygon (counter-clockwise).
 struct ConvexZone {

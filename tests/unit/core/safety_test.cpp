@@ -8,6 +8,8 @@
 #include <limits>
 #include <random>
 
+#include "core/fence.hpp"
+
 using namespace shapeform::core;
 
 namespace {
@@ -506,4 +508,71 @@ TEST_CASE(
     }
   }
   CHECK(arrived_runs >= 1);
+}
+
+TEST_CASE("safety: no step leaves the fence shrunk by its margin, nor crosses out on its way",
+          "[safety][fence]") {
+  Command c;
+  c.fence = {Vec2(-4, -3), Vec2(3, -4), Vec2(5, 1), Vec2(0, 5), Vec2(-5, 2)};
+  c.fence_margin = 0.5;
+  const std::vector<ConvexZone> pieces = convex_pieces({circle(0, 0, 1)});
+  std::mt19937_64 rng(31);
+  for (const bool box : {false, true}) {
+    Command cmd = c;
+    if (box) cmd.fence.clear(), cmd.workspace = 4.0;
+    SafetyParams p = safety_params(cmd, {});
+    p.max_step = 2.0;
+    const std::vector<HalfPlane> inner = fence_half_planes(cmd);
+    int steps = 0, intervened = 0;
+    for (int trial = 0; trial < 3000; ++trial) {
+      // A walk of a few steps from a point inside the shrunk fence, wanting to go anywhere.
+      Vec2 x = random_vec(rng, 5.0);
+      bool in = true;
+      for (const HalfPlane& h : inner) in = in && h.contains(x);
+      if (!in || x.norm() <= 1.0) continue;
+      SafetyState st;
+      for (int k = 0; k < 5; ++k, ++steps) {
+        const SafetyOutcome f = safety_filter(p, st, 0, x, x + random_vec(rng, 4.0), {}, pieces);
+        intervened += f.intervened ? 1 : 0;
+        for (int j = 0; j <= 10; ++j)
+          for (const HalfPlane& h : inner) CHECK(h.contains(x + (j / 10.0) * (f.x - x), 1e-9));
+        CHECK(beyond_fence(cmd, f.x) == 0.0);
+        x = f.x;
+      }
+    }
+    CHECK(steps > 1000);
+    CHECK(intervened > steps / 4);
+  }
+}
+
+TEST_CASE("safety: an agent outside the fence is never pushed further out, and always has a step",
+          "[safety][fence]") {
+  Command c;
+  c.fence = {Vec2(-4, -3), Vec2(3, -4), Vec2(5, 1), Vec2(0, 5), Vec2(-5, 2)};
+  c.fence_margin = 0.5;
+  std::mt19937_64 rng(32);
+  for (const bool box : {false, true}) {
+    Command cmd = c;
+    if (box) cmd.fence.clear(), cmd.workspace = 4.0;
+    const SafetyParams p = safety_params(cmd, {});
+    const std::vector<HalfPlane> inner = fence_half_planes(cmd);
+    int outside = 0;
+    for (int trial = 0; trial < 3000; ++trial) {
+      const Vec2 x = random_vec(rng, 9.0);
+      if (beyond_fence(cmd, x) == 0.0) continue;
+      ++outside;
+      SafetyState st;
+      const SafetyOutcome f = safety_filter(p, st, 0, x, x + random_vec(rng, 4.0), {}, {});
+      CHECK(f.in_cell(f.x));
+      // Past no side further than it was (n . p <= max(b, n . x)); with the box's right angles that
+      // is no further from the fence either.
+      for (const HalfPlane& h : inner) CHECK(h.n.dot(f.x) <= std::max(h.b, h.n.dot(x)) + 1e-9);
+      if (box) CHECK(beyond_fence(cmd, f.x) <= beyond_fence(cmd, x) + 1e-9);
+      // Wanting to go back to the return point, it gets there (no other constraint binds).
+      SafetyState back;
+      const Vec2 home = fence_return_point(cmd, x);
+      CHECK((safety_filter(p, back, 0, x, home, {}, {}).x - home).norm() < 1e-9);
+    }
+    CHECK(outside > 1000);
+  }
 }
