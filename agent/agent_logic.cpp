@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <limits>
 
+#include "core/fence.hpp"
 #include "core/law.hpp"
 #include "core/swarm.hpp"
 
@@ -191,6 +192,9 @@ void AgentLogic::adopt() {
   zones_ = core::convex_pieces(cmd_.keep_out);
   safety_state_ = {};
   safety_ = {};
+  // Any new command releases a fence stop; an agent still outside the fence first returns inside.
+  beyond_ = core::beyond_fence(cmd_, x_) > 0.0;
+  fence_ = beyond_ ? FenceState::Returning : FenceState::Inside;
   if (lockstep_) {
     // A late joiner starts at the step the swarm is at, so nobody waits for its past.
     long k0 = 0;
@@ -249,6 +253,7 @@ std::optional<double> AgentLogic::arc() const {
 }
 
 bool AgentLogic::step() {
+  if (has_command()) check_fence();
   if (!has_command() || cmd_.hold) {
     // Before any command, and while held: stay put, and model time (with the tracked centre and
     // the lockstep step count) stands still.
@@ -256,6 +261,18 @@ bool AgentLogic::step() {
     core::stop(vehicle_state_);
     command_ = {};
     return false;
+  }
+  if (fence_ == FenceState::Stopped) {
+    // Stopped by a breach (stop, or hold until the supervisor holds everyone): as held.
+    v_ = core::Vec2::Zero();
+    core::stop(vehicle_state_);
+    command_ = {};
+    return false;
+  }
+  if (fence_ == FenceState::Returning) {
+    take_step(return_step());
+    if (returned()) fence_ = FenceState::Inside;
+    return true;
   }
   const bool arc_law = cmd_.law == core::Law::Arc;
   const dds::CommandId followed = arbiter_.id();
@@ -325,17 +342,31 @@ core::StepResult AgentLogic::filtered(const core::StepResult& r, std::optional<c
   // exact (age 0, the simulator's synchronous update); any other is as old as the time since it was
   // received, in periods, plus the step the neighbour may take while this agent steps.
   const double max_speed = safety_params_.max_step / cmd_.dt;
+  const auto age = [&](std::int64_t seen_ns) {
+    return (static_cast<double>(std::max<std::int64_t>(now_ns_ - seen_ns, 0)) * 1e-9 / period_s_ + 1.0) * cmd_.dt;
+  };
+  // A neighbour known at the last step but no longer in the table: kept while its silence is short.
+  const auto silent = [&](const Known& g) {
+    if (now_ns_ - g.seen_ns > kSilentMemory_ns) return;
+    snbrs_.push_back({g.id, g.x, age(g.seen_ns), max_speed});
+    known_next_.push_back(g);
+  };
   snbrs_.clear();
+  known_next_.clear();
+  auto g = known_.begin();
   for (const auto& e : table_->entries()) {
+    for (; g != known_.end() && g->id < e.id; ++g) silent(*g);
+    if (g != known_.end() && g->id == e.id) ++g;
     if (e.id == id_) continue;
     const Snapshot* use = &e.cur;
     if (lockstep_ && e.cur.command == followed && step_of(e.cur.model_time) > k && e.prev.command == followed)
       use = &e.prev;
     const bool exact = lockstep_ && use->command == followed && step_of(use->model_time) == k;
-    const double steps =
-        exact ? 0.0 : static_cast<double>(std::max<std::int64_t>(now_ns_ - e.last_seen_ns, 0)) * 1e-9 / period_s_ + 1.0;
-    snbrs_.push_back({e.id, use->x, steps * cmd_.dt, max_speed});
+    snbrs_.push_back({e.id, use->x, exact ? 0.0 : age(e.last_seen_ns), max_speed});
+    known_next_.push_back({e.id, e.cur.x, e.last_seen_ns});
   }
+  for (; g != known_.end(); ++g) silent(*g);
+  known_.swap(known_next_);
   f = core::safety_filter(safety_params_, safety_state_, id_, x_, r.x, snbrs_, zones_);
   safety_.interventions += f->intervened ? 1 : 0;
   safety_.sidesteps += f->sidestep_started ? 1 : 0;
@@ -346,6 +377,29 @@ core::StepResult AgentLogic::filtered(const core::StepResult& r, std::optional<c
                        : f->blocking_zone >= 0   ? -2 - f->blocking_zone
                                                  : -1;
   return {f->x, (f->x - x_) / cmd_.dt, r.clamped};
+}
+
+void AgentLogic::check_fence() {
+  const double out = core::beyond_fence(cmd_, x_);
+  if (out > 0.0 && !beyond_) {
+    ++safety_.fence_breaches;
+    breach_depth_ = out;
+    if (fence_ == FenceState::Inside)
+      fence_ = cmd_.breach_action == core::BreachAction::Return ? FenceState::Returning : FenceState::Stopped;
+  }
+  beyond_ = out > 0.0;
+  // Returned: at least fence_margin inside again (or as deep as the fence allows).
+  if (fence_ == FenceState::Returning && returned()) fence_ = FenceState::Inside;
+}
+
+bool AgentLogic::returned() const { return (core::fence_return_point(cmd_, x_) - x_).norm() <= 1e-9; }
+
+core::StepResult AgentLogic::return_step() const {
+  const core::Vec2 to = core::fence_return_point(cmd_, x_);
+  core::Vec2 step = to - x_;
+  const double longest = safety_params_.max_step;
+  if (longest > 0.0 && step.norm() > longest) step *= longest / step.norm();
+  return {x_ + step, step / cmd_.dt, false};
 }
 
 void AgentLogic::book_gap() {
@@ -393,7 +447,9 @@ void AgentLogic::take_step(const core::StepResult& law) {
 }
 
 bool AgentLogic::shares_step_with(const AgentLogic& first) const {
-  if (!has_command() || lockstep_ || first.lockstep_ || !core::shares_steps(cmd_) || table_ != first.table_)
+  // Filtered steps, and an agent dealing with a fence breach, are each taken on their own.
+  if (!has_command() || lockstep_ || first.lockstep_ || !core::shares_steps(cmd_) || table_ != first.table_ ||
+      core::filters(cmd_) || fence_ != FenceState::Inside)
     return false;
   if (command_id() != first.command_id() || t_ != first.t_ || following_target() != first.following_target())
     return false;
@@ -425,6 +481,8 @@ void AgentLogic::step_shared(const std::vector<AgentLogic*>& agents) {
     others.push_back(n);
   }
   core::agent_steps(local, hosted, others, t_local, steps);
+  // A breach found now is dealt with from the next tick on (shares_step_with is false then).
+  for (AgentLogic* a : agents) a->check_fence();
   for (std::size_t k = 0; k < agents.size(); ++k) agents[k]->take_step(steps[k]);
 }
 

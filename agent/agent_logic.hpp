@@ -51,6 +51,14 @@ struct SafetyFigures {
   double min_gap_time = 0.0;
   bool blocked = false;          ///< held or sidestepping on the last step (not where the law sends it)
   std::int64_t blocked_by = -1;  ///< what held it: a neighbour id (>= 0), keep-out zone k as -2 - k, -1 none
+  std::uint64_t fence_breaches = 0;  ///< excursions beyond the fence (core::beyond_fence > 0) begun
+};
+
+/// Where the agent stands against the fence (safety.fence, core/fence.hpp).
+enum class FenceState {
+  Inside,     ///< inside the fence (or on it)
+  Returning,  ///< heading back to core::fence_return_point (breach_action return, or a new command)
+  Stopped     ///< breach_action stop or hold: standing still until the next command
 };
 
 /// The latest states heard by one process, shared by the agents it hosts: one entry per agent id
@@ -184,11 +192,21 @@ class AgentLogic {
   /// agent's own step, as step() would book it. agents: the process's hosted agents, one table.
   static void step_shared(const std::vector<AgentLogic*>& agents);
 
+  /// How long the safety filter keeps a neighbour that fell silent (lost samples past the neighbour
+  /// timeout, a stalled or killed process, a robot without poses) as an obstacle at its last position,
+  /// its margin growing with the silence: the law forgets it at once, the filter not.
+  static constexpr std::int64_t kSilentMemory_ns = 1'000'000'000;
   /// The loop period, s: the safety filter takes a neighbour state received a seconds ago as
   /// a / period_s + 1 of its steps old (the steps it may have taken since, and one more while this agent
   /// steps), each at most the command's and the vehicle's speed bound (core::safety_params).
   void set_period(double period_s) { period_s_ = period_s; }
   const SafetyFigures& safety() const { return safety_; }
+  /// Whether the agent is beyond the fence now (at its last step or check), and what it does about it.
+  bool beyond_fence() const { return beyond_; }
+  FenceState fence_state() const { return fence_; }
+  /// The breach the last step found (the agent just went beyond the fence), cleared by reading it:
+  /// how far beyond, shape units (0: none).
+  double take_breach() { return std::exchange(breach_depth_, 0.0); }
 
   /// The vehicle this agent drives (the robot's own: agent config), from its start position with this
   /// heading (rad). Call before the first step; without it the agent moves as the law steps it.
@@ -276,6 +294,13 @@ class AgentLogic {
   core::StepResult filtered(const core::StepResult& r, std::optional<core::SafetyOutcome>& f);
   /// Books the smallest distance from the new position to a neighbour as last heard.
   void book_gap();
+  /// Checks the position against the fence before a step: a new excursion is a breach (counted, and
+  /// breach_action taken); back inside, the excursion ends.
+  void check_fence();
+  /// A step of the return inside: toward core::fence_return_point, at most the speed limit's step.
+  core::StepResult return_step() const;
+  /// Back inside: at least fence_margin inside the fence (or as deep as the fence allows).
+  bool returned() const;
   std::int32_t id_;
   core::Vec2 x_;  ///< the vehicle's controlled point (vehicle_state_.x)
   core::Vec2 v_ = core::Vec2::Zero();
@@ -311,7 +336,18 @@ class AgentLogic {
   std::vector<core::ConvexZone> zones_;        ///< the command's keep-out zones in convex pieces
   core::SafetyState safety_state_;
   std::vector<core::SafetyNeighbour> snbrs_;   ///< reused every step
+  /// The neighbours the filter knew at its last step, id-sorted, kept while silent (dropped from the
+  /// table for silence, or gone) for kSilentMemory_ns: still obstacles, their margins growing.
+  struct Known {
+    std::int32_t id;
+    core::Vec2 x;
+    std::int64_t seen_ns;
+  };
+  std::vector<Known> known_, known_next_;
   SafetyFigures safety_;
+  bool beyond_ = false;
+  FenceState fence_ = FenceState::Inside;
+  double breach_depth_ = 0.0;
 };
 
 /// Whether this process may publish its agent ids when another participant publishes one of them (two

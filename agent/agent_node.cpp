@@ -16,6 +16,7 @@
 
 #include "agent_logic.hpp"
 #include "app/json.hpp"
+#include "core/enum_names.hpp"
 #include "core/params.hpp"
 #include "core/safety.hpp"
 #include "dds/convert.hpp"
@@ -152,6 +153,8 @@ class AgentNode {
   void report();
   /// Statuses of the hosted agents; with --json also their "status" events.
   void publish_status(bool json = true);
+  /// Says that agent l went `out` beyond the fence, and what it does (safety.breach_action).
+  void report_breach(const AgentLogic& l, double out);
   /// Another participant publishes hosted agent `id`: report it; yield (stop, exit 2) if we must.
   void on_duplicate(std::int32_t id, const dds::SourceId& other, std::int64_t now);
   /// While yielding: our statuses (so a supervisor sees the duplicate too) once a reader matches,
@@ -512,12 +515,27 @@ void AgentNode::step(std::int64_t now) {
     }
   }
   for (std::size_t k = 0; k < logics_.size(); ++k) {
-    const AgentLogic& l = *logics_[k];
+    AgentLogic& l = *logics_[k];
+    if (const double out = l.take_breach(); out > 0.0) report_breach(l, out);
     if (l.steps_clamped() != clamped[k])
       throttled_.warn("clamp", "agent " + std::to_string(l.id()) +
                                    ": the command's step would leave the workspace; kept at its edge (safety.workspace = " +
                                    core::params::format_number(l.command().workspace) + ")");
   }
+}
+
+void AgentNode::report_breach(const AgentLogic& l, double out) {
+  const core::BreachAction action = l.command().breach_action;
+  const char* what = action == core::BreachAction::Return ? "returning inside"
+                     : action == core::BreachAction::Stop ? "stopped until the next command"
+                                                          : "stopped; the supervisor holds the swarm (resume to go on)";
+  util::log_warn("agent " + std::to_string(l.id()) + " is " + core::params::format_number(out) +
+                 " beyond the fence at (" + core::params::format_number(l.position().x()) + ", " +
+                 core::params::format_number(l.position().y()) + "): safety.breach_action " +
+                 std::string(core::params::name_of(core::params::kBreachActionNames, action)) + ", " + what);
+  if (opt_.json)
+    emit({{"event", "fence_breach"}, {"id", l.id()}, {"beyond", out}, {"x", l.position().x()},
+          {"y", l.position().y()}, {"action", core::params::name_of(core::params::kBreachActionNames, action)}});
 }
 
 void AgentNode::publish() {
@@ -667,6 +685,8 @@ void AgentNode::publish_status(bool json) {
     st.promises_broken = f.broken;
     st.blocked = f.blocked;
     st.blocked_by = static_cast<std::int32_t>(f.blocked_by);
+    st.beyond_fence = l->beyond_fence();
+    st.fence_breaches = f.fence_breaches;
     status_writer_.write(dds::to_msg(st));
     if (opt_.json && json)
       emit({{"event", "status"}, {"id", st.id}, {"neighbours_heard", st.neighbours_heard}, {"epoch", st.epoch},
@@ -677,7 +697,8 @@ void AgentNode::publish_status(bool json) {
             {"control_latency_p50_us", st.control_latency_p50_us},
             {"control_latency_p99_us", st.control_latency_p99_us}, {"age_p99_us", st.age_p99_us}, {"min_gap", st.min_gap},
             {"filter_interventions", st.filter_interventions}, {"deadlock_sidesteps", st.deadlock_sidesteps},
-            {"promises_broken", st.promises_broken}, {"blocked", st.blocked}, {"blocked_by", st.blocked_by}});
+            {"promises_broken", st.promises_broken}, {"blocked", st.blocked}, {"blocked_by", st.blocked_by},
+            {"beyond_fence", st.beyond_fence}, {"fence_breaches", st.fence_breaches}});
   }
   ages_us_.clear();
 }

@@ -70,6 +70,9 @@ class SupervisorNode {
   void drain_commands(std::int64_t now);
   void drain_states(std::int64_t now);
   void drain_statuses(std::int64_t now);
+  /// Agent s.id reports it is beyond the fence of the command in force: with breach_action hold, the
+  /// swarm is held (as the console's hold), said and recorded as an event.
+  void on_breach(const dds::StatusSample& s, std::int64_t now);
   /// Whether a sample of agent id from `source` is the agent's own (SwarmMonitor::claim); the first
   /// sample of another participant on an id in use is reported (log line, "duplicate" event).
   bool owned(std::int32_t id, const dds::SourceId& source, std::int64_t now);
@@ -291,9 +294,24 @@ void SupervisorNode::drain_statuses(std::int64_t now) {
   for (const auto& r : statuses_) {
     dds::StatusSample s;
     std::string why;
-    if (r.valid_data && dds::from_msg(r.msg, s, why) && owned(s.id, r.source, now))
-      monitor_.on_status(s);
+    if (!r.valid_data || !dds::from_msg(r.msg, s, why) || !owned(s.id, r.source, now)) continue;
+    monitor_.on_status(s);
+    if (s.beyond_fence && s.epoch == authority_.epoch()) on_breach(s, now);
   }
+}
+
+void SupervisorNode::on_breach(const dds::StatusSample& s, std::int64_t now) {
+  const core::CompiledCommand& cmd = authority_.current();
+  // Only the commander holds the swarm, once: the hold is a new epoch, which the agents' next statuses
+  // follow.
+  if (!authority_.own() || cmd.hold || cmd.breach_action != core::BreachAction::Hold) return;
+  const auto it = monitor_.agents().find(s.id);
+  const core::Vec2 x = it != monitor_.agents().end() ? it->second.x : core::Vec2::Zero();
+  util::log_warn("agent " + std::to_string(s.id) + " is beyond the fence at (" + core::params::format_number(x.x()) +
+                 ", " + core::params::format_number(x.y()) +
+                 "): holding the swarm (safety.breach_action hold); 'resume' releases it and the agent returns inside");
+  out_.event("fence_breach", {{"id", s.id}, {"x", x.x()}, {"y", x.y()}, {"action", "hold"}, {"epoch", s.epoch}});
+  executor_(Hold{false}, now);
 }
 
 bool SupervisorNode::owned(std::int32_t id, const dds::SourceId& source, std::int64_t now) {

@@ -737,3 +737,154 @@ TEST_CASE("free running on the line path with feed-forward is the fixed-centre s
   const Vec2 moved = core::centre_at(moving.tracking.path, static_cast<double>(steps)) - Vec2(-10, -10);
   for (int i = 0; i < 8; ++i) CHECK((ff[i] - moved - fx[i]).norm() < 1e-9);
 }
+
+namespace {
+/// The line x1 = 0 (every agent on the x1 axis has its closest point at the origin), the arc law, with
+/// a speed limit and the safety filter at separation d.
+core::CompiledCommand line_90(double d) {
+  core::Command c;
+  c.law = core::Law::Arc;
+  c.shape.kind = core::ShapeKind::Line;
+  c.shape.m = 0;
+  c.shape.c = 0;
+  c.shape.rotation = M_PI / 2;
+  c.max_speed = 0.1;
+  c.min_separation = d;
+  c.arc.k_normal = 0.5;  // config/scenarios/arc_circle.yaml's
+  c.arc.k_tangent = 1.0;
+  c.arc.spacing = 1.0;
+  return core::compile(c);
+}
+
+/// Free-running agents with a clock: period P = 20 ms, each agent ticking at its own phase, its state
+/// delivered to the others `latency` later (a fraction `loss` lost). Returns the smallest distance of
+/// two agents' true positions after any step, and the agents.
+double free_running(const core::CompiledCommand& cmd, const std::vector<Vec2>& start, int periods,
+                    std::vector<AgentLogic>& agents, std::int64_t latency = 3 * kMs, double loss = 0.0) {
+  constexpr std::int64_t P = 20 * kMs;
+  agents.clear();
+  for (int i = 0; i < static_cast<int>(start.size()); ++i) {
+    agents.emplace_back(i, start[i], 60 * kMs);
+    agents.back().set_period(1e-9 * static_cast<double>(P));
+  }
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<std::int64_t> phase(0, P - 1);
+  std::bernoulli_distribution lost(loss);
+  std::vector<std::int64_t> offset;
+  for (std::size_t i = 0; i < agents.size(); ++i) offset.push_back(phase(rng));
+  struct Delivery {
+    std::int64_t at;
+    int from;
+    Vec2 x;
+    std::uint64_t seq;
+    double t;
+    std::optional<double> arc;
+  };
+  std::vector<Delivery> inflight;
+  std::vector<std::uint64_t> seq(agents.size(), 0);
+  double low = std::numeric_limits<double>::infinity();
+  // As processes do: every agent heard before the command (the supervisor waits for them).
+  for (std::size_t i = 0; i < agents.size(); ++i)
+    for (std::size_t j = 0; j < agents.size(); ++j)
+      if (i != j) agents[j].on_state(static_cast<int>(i), agents[i].position(), ++seq[i], 0);
+  for (auto& a : agents) adopt(a, cmd, 1);
+  // Ticks in time order; deliveries due before a tick are taken first.
+  std::vector<std::pair<std::int64_t, int>> ticks;
+  for (int k = 0; k < periods; ++k)
+    for (std::size_t i = 0; i < agents.size(); ++i) ticks.emplace_back(k * P + offset[i], static_cast<int>(i));
+  std::sort(ticks.begin(), ticks.end());
+  for (const auto& [now, i] : ticks) {
+    for (auto it = inflight.begin(); it != inflight.end();) {
+      if (it->at > now) {
+        ++it;
+        continue;
+      }
+      for (std::size_t j = 0; j < agents.size(); ++j)
+        if (static_cast<int>(j) != it->from)
+          agents[j].on_state(it->from, it->x, it->seq, it->at, agents[it->from].command_id(), it->arc, it->t);
+      it = inflight.erase(it);
+    }
+    AgentLogic& a = agents[static_cast<std::size_t>(i)];
+    a.drop_stale(now);
+    a.step();
+    for (std::size_t j = 0; j < agents.size(); ++j)
+      if (static_cast<int>(j) != i) low = std::min(low, (agents[j].position() - a.position()).norm());
+    if (!lost(rng)) inflight.push_back({now + latency, i, a.position(), ++seq[i], a.model_time(), a.arc()});
+  }
+  return low;
+}
+
+std::vector<Vec2> on_x_axis(int n, double gap) {
+  std::vector<Vec2> x;
+  for (int i = 0; i < n; ++i) x.emplace_back(gap * (i - (n - 1) / 2.0), 0.0);
+  return x;
+}
+}  // namespace
+
+TEST_CASE("safety filter: free-running agents with late and lost states never come closer than d", "[agent][safety]") {
+  const double d = 0.25;
+  const auto start = on_x_axis(12, 0.5);
+  std::vector<AgentLogic> agents;
+  // Without the filter the crossing comes closer (so the start does force it).
+  CHECK(free_running(line_90(0.0), start, 400, agents) < d);
+  for (const std::int64_t latency : {1 * kMs, 15 * kMs, 35 * kMs})
+    for (const double loss : {0.0, 0.3, 0.7}) {
+      CAPTURE(latency, loss);
+      CHECK(free_running(line_90(d), start, 400, agents, latency, loss) >= d - 1e-9);
+      std::uint64_t interventions = 0, broken = 0;
+      double min_gap = 1e9;
+      for (const auto& a : agents) {
+        interventions += a.safety().interventions;
+        broken += a.safety().broken;
+        REQUIRE(a.safety().min_gap >= 0.0);
+        min_gap = std::min(min_gap, a.safety().min_gap);
+      }
+      CHECK(interventions > 0);
+      CHECK(broken == 0);
+      CHECK(min_gap >= d - 1e-9);  // what each agent saw of its neighbours, as last heard
+    }
+}
+
+TEST_CASE("safety filter: lockstep agents reproduce the simulator's filtered swarm exactly", "[agent][safety][lockstep]") {
+  const core::CompiledCommand cmd = line_90(0.25);
+  const auto start = on_x_axis(8, 0.5);
+  core::Swarm swarm(cmd, start);
+  for (int k = 0; k < 60; ++k) swarm.step();
+  REQUIRE(swarm.safety_counts().interventions > 0);
+  const auto lock = run_shuffled(cmd, start, true, 60);
+  for (int i = 0; i < 8; ++i) CHECK((lock[i] - swarm.positions()[i]).norm() < 1e-12);
+}
+
+TEST_CASE("fence: a command adopted beyond the fence sends the agent back inside, the margin deep, then the law",
+          "[agent][fence]") {
+  core::Command c;
+  c.shape.kind = core::ShapeKind::Circle;
+  c.shape.r0 = 2;
+  c.max_speed = 0.5;
+  c.fence = {Vec2(-3, -3), Vec2(3, -3), Vec2(3, 3), Vec2(-3, 3)};
+  c.fence_margin = 0.2;
+  for (const auto action : {core::BreachAction::Return, core::BreachAction::Stop, core::BreachAction::Hold}) {
+    CAPTURE(static_cast<int>(action));
+    c.breach_action = action;
+    AgentLogic a(0, Vec2(5, 0), 60 * kMs);
+    REQUIRE(adopt(a, core::compile(c), 1));
+    CHECK(a.beyond_fence());
+    CHECK(a.fence_state() == agent::FenceState::Returning);  // whatever the action: return first
+    Vec2 last = a.position();
+    int steps = 0;
+    for (; steps < 20 && a.fence_state() != agent::FenceState::Inside; ++steps) {
+      a.step();
+      CHECK((a.position() - last).norm() <= 0.5 + 1e-12);  // at the speed limit
+      CHECK(a.position().x() < last.x());                  // straight back
+      last = a.position();
+    }
+    CHECK(a.fence_state() == agent::FenceState::Inside);
+    CHECK(steps == 5);  // 5 - 2.8 = 2.2 at 0.5 per step
+    CHECK(a.position().x() == Approx(2.8));
+    CHECK_FALSE(a.beyond_fence());
+    CHECK(a.safety().fence_breaches == 0);  // outside when the command came: not a new excursion
+    // Then the law, on the circle (inside the fence, which the filter keeps it in).
+    for (int k = 0; k < 100; ++k) a.step();
+    CHECK(std::abs(a.position().norm() - 2.0) < 0.01);
+  }
+}

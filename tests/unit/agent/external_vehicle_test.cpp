@@ -340,3 +340,49 @@ TEST_CASE("external vehicle: model time advances by dt per step, the law steppin
     CHECK(a.previous_position() != a.position());
   }
 }
+
+TEST_CASE("fence: a robot found beyond it is a breach, counted once, and takes the breach action",
+          "[agent][fence]") {
+  core::Command c;
+  c.shape.kind = core::ShapeKind::Circle;
+  c.shape.r0 = 2;
+  c.fence = {Vec2(-3, -3), Vec2(3, -3), Vec2(3, 3), Vec2(-3, 3)};
+  c.fence_margin = 0.2;
+  for (const auto action : {core::BreachAction::Return, core::BreachAction::Stop, core::BreachAction::Hold}) {
+    CAPTURE(static_cast<int>(action));
+    c.breach_action = action;
+    AgentLogic a(0, Vec2(0, 2), 60 * kMs);
+    AgentLogic::ExternalVehicle e = ext();
+    e.pose_jump_m = 10.0;  // the push outside is accepted as a pose
+    a.set_external_vehicle(integrator(1.0), e);
+    std::string why;
+    REQUIRE(a.on_pose(Vec2(0, 2), 0.0, "map", 0, why) == AgentLogic::PoseVerdict::Accepted);
+    REQUIRE(adopt(a, core::compile(c), 1));
+    a.step();
+    CHECK_FALSE(a.beyond_fence());
+    CHECK(a.take_breach() == 0.0);
+    // Pushed 0.5 beyond the fence.
+    REQUIRE(a.on_pose(Vec2(3.5, 0), 0.0, "map", 50 * kMs, why) == AgentLogic::PoseVerdict::Accepted);
+    a.step();
+    CHECK(a.beyond_fence());
+    CHECK(a.take_breach() == Approx(0.5));
+    CHECK(a.take_breach() == 0.0);  // reported once
+    CHECK(a.safety().fence_breaches == 1);
+    if (action == core::BreachAction::Return) {
+      CHECK(a.fence_state() == agent::FenceState::Returning);
+      CHECK(a.vehicle_command().world.x() < 0.0);  // driven back in
+    } else {
+      CHECK(a.fence_state() == agent::FenceState::Stopped);
+      CHECK(zero(a.vehicle_command()));
+    }
+    // Still outside next step: the same excursion, not a new breach.
+    REQUIRE(a.on_pose(Vec2(3.5, 0), 0.0, "map", 100 * kMs, why) == AgentLogic::PoseVerdict::Accepted);
+    a.step();
+    CHECK(a.safety().fence_breaches == 1);
+    // The next command (the operator's resume, a new shape): back inside first.
+    REQUIRE(adopt(a, core::compile(c), 2));
+    CHECK(a.fence_state() == agent::FenceState::Returning);
+    a.step();
+    CHECK(a.vehicle_command().world.x() < 0.0);
+  }
+}
