@@ -13,11 +13,11 @@ namespace shapeform::supervisor {
 struct NoOp {};
 
 /// A new command to publish. Produced by shape, track (line/circle/point), gains, integrator,
-/// max_speed and law; `command` is the caller's current command with the change applied. Shape and
-/// track results are compiled anew (shapes::compile): a shape that cannot be built is a
-/// parse error, so nothing is published.
+/// max_speed, law and safety (separation, keep_out, fence); `command` is the caller's current command with
+/// the change applied. Shape and track results are compiled anew (shapes::compile): a shape that cannot be
+/// built is a parse error, so nothing is published.
 struct SetCommand {
-  enum class What { Shape, Track, Gains, Integrator, MaxSpeed, Law };
+  enum class What { Shape, Track, Gains, Integrator, MaxSpeed, Law, Safety };
   What what = What::Shape;
   core::CompiledCommand command;
 };
@@ -32,6 +32,9 @@ struct ShowMetrics {
 };
 /// `show`: print the command in force, its epoch and who published it.
 struct Show {};
+/// `safety` or `safety show`: print the safety settings in force (separation, keep-out zones numbered
+/// as `safety keep_out remove K` takes them, fence, its margin and breach action).
+struct ShowSafety {};
 /// `progress on|off|every S`: when the loop prints its progress line.
 struct Progress {
   enum class Mode { OnChange, Off, Every };
@@ -81,8 +84,8 @@ struct Hold {
 /// `resume`: the caller publishes the command in force with Command::hold cleared (a new epoch).
 struct Resume {};
 
-using Action =
-    std::variant<NoOp, SetCommand, TrackStop, Status, ShowMetrics, WaitConverged, WaitAgents, WaitTime, Sleep,
-                 RecordStart, RecordStop, Help, Quit, StartScenario, Show, Progress, Hold, Resume>;
+using Action = std::variant<NoOp, SetCommand, TrackStop, Status, ShowMetrics, WaitConverged, WaitAgents,
+                            WaitTime, Sleep, RecordStart, RecordStop, Help, Quit, StartScenario, Show,
+                            Progress, Hold, Resume, ShowSafety>;
 
 }  // namespace shapeform::supervisor

@@ -171,8 +171,13 @@ bool Args::on_off_or(const std::string& key, bool fallback) const {
 
 core::Vec2 Args::centre() const { return core::Vec2(number_or("cx", 0.0), number_or("cy", 0.0)); }
 
-std::vector<core::Vec2> Args::points(const std::string& key) const {
-  const std::string& text = raw(key);
+std::vector<core::Vec2> Args::points(const std::string& key) const { return check_points(key, raw(key)); }
+
+core::Vec2 Args::check_vec2(const std::string& label, const std::string& text) const {
+  return xy(text, name_ + ": " + label, false);
+}
+
+std::vector<core::Vec2> Args::check_points(const std::string& key, const std::string& text) const {
   std::vector<core::Vec2> out;
   if (util::trim(text).empty()) return out;
   std::size_t begin = 0;

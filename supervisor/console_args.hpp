@@ -95,6 +95,11 @@ class Args {
   core::Vec2 centre() const;
   /// A required `x,y;x,y;...` parameter (blanks around numbers allowed; empty text: no points).
   std::vector<core::Vec2> points(const std::string& key) const;
+  /// `text` (a positional value) as `x,y` with finite components; `label` names it in the messages
+  /// ("safety keep_out add circle: centre must be x,y, got '1'").
+  core::Vec2 check_vec2(const std::string& label, const std::string& text) const;
+  /// `text` (a positional value) as `x,y;x,y;...`, as points() reads a parameter.
+  std::vector<core::Vec2> check_points(const std::string& label, const std::string& text) const;
   /// Optional rotation rot (degrees, default 0) and scale (default 1) of every shape.
   void placement(core::ShapeSpec& s) const;
 

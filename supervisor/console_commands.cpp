@@ -8,6 +8,8 @@
 #include <utility>
 
 #include "core/enum_names.hpp"
+#include "core/fence.hpp"
+#include "core/safety.hpp"
 #include "shapes/shapes.hpp"
 
 namespace shapeform::supervisor {
@@ -373,6 +375,134 @@ CommandSpec law_command() {
 }
 
 // ---------------------------------------------------------------------------------------------
+// safety: separation, keep-out zones, the fence
+
+/// `safety separation D`.
+Action parse_separation(const Args& a, const CompiledCommand& current) {
+  if (a.positionals() == 0) fail(a.name() + ": missing separation D (shape units; 0 = off)");
+  CompiledCommand cmd = current;
+  cmd.min_separation = a.check_number("", a.positional(0), field_range("safety.min_separation"));
+  return SetCommand{SetCommand::What::Safety, cmd};
+}
+
+/// `safety keep_out add circle X,Y R | add polygon "x,y;..." | remove K | clear`. Zones are kept in
+/// the order they travel (circles first), which is the order `safety` numbers them.
+Action parse_keep_out(const Args& a, const CompiledCommand& current) {
+  const std::string verb = a.positionals() > 0 ? a.positional(0) : "";
+  CompiledCommand cmd = current;
+  std::vector<core::KeepOutZone>& zones = cmd.keep_out;
+  const auto extra = [&a](std::size_t n) {
+    if (a.positionals() > n) fail(a.name() + ": unexpected argument '" + a.positional(n) + "'");
+  };
+  if (verb == "clear") {
+    extra(1);
+    zones.clear();
+  } else if (verb == "remove") {
+    if (a.positionals() < 2) fail(a.name() + " remove: missing zone number K (as 'safety' lists them)");
+    extra(2);
+    const std::string& text = a.positional(1);
+    const double k = a.check_number("remove K", text, params::any());
+    if (zones.empty()) fail(a.name() + " remove: there is no keep-out zone");
+    if (!(k >= 1.0) || k != std::floor(k) || k > static_cast<double>(zones.size()))
+      fail(a.name() + " remove: K must be a zone number 1.." + std::to_string(zones.size()) +
+           " (as 'safety' lists them), got " + text);
+    zones.erase(zones.begin() + static_cast<std::ptrdiff_t>(k) - 1);
+  } else if (verb == "add") {
+    const std::string kind = a.positionals() > 1 ? a.positional(1) : "";
+    const std::string name = a.name() + " add " + kind;
+    core::KeepOutZone z;
+    if (kind == "circle") {
+      if (a.positionals() < 4) fail(name + ": expected the centre X,Y and the radius R");
+      z.centre = a.check_vec2("add circle: centre", a.positional(2));
+      z.radius = a.check_number("add circle: R", a.positional(3), params::any());
+    } else if (kind == "polygon") {
+      if (a.positionals() < 3) fail(name + ": missing vertices \"x,y;x,y;x,y\"");
+      extra(3);
+      z.kind = core::KeepOutZone::Kind::Polygon;
+      z.vertices = a.check_points("add polygon", a.positional(2));
+    } else {
+      fail(a.name() + " add: expected circle X,Y R or polygon \"x,y;x,y;x,y\"" +
+           (kind.empty() ? std::string() : ", got '" + kind + "'"));
+    }
+    const std::vector<std::string> problems = core::keep_out_problems(z);
+    if (!problems.empty()) fail(name + ": " + params::join(problems, "; "));
+    // Circles before polygons, as they travel (the agents number them alike).
+    const auto at = z.kind == core::KeepOutZone::Kind::Circle
+                        ? std::find_if(zones.begin(), zones.end(),
+                                       [](const core::KeepOutZone& q) {
+                                         return q.kind != core::KeepOutZone::Kind::Circle;
+                                       })
+                        : zones.end();
+    zones.insert(at, z);
+  } else {
+    fail(a.name() + ": expected add circle X,Y R, add polygon \"x,y;...\", remove K or clear" +
+         (verb.empty() ? std::string() : ", got '" + verb + "'"));
+  }
+  return SetCommand{SetCommand::What::Safety, cmd};
+}
+
+/// `safety fence box | polygon "x,y;..." [margin=M] [action=hold|stop|return]`: what is not given is
+/// kept.
+Action parse_fence(const Args& a, const CompiledCommand& current) {
+  const std::string kind = a.positionals() > 0 ? a.positional(0) : "";
+  CompiledCommand cmd = current;
+  if (kind == "box") {
+    if (a.positionals() > 1) fail(a.name() + " box: unexpected argument '" + a.positional(1) + "'");
+    cmd.fence.clear();
+  } else if (kind == "polygon") {
+    if (a.positionals() < 2) fail(a.name() + " polygon: missing vertices \"x,y;x,y;x,y\"");
+    cmd.fence = a.check_points("polygon", a.positional(1));
+    const std::vector<std::string> problems = core::fence_problems(cmd.fence, cmd.workspace);
+    if (!problems.empty()) fail(a.name() + " polygon: " + params::join(problems, "; "));
+  } else {
+    fail(a.name() + ": expected box or polygon \"x,y;x,y;...\"" +
+         (kind.empty() ? std::string() : ", got '" + kind + "'"));
+  }
+  cmd.fence_margin = a.number_or("margin", cmd.fence_margin);
+  if (a.has("action") && !params::parse_name(params::kBreachActionNames, a.raw("action"), cmd.breach_action))
+    fail(a.name() + ": unknown action '" + a.raw("action") + "' (expected " +
+         params::join(params::names(params::kBreachActionNames), "|") + ")");
+  return SetCommand{SetCommand::What::Safety, cmd};
+}
+
+CommandSpec safety_command() {
+  CommandSpec c;
+  c.word = "safety";
+  c.noun = "setting";
+  c.expected = "separation, keep_out, fence or show";
+  c.bare = "show";
+  const std::string actions = params::join(params::names(params::kBreachActionNames), "|");
+  c.forms = {
+      form("separation", {"D"}, {}, "keep agents D apart (0 = off)", parse_separation),
+      form("keep_out", {"add circle X,Y R", "add polygon \"x,y;x,y;x,y\"", "remove K", "clear"}, {},
+           "keep-out zones", parse_keep_out),
+      form("fence", {"box", "polygon \"x,y;x,y;x,y\""},
+           {opt("margin", "M", "safety.fence_margin"), opt("action", actions, "safety.breach_action")},
+           "geofence, its margin and breach action", parse_fence),
+      form("show", {""}, {}, "the safety settings in force",
+           [](const Args&, const CompiledCommand&) -> Action { return ShowSafety{}; }),
+  };
+  // clang-format off
+  c.details =
+      "  Changes the safety settings of the command in force and publishes it as a new epoch (the\n"
+      "  shape and everything else kept); docs/SAFETY.md. 'safety' alone is 'safety show'.\n"
+      "  separation D   smallest distance two agents keep at every step, shape units " + in("safety.min_separation") + ",\n"
+      "                 0 = off\n"
+      "  keep_out       zones no agent enters: add a circle (centre X,Y, radius R > 0) or a simple polygon\n"
+      "                 (>= 3 vertices); remove zone K as 'safety' numbers them (circles first); clear all\n"
+      "  fence box      the workspace box [-w, w]^2 is the fence (safety.workspace)\n"
+      "  fence polygon  a convex polygon inside the workspace box (cut a dent out with keep_out instead)\n"
+      "  margin=M       every step is kept M inside the fence, shape units " + in("safety.fence_margin") + "\n"
+      "  action=A       what an agent found beyond the fence does: hold = it stops and the supervisor\n"
+      "                 holds the swarm ('resume' releases); stop = that agent stops until the next\n"
+      "                 command; return = it heads back inside through the safety filter\n"
+      "  margin and action not given keep their values. A zone or fence with problems is refused,\n"
+      "  and nothing is sent.\n";
+  // clang-format on
+  return c;
+}
+
+// ---------------------------------------------------------------------------------------------
 // Publishing: start, hold, stop, resume
 
 CommandSpec start_command() {
@@ -427,9 +557,10 @@ std::vector<CommandSpec> question_commands() {
              "  One row per agent heard: id, alive/DEAD/left, last seen, position, epoch followed,\n"
              "  its shape error and how many neighbours it hears.\n"),
       single("show", fixed("the command in force and its epoch", Show{}),
-             "  The command in force: shape, tracking, law, gains, integrator, speed limit, its epoch and\n"
-             "  who published it (this supervisor, or another participant when the agents follow an epoch\n"
-             "  this supervisor did not publish), and how many agents follow it.\n"),
+             "  The command in force: shape, tracking, law, gains, integrator, speed limit and safety\n"
+             "  settings ('safety' alone), its epoch and who published it (this supervisor, or another\n"
+             "  participant when the agents follow an epoch this supervisor did not publish), and how many\n"
+             "  agents follow it.\n"),
       single("metrics", form("", {"", "json"}, {}, "latest formation metrics", metrics),
              "  Prints the latest metrics (shape error, gap CV, clusters, ...) as a table, 4 significant\n"
              "  digits, with units; `metrics json` prints them as one JSON object. With --json both print\n"
@@ -585,8 +716,9 @@ std::vector<std::string> usage_words(const std::string& usage) {
 
 const std::vector<CommandSpec>& command_specs() {
   static const std::vector<CommandSpec> table = [] {
-    std::vector<CommandSpec> t = {shape_command(),     track_command(), gains_command(), integrator_command(),
-                                  max_speed_command(), law_command(),   start_command()};
+    std::vector<CommandSpec> t = {shape_command(),      track_command(),     gains_command(),
+                                  integrator_command(), max_speed_command(), law_command(),
+                                  safety_command(),     start_command()};
     for (auto* group : {hold_commands, question_commands})
       for (CommandSpec& c : group()) t.push_back(std::move(c));
     for (auto* make :

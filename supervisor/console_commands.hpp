@@ -50,6 +50,9 @@ struct CommandSpec {
   std::vector<FormSpec> forms;
   std::string details;           ///< `help WORD` after the syntax lines (indented lines)
   bool offers_commands = false;  ///< Tab offers the command words as its value (help)
+  /// The form the command word alone is (`safety` is `safety show`); empty: a command with second
+  /// words needs one.
+  std::string bare;
 
   bool has_sub() const { return !forms.empty() && !forms.front().sub.empty(); }
   /// The form of second word `sub` (the only form when the command has no second word); null if none.

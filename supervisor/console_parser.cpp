@@ -26,6 +26,10 @@ Action parse_tokens(const std::vector<Token>& t, const core::CompiledCommand& cu
     const FormSpec& f = c->forms.front();
     return f.parse(Args(word, t, 1, c->params(f), f.max_positionals()), current);
   }
+  if ((t.size() < 2 || t[1].is_pair) && !c->bare.empty()) {
+    const FormSpec& f = *c->form(c->bare);
+    return f.parse(Args(c->words(f), t, 1, c->params(f), f.max_positionals()), current);
+  }
   if (t.size() < 2 || t[1].is_pair) fail(word + ": expected " + c->expected);
   const FormSpec* f = c->form(t[1].text);
   if (f == nullptr) {
@@ -85,20 +89,29 @@ std::vector<std::string> form_lines(const CommandSpec& c, const FormSpec& f, std
 /// A form's syntax in the overview, on one line: its usages as alternatives ("metrics [json]",
 /// "progress on|off|every S") when it has no parameters, else its lines joined by " | ".
 std::string overview_syntax(const CommandSpec& c, const FormSpec& f) {
+  std::string syntax;
   if (f.params.empty() && f.usages.size() > 1) {
     std::vector<std::string> alternatives;
     for (const std::string& u : f.usages)
       if (!u.empty()) alternatives.push_back(u);
     const std::string all = join(alternatives, "|");
     const bool optional = alternatives.size() < f.usages.size();
-    return c.words(f) + " " + (optional ? "[" + all + "]" : all);
+    syntax = c.words(f) + " " + (optional ? "[" + all + "]" : all);
+  } else {
+    for (std::size_t brief = 0; brief <= optional_groups(f.params); ++brief) {
+      syntax = join(form_lines(c, f, brief), " | ");
+      if (syntax.size() <= kColumn) break;
+    }
   }
-  std::string syntax;
-  for (std::size_t brief = 0; brief <= optional_groups(f.params); ++brief) {
-    syntax = join(form_lines(c, f, brief), " | ");
-    if (syntax.size() <= kColumn) break;
+  if (syntax.size() <= kColumn) return syntax;
+  // Too long for the column ("safety keep_out add circle X,Y R|add polygon ..."): the usages' first
+  // words and "...", the page (`help WORD`) has them whole.
+  std::vector<std::string> first;
+  for (const std::string& u : f.usages) {
+    const std::string w = u.substr(0, u.find(' '));
+    if (!w.empty() && std::find(first.begin(), first.end(), w) == first.end()) first.push_back(w);
   }
-  return syntax;
+  return c.words(f) + " " + join(first, "|") + " ..." + param_syntax(f.params, optional_groups(f.params));
 }
 
 std::string overview() {

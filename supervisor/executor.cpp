@@ -101,6 +101,15 @@ void Executor::execute(const Show&, std::int64_t now_ns) {
   p_.out.event("show", j);
 }
 
+void Executor::execute(const ShowSafety&, std::int64_t) {
+  const core::Command& c = p_.authority.current();
+  p_.out.human() << (p_.authority.epoch() == 0 ? "no command in force yet; the --config scenario's:\n" : "")
+                 << safety_lines(c) << std::flush;
+  nlohmann::json j = p_.authority.in_force_json();
+  j["safety"] = app::command_json(c)["safety"];
+  p_.out.event("safety", j);
+}
+
 ShowInfo Executor::show_info(std::int64_t now_ns) const {
   const CommandAuthority& auth = p_.authority;
   ShowInfo info;

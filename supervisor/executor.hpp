@@ -47,6 +47,7 @@ class Executor {
   void execute(const Status& a, std::int64_t now_ns);
   void execute(const ShowMetrics& a, std::int64_t now_ns);
   void execute(const Show& a, std::int64_t now_ns);
+  void execute(const ShowSafety& a, std::int64_t now_ns);
   void execute(const Progress& a, std::int64_t now_ns);
   void execute(const WaitConverged& a, std::int64_t now_ns);
   void execute(const WaitAgents& a, std::int64_t now_ns);

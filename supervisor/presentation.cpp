@@ -238,6 +238,44 @@ std::string show_text(const ShowInfo& info) {
   o << "  max_speed   ";
   if (c.max_speed > 0) o << c.max_speed << '\n';
   else o << "off\n";
+  o << safety_lines(c);
+  return o.str();
+}
+
+std::string safety_lines(const core::Command& c) {
+  std::ostringstream o;
+  const auto points = [](const std::vector<core::Vec2>& v) {
+    std::ostringstream p;
+    p << "(";
+    for (std::size_t i = 0; i < v.size(); ++i) p << (i == 0 ? "" : "; ") << v[i].x() << ", " << v[i].y();
+    p << ")";
+    return p.str();
+  };
+  o << "  separation  ";
+  if (c.min_separation > 0)
+    o << c.min_separation << '\n';
+  else
+    o << "off\n";
+  o << "  keep_out    ";
+  if (c.keep_out.empty())
+    o << "none\n";
+  else
+    o << c.keep_out.size() << (c.keep_out.size() == 1 ? " zone\n" : " zones\n");
+  for (std::size_t k = 0; k < c.keep_out.size(); ++k) {
+    const core::KeepOutZone& z = c.keep_out[k];
+    o << "    " << k + 1 << "  ";
+    if (z.kind == core::KeepOutZone::Kind::Circle)
+      o << "circle centre (" << z.centre.x() << ", " << z.centre.y() << ") r=" << z.radius << '\n';
+    else
+      o << "polygon " << points(z.vertices) << '\n';
+  }
+  o << "  fence       ";
+  if (c.fence.empty())
+    o << "box [" << -c.workspace << ", " << c.workspace << "]^2 (safety.workspace)\n";
+  else
+    o << "polygon " << points(c.fence) << '\n';
+  o << "  margin      " << c.fence_margin << '\n';
+  o << "  breach      " << core::to_string(c.breach_action) << '\n';
   return o.str();
 }
 

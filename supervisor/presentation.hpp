@@ -98,8 +98,17 @@ struct ShowInfo {
 };
 
 /// The `show` answer: the epoch in force, who published it and when, how many agents follow it,
-/// then one line each for the shape, tracking, law, gains, integrator and speed limit.
+/// then one line each for the shape, tracking, law, gains, integrator and speed limit, then the safety
+/// settings (safety_lines).
 std::string show_text(const ShowInfo& info);
+
+/// The safety settings of a command, one indented line each, as `safety` and `show` print them:
+///   "  separation  0.25" ("off" when 0)
+///   "  keep_out    2 zones" then "    1  circle centre (5, 0) r=1" / "    2  polygon (0, 0; 1, 0; 0, 1)"
+///   "  fence       box [-1000, 1000]^2" or "polygon (x, y; ...)"
+///   "  margin      0.5", "  breach      hold"
+/// The zones are numbered from 1 in the order `safety keep_out remove K` takes them.
+std::string safety_lines(const core::Command& c);
 
 /// What the exit summary reports.
 struct Summary {

@@ -207,6 +207,31 @@ std::vector<P> build_command_table() {
       "circles: finite, `r > 0`; polygons: `>= 3` finite vertices, no two consecutive equal, not all collinear, "
       "edges that do not cross (convex or not)",
       [](auto& c) -> auto& { return c.keep_out; }));
+  t.push_back(plain<std::vector<Vec2>>(
+      Type::Vec2List, "safety.fence", {"fence"}, su,
+      "the geofence: a convex polygon `[[x, y], ...]` (either way round) the agents stay inside; empty: the "
+      "workspace box `[-w, w]^2` is the fence. Every step is kept `safety.fence_margin` inside it "
+      "(core/fence.hpp); an agent found beyond it takes `safety.breach_action` (docs/SAFETY.md, Geofence). "
+      "On "
+      "the wire flattened x0, y0, x1, y1, ...",
+      "empty, or `>= 3` finite vertices, no two consecutive equal, not all collinear, simple and convex (cut "
+      "a "
+      "dent out with `safety.keep_out` instead), every vertex inside `[-w, w]^2`",
+      [](auto& c) -> auto& { return c.fence; }));
+  t.push_back(real(
+      "safety.fence_margin", "fence_margin", su, at_least(0),
+      "how far inside the fence the safety filter keeps every step (an agent beyond the fence itself is a "
+      "breach, not one within the margin); in a fence thinner than twice the margin no step goes further out "
+      "and `return` aims at its deepest points",
+      [](auto& c) -> auto& { return c.fence_margin; }));
+  t.push_back(choice(
+      "safety.breach_action", "breach_action",
+      "what an agent found beyond the fence (its own position, or its vehicle's pose) does, checked every "
+      "step: `hold` = it stops and the supervisor holds the whole swarm (as the console's `hold`; `resume` "
+      "releases it); `stop` = that agent stops until the next command; `return` = it heads straight back to "
+      "the nearest point `safety.fence_margin` inside the fence through the safety filter, then follows the "
+      "law again. After a new command an agent still outside first returns inside",
+      kBreachActionNames, [](auto& c) -> auto& { return c.breach_action; }));
   return t;
 }
 

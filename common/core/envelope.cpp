@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "fence.hpp"
 #include "params.hpp"
 
 namespace shapeform::core {
@@ -127,6 +128,14 @@ std::vector<EnvelopeProblem> envelope_problems(const CompiledCommand& cmd) {
     out.push_back({key, wire,
                    std::string(key) + " = " + value + ": the shape reaches " +
                        format_number(c.distance + reach) + " units from the origin" + where});
+  }
+  // The fence: convex and inside the workspace (fence.hpp).
+  const std::vector<std::string> fence = fence_problems(cmd.fence, w);
+  if (!fence.empty()) {
+    std::string value;
+    for (const Vec2& v : cmd.fence)
+      value += (value.empty() ? "[[" : ", [") + format_number(v.x()) + ", " + format_number(v.y()) + "]";
+    out.push_back({"safety.fence", "fence", "safety.fence = " + value + "]: " + params::join(fence, "; ")});
   }
   // The gains: one step must not overshoot beyond what the speed limit can hold.
   const double limit = cmd.max_speed > 0.0 ? kStepGainMaxLimited : kStepGainMaxFree;

@@ -32,7 +32,8 @@ struct EnvelopeProblem {
 };
 
 /// Every problem of cmd: its shape (placed by centre, rotation and scale) or its tracked path must lie
-/// within the workspace [-workspace, workspace]^2, and its step gains within kStepGainMax*.
+/// within the workspace [-workspace, workspace]^2, its fence must be usable and inside the workspace
+/// (core::fence_problems), and its step gains within kStepGainMax*.
 /// Empty when the command is safe.
 std::vector<EnvelopeProblem> envelope_problems(const CompiledCommand& cmd);
 

@@ -5,7 +5,7 @@
 #include <limits>
 
 #include "params.hpp"
-#include "safety.hpp"
+#include "polygon.hpp"
 
 namespace shapeform::core {
 
@@ -13,26 +13,12 @@ namespace {
 
 double cross(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
 
-/// Twice the signed area (> 0: counter-clockwise).
-double twice_area(const std::vector<Vec2>& v) {
-  double a = 0.0;
-  for (std::size_t i = 0; i < v.size(); ++i) a += cross(v[i], v[(i + 1) % v.size()]);
-  return a;
-}
-
 /// The point of segment [a, b] nearest p.
 Vec2 segment_point(const Vec2& a, const Vec2& b, const Vec2& p) {
   const Vec2 e = b - a;
   const double l2 = e.squaredNorm();
   const double t = l2 > 0.0 ? std::clamp((p - a).dot(e) / l2, 0.0, 1.0) : 0.0;
   return a + t * e;
-}
-
-/// "polygon ..." (keep_out_problems' words) said of the fence.
-std::string as_fence(std::string s) {
-  for (std::size_t at = s.find("polygon"); at != std::string::npos; at = s.find("polygon", at))
-    s.replace(at, 7, "fence");
-  return s;
 }
 
 /// The outward half-planes of a counter-clockwise convex polygon's edges, each shrunk by margin.
@@ -89,10 +75,7 @@ Vec2 nearest_in(const std::vector<Vec2>& v, const Vec2& x) {
 std::vector<std::string> fence_problems(const std::vector<Vec2>& fence, double workspace) {
   std::vector<std::string> out;
   if (fence.empty()) return out;
-  KeepOutZone z;
-  z.kind = KeepOutZone::Kind::Polygon;
-  z.vertices = fence;
-  for (const std::string& p : keep_out_problems(z)) out.push_back(as_fence(p));
+  out = simple_polygon_problems(fence, "fence");
   if (!out.empty()) return out;
   // Simple and of positive area: convex when it turns one way at every vertex (a vertex on the line of
   // its neighbours, going on, is a straight corner; going back is a spike).

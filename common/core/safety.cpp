@@ -6,6 +6,7 @@
 #include <numeric>
 
 #include "fence.hpp"
+#include "polygon.hpp"
 
 namespace shapeform::core {
 
@@ -24,29 +25,6 @@ Vec2 segment_point(const Vec2& a, const Vec2& b, const Vec2& p) {
   const double l2 = e.squaredNorm();
   const double t = l2 > 0.0 ? std::clamp((p - a).dot(e) / l2, 0.0, 1.0) : 0.0;
   return a + t * e;
-}
-
-/// Twice the signed area (> 0: counter-clockwise).
-double twice_area(const std::vector<Vec2>& v) {
-  double a = 0.0;
-  for (std::size_t i = 0; i < v.size(); ++i) a += cross(v[i], v[(i + 1) % v.size()]);
-  return a;
-}
-
-/// Whether segments [a, b] and [c, d] meet (touching counts).
-bool segments_meet(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d) {
-  const auto side = [](const Vec2& p, const Vec2& q, const Vec2& r) {
-    const double v = cross(q - p, r - p);
-    return v > 0.0 ? 1 : (v < 0.0 ? -1 : 0);
-  };
-  const auto on = [](const Vec2& p, const Vec2& q, const Vec2& r) {  // r on [p, q], collinear given
-    return std::min(p.x(), q.x()) <= r.x() && r.x() <= std::max(p.x(), q.x()) &&
-           std::min(p.y(), q.y()) <= r.y() && r.y() <= std::max(p.y(), q.y());
-  };
-  const int d1 = side(a, b, c), d2 = side(a, b, d), d3 = side(c, d, a), d4 = side(c, d, b);
-  if (d1 * d2 < 0 && d3 * d4 < 0) return true;
-  return (d1 == 0 && on(a, b, c)) || (d2 == 0 && on(a, b, d)) || (d3 == 0 && on(c, d, a)) ||
-         (d4 == 0 && on(c, d, b));
 }
 
 bool convex_ccw(const std::vector<Vec2>& v) {
@@ -135,33 +113,7 @@ std::vector<std::string> keep_out_problems(const KeepOutZone& z) {
     if (!std::isfinite(z.radius) || z.radius <= 0.0) out.push_back("circle radius must be > 0");
     return out;
   }
-  const std::vector<Vec2>& v = z.vertices;
-  if (v.size() < 3) {
-    out.push_back("polygon needs >= 3 vertices, got " + std::to_string(v.size()));
-    return out;
-  }
-  for (const Vec2& p : v)
-    if (!p.allFinite()) {
-      out.push_back("polygon vertices must be finite");
-      return out;
-    }
-  for (std::size_t i = 0; i < v.size(); ++i)
-    if (v[i] == v[(i + 1) % v.size()])
-      out.push_back("polygon vertices " + std::to_string(i) + " and " + std::to_string((i + 1) % v.size()) +
-                    " are equal");
-  if (!out.empty()) return out;
-  const std::size_t n = v.size();
-  for (std::size_t i = 0; i < n; ++i)
-    for (std::size_t j = i + 2; j < n; ++j) {
-      if (i == 0 && j == n - 1) continue;  // adjacent through the closing edge
-      if (segments_meet(v[i], v[(i + 1) % n], v[j], v[(j + 1) % n])) {
-        out.push_back("polygon edges " + std::to_string(i) + " and " + std::to_string(j) +
-                      " cross (the polygon must be simple)");
-        return out;
-      }
-    }
-  if (twice_area(v) == 0.0) out.push_back("polygon vertices are all on one line (no area)");
-  return out;
+  return simple_polygon_problems(z.vertices, "polygon");
 }
 
 std::vector<ConvexZone> convex_pieces(const std::vector<KeepOutZone>& zones) {

@@ -27,7 +27,7 @@
   X(path_radius) X(path_period) X(path_phase) X(feedforward)                                          \
   X(k1) X(k2) X(sigma) X(beta) X(r) X(max_speed)                                                      \
   X(integrator) X(dt) X(law) X(k_normal) X(k_tangent) X(spacing) X(hold) X(workspace)        \
-  X(min_separation) X(keep_out_circles) X(keep_out_polygons)
+  X(min_separation) X(keep_out_circles) X(keep_out_polygons) X(fence) X(fence_margin) X(breach_action)
 // clang-format on
 
 namespace shapeform::dds {

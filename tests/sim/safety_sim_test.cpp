@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "config/config.hpp"
+#include "core/fence.hpp"
 #include "core/safety.hpp"
 #include "simulation.hpp"
 
@@ -235,4 +236,57 @@ TEST_CASE("safety in the simulator: an agent placed on top of another steps away
   REQUIRE(r.separation.min);
   CHECK(r.separation.step == 0);  // the start is the closest moment: from then on they only part
   CHECK(start_separation(r.final_positions) >= kSeparation - 1e-9);
+}
+
+TEST_CASE(
+    "safety in the simulator: a fence that cuts through the circle is never left, the rest of the shape "
+    "forms",
+    "[sim][safety][fence]") {
+  // The circle of radius 4 about the origin; the fence cuts it off at x1 = 2.5 (a slanted edge from
+  // (2, -6) to (3, 6)) and the agents start inside it.
+  const std::vector<Vec2> fence = {Vec2(-6, -6), Vec2(2, -6), Vec2(3, 6), Vec2(-6, 6)};
+  for (const std::string law : {"paper", "arc"}) {
+    for (const double margin : {0.0, 0.3}) {
+      INFO("law " << law << ", margin " << margin);
+      config::Config cfg =
+          config::load(kSourceDir + "/config/scenarios/" + (law == "arc" ? "arc_circle" : "circle") + ".yaml",
+                       {"shape.kind=circle", "shape.r0=4"});
+      cfg.command.fence = fence;
+      cfg.command.fence_margin = margin;
+      REQUIRE(core::fence_problems(fence, cfg.command.workspace).empty());
+      REQUIRE(core::filters(cfg.command));
+      const std::vector<Vec2> start = dense(12, 2.0, kSeparation, 11);
+      core::Swarm swarm(cfg.command, start);
+      double worst = 0.0, worst_shrunk = 0.0;
+      const std::vector<core::HalfPlane> inner = core::fence_half_planes(cfg.command);
+      for (int k = 0; k < 400; ++k) {
+        swarm.step();
+        for (const Vec2& x : swarm.positions()) {
+          worst = std::max(worst, core::beyond_fence(cfg.command, x));
+          for (const core::HalfPlane& h : inner) worst_shrunk = std::max(worst_shrunk, h.n.dot(x) - h.b);
+        }
+      }
+      CHECK(worst <= 1e-9);  // rounding: the filter's constraints hold to 1e-12 of their size
+      CHECK(worst_shrunk <= 1e-9);
+      CHECK(swarm.safety_counts().interventions > 0);
+      // The agents the fence holds back sit on it; the others reach the circle (the arc law exactly; the
+      // paper's law, pulled in by its cohesion term, within 0.5 after 400 steps).
+      int on_circle = 0;
+      const double band = law == "arc" ? 0.1 : 0.5;
+      for (const Vec2& x : swarm.positions()) on_circle += std::abs(x.norm() - 4.0) < band ? 1 : 0;
+      CHECK(on_circle >= 8);
+      // Without the fence the same agents do cross the line.
+      core::CompiledCommand free = cfg.command;
+      free.fence.clear();
+      free.fence_margin = 0.0;
+      core::Swarm unfenced(free, start);
+      double crossed = 0.0;
+      for (int k = 0; k < 400; ++k) {
+        unfenced.step();
+        for (const Vec2& x : unfenced.positions())
+          crossed = std::max(crossed, core::beyond_fence(cfg.command, x));
+      }
+      CHECK(crossed > 0.5);
+    }
+  }
 }

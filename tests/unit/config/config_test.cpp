@@ -1422,3 +1422,52 @@ safety:
   CHECK(problem_of("schema_version: 1\nsafety:\n  keep_out: {circle: [0, 0, 1]}\n") ==
         "safety.keep_out: expected a list of zones, got a map (line 3)");
 }
+
+TEST_CASE(
+    "safety.fence, safety.fence_margin and safety.breach_action: read, written back, and refused naming the "
+    "key, the value, the fix and the line",
+    "[config][safety]") {
+  using shapeform::core::BreachAction;
+  using shapeform::core::Vec2;
+  const Config d = load_string("schema_version: 1\n");
+  CHECK(d.command.fence.empty());  // the workspace box
+  CHECK(d.command.fence_margin == 0.0);
+  CHECK(d.command.breach_action == BreachAction::Hold);
+  const Config c = load_string(R"(schema_version: 1
+safety:
+  fence: [[-8, -8], [8, -8], [8, 6], [0, 9], [-8, 6]]
+  fence_margin: 0.5
+  breach_action: return
+)");
+  REQUIRE(c.command.fence.size() == 5);
+  CHECK(c.command.fence[3] == Vec2(0, 9));
+  CHECK(c.command.fence_margin == 0.5);
+  CHECK(c.command.breach_action == BreachAction::Return);
+  const Config back = load_string(to_yaml(c));
+  CHECK(back.command.fence == c.command.fence);
+  CHECK(back.command.fence_margin == 0.5);
+  CHECK(back.command.breach_action == BreachAction::Return);
+  CHECK(load("", {"safety.fence=[[0, 0], [1, 0], [0, 1]]", "safety.breach_action=stop"})
+            .command.breach_action == BreachAction::Stop);
+  CHECK(problem_of("schema_version: 1\nsafety:\n  fence_margin: -1\n") ==
+        "safety.fence_margin: must be >= 0, got -1 (line 3)");
+  CHECK_THAT(problem_of("schema_version: 1\nsafety:\n  breach_action: land\n"),
+             Catch::StartsWith("safety.breach_action: ") && Catch::Contains("land") &&
+                 Catch::Contains("hold") && Catch::Contains("return"));
+  // Not convex: the key, the value and the fix.
+  CHECK(
+      problem_of("schema_version: 1\nsafety:\n  fence: [[0, 0], [4, 0], [4, 1], [1, 1], [1, 4], [0, 4]]\n") ==
+      "safety.fence = [[0, 0], [4, 0], [4, 1], [1, 1], [1, 4], [0, 4]]: a fence must be convex (it turns "
+      "back at "
+      "vertex 3); cut the rest out with safety.keep_out (line 3)");
+  CHECK(
+      problem_of("schema_version: 1\nsafety:\n  fence: [[0, 0], [1, 1], [1, 0], [0, 1]]\n") ==
+      "safety.fence = [[0, 0], [1, 1], [1, 0], [0, 1]]: fence edges 0 and 2 cross (the fence must be simple) "
+      "(line 3)");
+  CHECK(problem_of("schema_version: 1\nsafety:\n  fence: [[0, 0], [1, 0]]\n") ==
+        "safety.fence = [[0, 0], [1, 0]]: fence needs >= 3 vertices, got 2 (line 3)");
+  // The whole envelope: a fence inside the workspace.
+  CHECK(problem_of("schema_version: 1\nsafety:\n  workspace: 10\n  fence: [[0, 0], [20, 0], [0, 5]]\n") ==
+        "safety.fence = [[0, 0], [20, 0], [0, 5]]: fence vertex 1 (20, 0) is outside the workspace [-w, w]^2 "
+        "(safety.workspace = 10): move it in or widen safety.workspace (line 4)");
+}

@@ -254,3 +254,48 @@ TEST_CASE("every name field refuses an unknown name, and the vertices odd counts
 }
 
 }  // namespace shapeform
+
+namespace shapeform {
+
+TEST_CASE(
+    "a received fence is taken when usable, else refused with the reason (not convex, not simple, outside "
+    "the workspace)",
+    "[dds][convert][command]") {
+  msg::ShapeCommand m = dds::to_msg(base_command(), 1);
+  core::CompiledCommand out;
+  m.fence({-5, -5, 5, -5, 0, 5});
+  m.fence_margin(0.5);
+  m.breach_action("return");
+  REQUIRE(receive(m, out) == "");
+  CHECK(out.fence == std::vector<core::Vec2>{core::Vec2(-5, -5), core::Vec2(5, -5), core::Vec2(0, 5)});
+  CHECK(out.fence_margin == 0.5);
+  CHECK(out.breach_action == core::BreachAction::Return);
+  m.fence({});  // the workspace box
+  REQUIRE(receive(m, out) == "");
+  CHECK(out.fence.empty());
+  m.fence({0, 0, 4, 0, 4, 1, 1, 1, 1, 4, 0, 4});
+  CHECK(receive(m, out) ==
+        "command.fence: safety.fence = [[0, 0], [4, 0], [4, 1], [1, 1], [1, 4], [0, 4]]: a fence must be "
+        "convex (it "
+        "turns back at vertex 3); cut the rest out with safety.keep_out");
+  m.fence({0, 0, 1, 1, 1, 0, 0, 1});
+  CHECK(receive(m, out) ==
+        "command.fence: safety.fence = [[0, 0], [1, 1], [1, 0], [0, 1]]: fence edges 0 and 2 cross (the "
+        "fence must "
+        "be simple)");
+  m.fence({0, 0, 2000, 0, 0, 1});
+  CHECK(receive(m, out) ==
+        "command.fence: safety.fence = [[0, 0], [2000, 0], [0, 1]]: fence vertex 1 (2000, 0) is outside the "
+        "workspace [-w, w]^2 (safety.workspace = 1000): move it in or widen safety.workspace");
+  m.fence({0, 0, 1, 0});
+  CHECK(receive(m, out) ==
+        "command.fence: safety.fence = [[0, 0], [1, 0]]: fence needs >= 3 vertices, got 2");
+  m.fence({});
+  m.fence_margin(-1);
+  CHECK(receive(m, out) == "command.fence_margin: must be >= 0, got -1");
+  m.fence_margin(0);
+  m.breach_action("land");
+  CHECK(receive(m, out) == "command.breach_action: unknown breach_action \"land\" (hold|stop|return)");
+}
+
+}  // namespace shapeform

@@ -81,6 +81,9 @@ TEST_CASE("registry: positional values and counts come from the usages", "[super
   CHECK(form_of("status").max_positionals() == 0);
   CHECK(form_of("help").values().empty());
   CHECK(find_command("help")->offers_commands);
+  CHECK(form_of("safety", "keep_out").values() == V{"add", "add", "remove", "clear"});
+  CHECK(form_of("safety", "keep_out").max_positionals() == 4);
+  CHECK(form_of("safety", "fence").values() == V{"box", "polygon"});
 }
 
 TEST_CASE("registry: words, aliases and second words", "[supervisor][registry]") {
@@ -137,6 +140,16 @@ TEST_CASE("help is written from the registry: every form's syntax, on its page a
   CHECK(overview.find("\nmetrics [json] ") != std::string::npos);
   CHECK(help_text("metrics").rfind("metrics\nmetrics json\n", 0) == 0);
   CHECK(help_text("law").rfind("law paper\nlaw arc [k_normal=K] [k_tangent=T] [spacing=S]\n", 0) == 0);
+  CHECK(
+      help_text("safety").rfind("safety separation D\n"
+                                "safety keep_out add circle X,Y R\n"
+                                "safety keep_out add polygon \"x,y;x,y;x,y\"\n"
+                                "safety keep_out remove K\n"
+                                "safety keep_out clear\n"
+                                "safety fence box\n"
+                                "safety fence polygon \"x,y;x,y;x,y\" [margin=M] [action=hold|stop|return]\n"
+                                "safety show\n",
+                                0) == 0);
 }
 
 TEST_CASE("every form's parse function is reached by its words", "[supervisor][registry]") {
@@ -160,6 +173,11 @@ TEST_CASE("every form's parse function is reached by its words", "[supervisor][r
       {"progress off", Action(Progress{}).index()},
       {"stop", Action(Hold{}).index()},
       {"resume", Action(Resume{}).index()},
+      {"safety separation 1", Action(SetCommand{}).index()},
+      {"safety keep_out add circle 1,2 3", Action(SetCommand{}).index()},
+      {"safety fence box", Action(SetCommand{}).index()},
+      {"safety show", Action(ShowSafety{}).index()},
+      {"safety", Action(ShowSafety{}).index()},
   };
   for (const auto& [line, index] : lines) {
     const ParseResult r = parse_command(line, core::CompiledCommand{});

@@ -998,3 +998,122 @@ TEST_CASE("console: a command outside the envelope is refused, naming the value"
   CHECK(parse_as<SetCommand>("gains k2=100").command.gains.k2 == 100);
   CHECK(error_of("gains k2=200").rfind("gains: dynamics.k2 = 200: the step gain k2 dt sigma^(-2 beta) is 13.", 0) == 0);
 }
+
+namespace {
+
+/// The current command with a circle and a triangle to keep out, a fence and its settings.
+core::CompiledCommand guarded_command() {
+  core::Command c = current_command();
+  core::KeepOutZone circle;
+  circle.centre = core::Vec2(5, 0);
+  circle.radius = 1;
+  core::KeepOutZone triangle;
+  triangle.kind = core::KeepOutZone::Kind::Polygon;
+  triangle.vertices = {core::Vec2(0, 0), core::Vec2(1, 0), core::Vec2(0, 1)};
+  c.keep_out = {circle, triangle};
+  c.fence = {core::Vec2(-20, -20), core::Vec2(20, -20), core::Vec2(0, 20)};
+  c.fence_margin = 0.5;
+  c.breach_action = core::BreachAction::Stop;
+  c.min_separation = 0.25;
+  return core::compile(c);
+}
+
+core::CompiledCommand safety_set(std::string_view line,
+                                 const core::CompiledCommand& cur = guarded_command()) {
+  const SetCommand s = parse_as<SetCommand>(line, cur);
+  CHECK(s.what == SetCommand::What::Safety);
+  check_shape_unchanged(s.command);
+  check_rest_unchanged(s.command);
+  return s.command;
+}
+
+}  // namespace
+
+TEST_CASE("safety: every form changes its setting and keeps the rest of the command",
+          "[supervisor][parser][safety]") {
+  using core::Vec2;
+  const core::CompiledCommand g = guarded_command();
+  CHECK(safety_set("safety separation 0.5").min_separation == 0.5);
+  CHECK(safety_set("safety separation 0").min_separation == 0.0);
+  CHECK(safety_set("safety separation 0.5").keep_out == g.keep_out);
+  // keep_out: circles go before the polygons (the order they travel in and 'safety' numbers them)
+  const core::CompiledCommand a = safety_set("safety keep_out add circle -3,4 2");
+  REQUIRE(a.keep_out.size() == 3);
+  CHECK(a.keep_out[1].kind == core::KeepOutZone::Kind::Circle);
+  CHECK(a.keep_out[1].centre == Vec2(-3, 4));
+  CHECK(a.keep_out[1].radius == 2.0);
+  CHECK(a.keep_out[2] == g.keep_out[1]);
+  const core::CompiledCommand p = safety_set("safety keep_out add polygon \"2,2; 4,2; 3,5\"");
+  REQUIRE(p.keep_out.size() == 3);
+  CHECK(p.keep_out[2].vertices == std::vector<Vec2>{Vec2(2, 2), Vec2(4, 2), Vec2(3, 5)});
+  const core::CompiledCommand r = safety_set("safety keep_out remove 1");
+  REQUIRE(r.keep_out.size() == 1);
+  CHECK(r.keep_out[0] == g.keep_out[1]);
+  CHECK(safety_set("safety keep_out remove 2").keep_out == std::vector<core::KeepOutZone>{g.keep_out[0]});
+  CHECK(safety_set("safety keep_out clear").keep_out.empty());
+  // fence: margin and action kept unless given
+  const core::CompiledCommand box = safety_set("safety fence box");
+  CHECK(box.fence.empty());
+  CHECK(box.fence_margin == 0.5);
+  CHECK(box.breach_action == core::BreachAction::Stop);
+  const core::CompiledCommand poly =
+      safety_set("safety fence polygon \"-9,-9;9,-9;9,9;-9,9\" margin=1 action=return");
+  CHECK(poly.fence == std::vector<Vec2>{Vec2(-9, -9), Vec2(9, -9), Vec2(9, 9), Vec2(-9, 9)});
+  CHECK(poly.fence_margin == 1.0);
+  CHECK(poly.breach_action == core::BreachAction::Return);
+  CHECK(poly.keep_out == g.keep_out);
+  CHECK(safety_set("safety fence box action=hold").breach_action == core::BreachAction::Hold);
+  CHECK(safety_set("safety fence box margin=0").fence_margin == 0.0);
+  // Questions: the word alone, or show.
+  parse_as<ShowSafety>("safety");
+  parse_as<ShowSafety>("safety show");
+}
+
+TEST_CASE("safety: bad lines are refused naming what was wrong, and publish nothing",
+          "[supervisor][parser][safety]") {
+  CHECK(error_of("safety separation") == "safety separation: missing separation D (shape units; 0 = off)");
+  CHECK(error_of("safety separation -1") == "safety separation must be >= 0, got -1");
+  CHECK(error_of("safety separation x") == "safety separation: not a number: 'x'");
+  CHECK(error_of("safety bogus") ==
+        "safety: unknown setting 'bogus' (expected separation, keep_out, fence, show)");
+  CHECK(error_of("safety keep_out") ==
+        "safety keep_out: expected add circle X,Y R, add polygon \"x,y;...\", remove K or clear");
+  CHECK(error_of("safety keep_out add square 1,1 1") ==
+        "safety keep_out add: expected circle X,Y R or polygon \"x,y;x,y;x,y\", got 'square'");
+  CHECK(error_of("safety keep_out add circle 1,1") ==
+        "safety keep_out add circle: expected the centre X,Y and the radius R");
+  CHECK(error_of("safety keep_out add circle 1 2") ==
+        "safety keep_out: add circle: centre must be x,y, got '1'");
+  CHECK(error_of("safety keep_out add circle 1,1 0") ==
+        "safety keep_out add circle: circle radius must be > 0");
+  CHECK(error_of("safety keep_out add circle 1,1 r") == "safety keep_out: add circle: R: not a number: 'r'");
+  CHECK(error_of("safety keep_out add polygon \"0,0;1,1;1,0;0,1\"") ==
+        "safety keep_out add polygon: polygon edges 0 and 2 cross (the polygon must be simple)");
+  CHECK(error_of("safety keep_out add polygon \"0,0;1,1\"") ==
+        "safety keep_out add polygon: polygon needs >= 3 vertices, got 2");
+  CHECK(error_of("safety keep_out remove 1") == "safety keep_out remove: there is no keep-out zone");
+  const ParseResult far = parse_command("safety keep_out remove 3", guarded_command());
+  CHECK(far.error == "safety keep_out remove: K must be a zone number 1..2 (as 'safety' lists them), got 3");
+  CHECK(std::holds_alternative<NoOp>(far.action));
+  CHECK(parse_command("safety keep_out remove 1.5", guarded_command()).error ==
+        "safety keep_out remove: K must be a zone number 1..2 (as 'safety' lists them), got 1.5");
+  CHECK(error_of("safety keep_out clear now") == "safety keep_out: unexpected argument 'now'");
+  CHECK(error_of("safety fence") == "safety fence: expected box or polygon \"x,y;x,y;...\"");
+  CHECK(error_of("safety fence circle") ==
+        "safety fence: expected box or polygon \"x,y;x,y;...\", got 'circle'");
+  CHECK(error_of("safety fence polygon") == "safety fence polygon: missing vertices \"x,y;x,y;x,y\"");
+  CHECK(error_of("safety fence polygon \"0,0;4,0;4,1;1,1;1,4;0,4\"") ==
+        "safety fence polygon: a fence must be convex (it turns back at vertex 3); cut the rest out with "
+        "safety.keep_out");
+  CHECK(
+      error_of("safety fence polygon \"0,0;2000,0;0,1\"") ==
+      "safety fence polygon: fence vertex 1 (2000, 0) is outside the workspace [-w, w]^2 (safety.workspace = "
+      "1000): move it in or widen safety.workspace");
+  CHECK(error_of("safety fence polygon \"0,0;x,0;0,1\"") ==
+        "safety fence: polygon: point 2: not a number: 'x,0'");
+  CHECK(error_of("safety fence box margin=-1") == "safety fence: margin must be >= 0, got -1");
+  CHECK(error_of("safety fence box action=land") ==
+        "safety fence: unknown action 'land' (expected hold|stop|return)");
+  CHECK(error_of("safety fence box radius=1") ==
+        "safety fence: unknown parameter 'radius' (expected margin, action)");
+}

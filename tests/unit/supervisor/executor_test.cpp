@@ -167,3 +167,37 @@ TEST_CASE("executor: record start and stop", "[supervisor][executor]") {
   CHECK(r.errors.str().rfind("record start: ", 0) == 0);
   fs::remove_all(dir);
 }
+
+TEST_CASE(
+    "executor: safety changes are published as new epochs, a bad one publishes nothing, and safety shows "
+    "them",
+    "[supervisor][executor][safety]") {
+  Rig r;
+  run(r, "shape circle r=4");
+  run(r, "safety separation 0.25", kS);
+  REQUIRE(r.sent.size() == 2);
+  CHECK(r.sent.back().command.min_separation == 0.25);
+  CHECK(r.sent.back().command.shape.r0 == 4.0);  // the rest kept
+  run(r, "safety keep_out add circle 5,0 1", kS);
+  run(r, "safety fence polygon \"-9,-9;9,-9;0,9\" margin=0.5 action=return", kS);
+  REQUIRE(r.sent.size() == 4);
+  CHECK(r.sent.back().command.keep_out.size() == 1);
+  CHECK(r.sent.back().command.fence.size() == 3);
+  CHECK(r.sent.back().command.breach_action == core::BreachAction::Return);
+  CHECK(r.sent.back().id.epoch == 4);
+  const supervisor::ParseResult bad =
+      supervisor::parse_command("safety fence polygon \"0,0;4,0;4,1;1,1;1,4;0,4\"", r.authority.current());
+  CHECK_FALSE(bad.ok());
+  r.take_human();
+  r.take_events();
+  run(r, "safety", kS);
+  CHECK(r.sent.size() == 4);  // a question publishes nothing
+  const std::string shown = r.take_human();
+  CHECK(shown == supervisor::safety_lines(r.authority.current()));
+  CHECK(shown.find("    1  circle centre (5, 0) r=1\n") != std::string::npos);
+  const auto events = r.take_events();
+  REQUIRE(events.size() == 1);
+  CHECK(events[0]["event"] == "safety");
+  CHECK(events[0]["safety"]["breach_action"] == "return");
+  CHECK(events[0]["safety"]["fence_margin"] == 0.5);
+}

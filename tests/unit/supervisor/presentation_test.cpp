@@ -265,3 +265,39 @@ TEST_CASE("show: the command in force and who published it", "[supervisor][prese
   CHECK(t.rfind("no command in force yet", 0) == 0);
   CHECK(t.find("the agents follow epoch 6, published by another participant") != std::string::npos);
 }
+
+TEST_CASE(
+    "safety_lines: separation, the zones numbered from 1, the fence, its margin and breach action; in show "
+    "too",
+    "[supervisor][presentation][safety]") {
+  core::Command c;
+  CHECK(supervisor::safety_lines(c) ==
+        "  separation  off\n"
+        "  keep_out    none\n"
+        "  fence       box [-1000, 1000]^2 (safety.workspace)\n"
+        "  margin      0\n"
+        "  breach      hold\n");
+  c.min_separation = 0.25;
+  core::KeepOutZone circle;
+  circle.centre = core::Vec2(5, 0);
+  circle.radius = 1.5;
+  core::KeepOutZone triangle;
+  triangle.kind = core::KeepOutZone::Kind::Polygon;
+  triangle.vertices = {core::Vec2(0, 0), core::Vec2(1, 0), core::Vec2(0, 1)};
+  c.keep_out = {circle, triangle};
+  c.fence = {core::Vec2(-8, -8), core::Vec2(8, -8), core::Vec2(0, 9.5)};
+  c.fence_margin = 0.5;
+  c.breach_action = core::BreachAction::Return;
+  const std::string lines = supervisor::safety_lines(c);
+  CHECK(lines ==
+        "  separation  0.25\n"
+        "  keep_out    2 zones\n"
+        "    1  circle centre (5, 0) r=1.5\n"
+        "    2  polygon (0, 0; 1, 0; 0, 1)\n"
+        "  fence       polygon (-8, -8; 8, -8; 0, 9.5)\n"
+        "  margin      0.5\n"
+        "  breach      return\n");
+  supervisor::ShowInfo info;
+  info.command = c;
+  CHECK(supervisor::show_text(info).find(lines) != std::string::npos);
+}
