@@ -192,9 +192,13 @@ void AgentLogic::adopt() {
   zones_ = core::convex_pieces(cmd_.keep_out);
   safety_state_ = {};
   safety_ = {};
-  // Any new command releases a fence stop; an agent still outside the fence first returns inside.
-  beyond_ = core::beyond_fence(cmd_, x_) > 0.0;
-  fence_ = beyond_ ? FenceState::Returning : FenceState::Inside;
+  // Any new command releases a fence stop. An agent the new command's fence leaves outside breaches it
+  // (its action taken); one already outside (the excursion goes on: the operator's resume or a new
+  // shape after a breach) returns inside first.
+  fence_ = FenceState::Inside;
+  if (beyond_ && core::beyond_fence(cmd_, x_) > 0.0) fence_ = FenceState::Returning;
+  else beyond_ = false;
+  check_fence();
   if (lockstep_) {
     // A late joiner starts at the step the swarm is at, so nobody waits for its past.
     long k0 = 0;

@@ -91,6 +91,14 @@ std::vector<AgentRow> agent_rows(const SwarmMonitor& monitor, std::int64_t now_n
     r.epoch = a.command.epoch;
     if (shape && a.command == monitor.command_id()) r.shape_error = (a.x - core::target_point(*shape, cmd->curve(), a.x)).norm();
     r.neighbours_heard = a.neighbours_heard;
+    const dds::StatusSample& st = a.status;
+    if (st.epoch == monitor.epoch() && st.epoch != 0) {
+      if (st.beyond_fence) r.safety = "beyond the fence";
+      else if (st.blocked)
+        r.safety = st.blocked_by >= 0    ? "held by " + std::to_string(st.blocked_by)
+                   : st.blocked_by <= -2 ? "held by zone " + std::to_string(-2 - st.blocked_by)
+                                         : "held by the fence";
+    }
     rows.push_back(r);
   }
   return rows;
@@ -99,13 +107,13 @@ std::vector<AgentRow> agent_rows(const SwarmMonitor& monitor, std::int64_t now_n
 std::string status_table(const std::vector<AgentRow>& rows) {
   std::ostringstream o;
   char line[200];
-  std::snprintf(line, sizeof line, "%6s %-6s %10s %10s %10s %6s %11s %6s\n", "agent", "alive", "last_seen",
-                "x1", "x2", "epoch", "shape_error", "heard");
+  std::snprintf(line, sizeof line, "%6s %-6s %10s %10s %10s %6s %11s %6s  %s\n", "agent", "alive", "last_seen",
+                "x1", "x2", "epoch", "shape_error", "heard", "safety");
   o << line;
   for (const AgentRow& r : rows) {
-    std::snprintf(line, sizeof line, "%6d %-6s %9.2fs %10.4f %10.4f %6llu %11s %6s\n", r.id,
+    std::snprintf(line, sizeof line, "%6d %-6s %9.2fs %10.4f %10.4f %6llu %11s %6s  %s\n", r.id,
                   r.alive ? "yes" : (r.departed ? "left" : "DEAD"), r.last_seen_s, r.x.x(), r.x.y(), static_cast<unsigned long long>(r.epoch),
-                  fmt_opt(r.shape_error).c_str(), count_or_dash(r.neighbours_heard).c_str());
+                  fmt_opt(r.shape_error).c_str(), count_or_dash(r.neighbours_heard).c_str(), r.safety.c_str());
     o << line;
   }
   if (rows.empty()) o << "(no agent heard yet)\n";
@@ -123,7 +131,8 @@ nlohmann::json status_json(const std::vector<AgentRow>& rows, std::uint64_t epoc
                       {"y", r.x.y()},
                       {"epoch", r.epoch},
                       {"shape_error", or_null(r.shape_error)},
-                      {"neighbours_heard", or_null(r.neighbours_heard)}});
+                      {"neighbours_heard", or_null(r.neighbours_heard)},
+                      {"safety", r.safety}});
   return {{"event", "status"}, {"epoch", epoch}, {"model_time", model_time}, {"agents", std::move(agents)}};
 }
 

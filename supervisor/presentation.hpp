@@ -30,6 +30,9 @@ struct AgentRow {
   std::uint64_t epoch = 0;    ///< command epoch it follows
   std::optional<double> shape_error;    ///< |x - x_T(x)| when it follows the current command
   std::optional<int> neighbours_heard;  ///< from its latest AgentStatus
+  /// The safety filter, from its latest status of the current command: "held by 3", "held by zone 0",
+  /// "held by the fence", "beyond the fence", or empty.
+  std::string safety;
 };
 
 /// Every agent the monitor knows, ascending id, at now_ns; the shape error against the current

@@ -296,7 +296,9 @@ void SupervisorNode::drain_statuses(std::int64_t now) {
     std::string why;
     if (!r.valid_data || !dds::from_msg(r.msg, s, why) || !owned(s.id, r.source, now)) continue;
     monitor_.on_status(s);
-    if (s.beyond_fence && s.epoch == authority_.epoch()) on_breach(s, now);
+    // A breach of the command in force (an excursion that began under it: one going on since an
+    // earlier command is the agent returning inside, not a new breach).
+    if (s.beyond_fence && s.fence_breaches > 0 && s.epoch == authority_.epoch()) on_breach(s, now);
   }
 }
 

@@ -372,11 +372,15 @@ SafetyOutcome safety_filter(const SafetyParams& p, SafetyState& state, std::int3
       source.push_back(j.id);
     }
   }
+  Vec2 exit = Vec2::Zero();  // out of the zones x is in (one set over it): away from their insides
   for (const ConvexZone& z : zones) {
     bool in = false;
     out.cell.push_back(keep_out_half_plane(z, x, in));
     source.push_back(-1 - static_cast<std::int64_t>(z.zone));
-    if (in) ++out.inside_zones;
+    if (in) {
+      ++out.inside_zones;
+      exit -= out.cell.back().n;
+    }
   }
   // The fence's sides shrunk by its margin; one that x breaks (an agent outside: pushed by a vehicle's
   // momentum, placed there, a fence moved under it) becomes "go no further out", so x stays in the cell.
@@ -401,13 +405,21 @@ SafetyOutcome safety_filter(const SafetyParams& p, SafetyState& state, std::int3
     const Vec2 dir = l > 0.0 ? Vec2(away / l) : Vec2(-out.cell.front().n);
     goal = x + (out.max_step > 0.0 ? out.max_step : d - nearest_broken) * dir;
     state.held = 0;
+  } else if (out.inside_zones > 0 && exit.norm() > 0.0) {
+    // Inside a zone (set over the agent): out by the shortest way, a whole step at a time (or at once
+    // without a speed limit), whatever the law asks.
+    double deepest = 0.0;
+    for (const ConvexZone& z : zones)
+      if (inside(z, x)) deepest = std::max(deepest, z.circle ? z.radius - (x - z.centre).norm() : out.max_step);
+    goal = x + (out.max_step > 0.0 ? out.max_step : deepest + 1e-9) * Vec2(exit / exit.norm());
+    state.held = 0;
   } else if (state.sidestep_left > 0) {
     goal = x + turn_right(step, p.sidestep_deg);
     out.sidestep = true;
     --state.sidestep_left;
   }
   out.x = solve(goal);
-  if (out.broken == 0 && !out.sidestep) {
+  if (out.broken == 0 && out.inside_zones == 0 && !out.sidestep) {
     out.held = len > p.stuck_min_step && (out.x - x).norm() < p.stuck_fraction * len;
     state.held = out.held ? state.held + 1 : 0;
     if (state.held >= p.stuck_steps && p.stuck_steps > 0) {

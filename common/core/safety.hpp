@@ -145,7 +145,7 @@ struct SafetyOutcome {
   bool sidestep_started = false;  ///< this step began a sidestep (a deadlock resolution, counted)
   bool held = false;              ///< the law asks to move and the step was cut below stuck_fraction of it
   int broken = 0;                 ///< neighbours already closer than d: the agent stepped away from them
-  int inside_zones = 0;           ///< keep-out pieces the agent was already in (it went no deeper)
+  int inside_zones = 0;           ///< keep-out pieces the agent was already in (a zone set over it): it steps out
   /// The neighbour whose half-plane binds at x (the nearest binding one), -1 when none does; with a
   /// zone binding instead, blocking_zone is its index.
   std::int32_t blocking_id = -1;

@@ -855,7 +855,7 @@ TEST_CASE("safety filter: lockstep agents reproduce the simulator's filtered swa
   for (int i = 0; i < 8; ++i) CHECK((lock[i] - swarm.positions()[i]).norm() < 1e-12);
 }
 
-TEST_CASE("fence: a command adopted beyond the fence sends the agent back inside, the margin deep, then the law",
+TEST_CASE("fence: a command whose fence leaves the agent outside is a breach; the next command brings it back",
           "[agent][fence]") {
   core::Command c;
   c.shape.kind = core::ShapeKind::Circle;
@@ -869,7 +869,17 @@ TEST_CASE("fence: a command adopted beyond the fence sends the agent back inside
     AgentLogic a(0, Vec2(5, 0), 60 * kMs);
     REQUIRE(adopt(a, core::compile(c), 1));
     CHECK(a.beyond_fence());
-    CHECK(a.fence_state() == agent::FenceState::Returning);  // whatever the action: return first
+    CHECK(a.safety().fence_breaches == 1);
+    CHECK(a.take_breach() == Approx(2.0));
+    if (action != core::BreachAction::Return) {
+      // Stopped until the next command, which brings it back (not a new breach: the same excursion).
+      CHECK(a.fence_state() == agent::FenceState::Stopped);
+      for (int k = 0; k < 5; ++k) CHECK_FALSE(a.step());
+      CHECK(a.position() == Vec2(5, 0));
+      REQUIRE(adopt(a, core::compile(c), 2));
+      CHECK(a.safety().fence_breaches == 0);
+    }
+    CHECK(a.fence_state() == agent::FenceState::Returning);
     Vec2 last = a.position();
     int steps = 0;
     for (; steps < 20 && a.fence_state() != agent::FenceState::Inside; ++steps) {
@@ -882,7 +892,6 @@ TEST_CASE("fence: a command adopted beyond the fence sends the agent back inside
     CHECK(steps == 5);  // 5 - 2.8 = 2.2 at 0.5 per step
     CHECK(a.position().x() == Approx(2.8));
     CHECK_FALSE(a.beyond_fence());
-    CHECK(a.safety().fence_breaches == 0);  // outside when the command came: not a new excursion
     // Then the law, on the circle (inside the fence, which the filter keeps it in).
     for (int k = 0; k < 100; ++k) a.step();
     CHECK(std::abs(a.position().norm() - 2.0) < 0.01);

@@ -576,3 +576,23 @@ TEST_CASE("safety: an agent outside the fence is never pushed further out, and a
     CHECK(outside > 1000);
   }
 }
+
+TEST_CASE("safety: an agent inside a zone set over it steps out by the shortest way and stays out", "[safety]") {
+  KeepOutZone z;
+  z.centre = Vec2(0, 0);
+  z.radius = 1.0;
+  const auto pieces = convex_pieces({z});
+  SafetyParams p;
+  p.max_step = 0.2;
+  SafetyState state;
+  Vec2 x(0.3, 0.0);
+  // The law wants it to stay where it is (its slot is inside the zone).
+  for (int k = 0; k < 10; ++k) {
+    const SafetyOutcome f = safety_filter(p, state, 0, x, x, {}, pieces);
+    CHECK((f.x - x).norm() <= 0.2 + 1e-12);
+    if (k < 4) CHECK(f.x.x() > x.x());  // straight out, along the radius
+    x = f.x;
+  }
+  CHECK(x.norm() >= 1.0 - 1e-9);
+  CHECK(std::abs(x.y()) < 1e-12);
+}

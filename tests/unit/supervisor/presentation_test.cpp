@@ -45,7 +45,8 @@ TEST_CASE("status JSON and table carry the same facts for every agent", "[superv
   for (std::size_t i = 0; i < a.size(); ++i) {
     CHECK(a[i]["id"] == static_cast<int>(i));  // ascending id
     const std::set<std::string> keys = {"id",    "alive",       "state",
-                                            "last_seen_s", "x", "y", "epoch", "shape_error", "neighbours_heard"};
+                                            "last_seen_s", "x", "y", "epoch", "shape_error", "neighbours_heard",
+                                            "safety"};
     std::set<std::string> got;
     for (const auto& [k, v] : a[i].items()) got.insert(k);
     CHECK(got == keys);
@@ -67,10 +68,11 @@ TEST_CASE("status JSON and table carry the same facts for every agent", "[superv
   CHECK(a[4]["alive"] == false);
   CHECK(a[4]["state"] == "dead");  // silent
   CHECK(a[4]["last_seen_s"] == 2.0);
+  CHECK(a[0]["safety"] == "");  // the filter does not hold it
 
   const std::string table = supervisor::status_table(rows);
-  CHECK(table.find("     0 yes         0.00s     4.0000     0.0000      1      0.0000      3\n") != std::string::npos);
-  CHECK(table.find("     1 yes         0.50s     0.0000     5.0000      1      1.0000      -\n") != std::string::npos);
+  CHECK(table.find("     0 yes         0.00s     4.0000     0.0000      1      0.0000      3  \n") != std::string::npos);
+  CHECK(table.find("     1 yes         0.50s     0.0000     5.0000      1      1.0000      -  \n") != std::string::npos);
   CHECK(table.find("     3 left") != std::string::npos);
   CHECK(table.find("     4 DEAD") != std::string::npos);
   CHECK(supervisor::status_table({}).find("(no agent heard yet)") != std::string::npos);
@@ -300,4 +302,41 @@ TEST_CASE(
   supervisor::ShowInfo info;
   info.command = c;
   CHECK(supervisor::show_text(info).find(lines) != std::string::npos);
+}
+
+TEST_CASE("status: what the safety filter does to each agent, from its status of the current command",
+          "[supervisor][presentation]") {
+  const std::int64_t now = 10 * kS;
+  SwarmMonitor m(kS, {});
+  m.set_command(circle(), 1, 0);
+  for (int i = 0; i < 5; ++i) m.on_state(i, Vec2(i, 0), Vec2(i, 0), 1, 10.0, now);
+  auto st = test::status(0, 4);
+  st.blocked = true;
+  st.blocked_by = 3;
+  m.on_status(st);
+  st.id = 1;
+  st.blocked_by = -2;  // zone 0
+  m.on_status(st);
+  st.id = 2;
+  st.blocked_by = -1;
+  m.on_status(st);
+  st.id = 3;
+  st.blocked = false;
+  st.beyond_fence = true;
+  m.on_status(st);
+  st.id = 4;
+  st.beyond_fence = true;
+  st.epoch = 0;  // of another command: not shown
+  m.on_status(st);
+  const auto rows = supervisor::agent_rows(m, now, 10.0);
+  CHECK(rows[0].safety == "held by 3");
+  CHECK(rows[1].safety == "held by zone 0");
+  CHECK(rows[2].safety == "held by the fence");
+  CHECK(rows[3].safety == "beyond the fence");
+  CHECK(rows[4].safety == "");
+  CHECK(supervisor::status_table(rows).find("held by zone 0") != std::string::npos);
+  core::Metrics metrics;
+  m.run_figures(metrics, now);
+  CHECK(metrics.agents_blocked == 3);
+  CHECK(metrics.agents_beyond_fence == 1);
 }
