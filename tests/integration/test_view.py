@@ -15,7 +15,7 @@ blocked_mark}; the test compares that with the supervisor's recording, never wit
   an agent late: see the comment there).
   While the swarm forms: 8 agents drawn alive, the commanded outline drawn, the charts advancing,
   frames at >= 10 per second. The command carries a small separation and two keep-out zones well
-  away from the agents' paths (the safety filter on, never binding): both zones drawn, the safety line
+  away from the agents' paths (the safety filter on, the zones never near an agent): both zones drawn, the safety line
   shown, the separation chart with points and its dashed line at the separation.
 - replay: the same page on `shapeform_view --replay` of that recording: paused, the agents drawn are
   the recorded rows of the model time shown and the model time stands still; a seek (the page's
@@ -39,7 +39,7 @@ from selenium.webdriver.chrome.service import Service  # noqa: E402
 AGENTS = 8
 TOLERANCE = 0.05
 # A circle and a triangle outside the 10 x 10 start box (the circle of radius 4 forms inside it), and a
-# separation far below the agents' spacing: the filter runs on every step and never moves one.
+# separation far below the agents' spacing: the filter runs on every step, no agent comes near a zone.
 MIN_SEPARATION = 0.05
 KEEP_OUT = "[{circle: [7.5, 0, 0.5]}, {polygon: [[-7.5, -7.5], [-6.5, -7.5], [-7, -6.5]]}]"
 CHROMEDRIVER = "/usr/bin/chromedriver"
