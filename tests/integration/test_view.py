@@ -15,8 +15,8 @@ blocked_mark}; the test compares that with the supervisor's recording, never wit
   an agent late: see the comment there).
   While the swarm forms: 8 agents drawn alive, the commanded outline drawn, the charts advancing,
   frames at >= 10 per second. The command carries a small separation and two keep-out zones well
-  away from the agents' paths (the safety filter on, the zones never near an agent): both zones drawn, the safety line
-  shown, the separation chart with points and its dashed line at the separation.
+  away from the agents' paths (the safety filter on, the zones never near an agent): both zones drawn,
+  the safety line shown, the separation chart with points and its dashed line at the separation.
 - replay: the same page on `shapeform_view --replay` of that recording: paused, the agents drawn are
   the recorded rows of the model time shown and the model time stands still; a seek (the page's
   slider) shows the rows of the recording at the moment sought; play moves model time on; the
