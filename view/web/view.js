@@ -75,7 +75,9 @@ function zone_fill() {
   const g = tile.getContext("2d");
   g.fillStyle = "rgba(198, 40, 40, 0.10)"; g.fillRect(0, 0, 8, 8);
   g.strokeStyle = "rgba(198, 40, 40, 0.45)"; g.lineWidth = 1;
-  g.beginPath(); g.moveTo(0, 8); g.lineTo(8, 0); g.moveTo(-2, 2); g.lineTo(2, -2); g.moveTo(6, 10); g.lineTo(10, 6); g.stroke();
+  g.beginPath();  // one diagonal, continued across the tile's corners so that tiles join
+  g.moveTo(0, 8); g.lineTo(8, 0); g.moveTo(-2, 2); g.lineTo(2, -2); g.moveTo(6, 10); g.lineTo(10, 6);
+  g.stroke();
   hatch = ctx.createPattern(tile, "repeat");
   return hatch;
 }
@@ -201,7 +203,9 @@ function draw_series(id, f, series, level) {
   if (all.length === 0) return lines.map(() => 0);
   let t0 = Infinity, t1 = -Infinity, lo = 0, hi = 0;
   for (const l of lines) {
-    for (const p of l.pts) { t0 = Math.min(t0, p[0]); t1 = Math.max(t1, p[0]); lo = Math.min(lo, p[l.k]); hi = Math.max(hi, p[l.k]); }
+    for (const p of l.pts) {
+      t0 = Math.min(t0, p[0]); t1 = Math.max(t1, p[0]); lo = Math.min(lo, p[l.k]); hi = Math.max(hi, p[l.k]);
+    }
   }
   if (level !== null) { lo = Math.min(lo, level); hi = Math.max(hi, 1.1 * level); }
   t1 = Math.max(t1, t0 + 1e-9);
@@ -242,7 +246,8 @@ function fill_safety(f) {
   const shown = filters || SAFETY_COUNTS.some(([k]) => s[k]);
   box.hidden = !shown;
   if (!shown) return false;
-  const parts = SAFETY_COUNTS.map(([k, label]) => `<span class="${s[k] ? "nonzero" : ""}">${label} <b>${s[k] === null || s[k] === undefined ? "–" : s[k]}</b></span>`);
+  const parts = SAFETY_COUNTS.map(([k, label]) =>
+    `<span class="${s[k] ? "nonzero" : ""}">${label} <b>${s[k] === null || s[k] === undefined ? "–" : s[k]}</b></span>`);
   const run = s.min_separation_run === null || s.min_separation_run === undefined ? "–" :
     `${fmt(s.min_separation_run, 3)} (t = ${fmt(s.min_separation_run_time, 1)})`;
   box.innerHTML = `<span>safety: d = <b>${fmt(f.min_separation || 0, 3)}</b>, ${(f.keep_out || []).length} zone(s); ` +
