@@ -20,6 +20,33 @@ nlohmann::json optional_number(const std::optional<double>& v) {
   return v && std::isfinite(*v) ? nlohmann::json(*v) : nlohmann::json(nullptr);
 }
 
+/// The chart's columns, in the order of every point of Scene::chart_ (new columns go at the end: the
+/// page finds a column by name, a saved frame by position).
+constexpr const char* kChartColumns[] = {"model_time",   "shape_error_mean", "gap_cv",
+                                         "agents_alive", "min_separation",   "min_separation_run"};
+constexpr std::size_t kChartWidth = sizeof(kChartColumns) / sizeof(kChartColumns[0]);
+
+/// The run's safety figures of the metric table the page's safety line shows (docs/SAFETY.md).
+constexpr const char* kSafetyFigures[] = {
+    "min_separation_run", "min_separation_run_time", "filter_interventions", "deadlock_sidesteps",
+    "promises_broken",    "agents_blocked",          "fence_breaches",       "agents_beyond_fence"};
+
+/// The command's keep-out zones as the page draws them: {"circle": [cx, cy, r]} or
+/// {"polygon": [[x, y], ...]}, exact (the filter's own numbers), in the command's order.
+nlohmann::json zones_json(const std::vector<core::KeepOutZone>& zones) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const core::KeepOutZone& z : zones) {
+    if (z.kind == core::KeepOutZone::Kind::Circle) {
+      out.push_back({{"circle", {z.centre.x(), z.centre.y(), z.radius}}});
+    } else {
+      nlohmann::json vertices = nlohmann::json::array();
+      for (const core::Vec2& v : z.vertices) vertices.push_back({v.x(), v.y()});
+      out.push_back({{"polygon", std::move(vertices)}});
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 std::vector<core::Vec2> outline(const core::CompiledCommand& cmd, double t, int n, double line_half_length) {
@@ -58,7 +85,7 @@ void Series::push(const std::vector<double>& point) {
 }
 
 Scene::Scene(SceneParams p)
-    : p_(p), centre_path_(p.centre_path_capacity, 2), chart_(p.chart_capacity, 4) {}
+    : p_(p), centre_path_(p.centre_path_capacity, 2), chart_(p.chart_capacity, kChartWidth) {}
 
 void Scene::on_state(std::int32_t id, const core::Vec2& x, double model_time, std::uint64_t epoch, double now_s) {
   AgentInfo& a = agents_[id];
@@ -112,7 +139,9 @@ void Scene::on_metrics(double model_time, std::uint64_t epoch, int agents_alive,
   }
   if (!metrics_time_ || model_time != *metrics_time_ || chart_.size() == 0) {
     const auto nan = std::numeric_limits<double>::quiet_NaN();
-    chart_.push({model_time, m.shape_error_mean.value_or(nan), m.gap_cv.value_or(nan), static_cast<double>(agents_alive)});
+    chart_.push({model_time, m.shape_error_mean.value_or(nan), m.gap_cv.value_or(nan),
+                 static_cast<double>(agents_alive), m.min_separation.value_or(nan),
+                 m.min_separation_run.value_or(nan)});
   }
   metrics_time_ = model_time;
   metrics_ = app::metrics_json(m);
@@ -190,6 +219,10 @@ nlohmann::json Scene::frame(double now_s) {
     for (const auto& x : outline(*command_, t, p_.outline_points)) pts.push_back(point(x));
     out["outline"] = {{"points", std::move(pts)}, {"closed", command_->curve().closed()}};
   }
+  // The safety filter's constraints (docs/SAFETY.md), drawn under the agents. The fence (safety.fence:
+  // a convex polygon, empty meaning the workspace box) belongs here too once core::Command has it.
+  out["keep_out"] = command_ ? zones_json(command_->keep_out) : json::array();
+  out["min_separation"] = command_ ? command_->min_separation : 0.0;
   out["centre"] = centre_ ? point(*centre_) : json(nullptr);
   json path = json::array();
   for (const auto& p : centre_path_.points()) path.push_back(json::array({round4(p[0]), round4(p[1])}));
@@ -200,8 +233,14 @@ nlohmann::json Scene::frame(double now_s) {
     for (const double v : p) row.push_back(std::isfinite(v) ? json(v) : json(nullptr));
     chart.push_back(std::move(row));
   }
-  out["chart"] = {{"columns", {"model_time", "shape_error_mean", "gap_cv", "agents_alive"}}, {"points", std::move(chart)}};
+  json columns = json::array();
+  for (const char* c : kChartColumns) columns.push_back(c);
+  out["chart"] = {{"columns", std::move(columns)}, {"points", std::move(chart)}};
   out["metrics"] = metrics_;
+  json safety = json::object();
+  for (const char* name : kSafetyFigures)
+    safety[name] = metrics_.is_object() ? metrics_.at(name) : json(nullptr);
+  out["safety"] = std::move(safety);
   return out;
 }
 

@@ -1,10 +1,11 @@
 #pragma once
 /// What the viewer shows, without DDS, HTTP or clocks: the latest state of every agent, the command
-/// in force with its outline (sampled with the core's curve code), the tracked centre and its path,
-/// trails of the last seconds and the metric charts of the current epoch; and one frame of all that
-/// as JSON, the message the page draws. Fed by the live DDS readers (view/live.cpp) or by a recording
-/// (view/replay.hpp) through the same calls; `now_s` is the feeder's clock in seconds (the viewer's
-/// steady clock live, the recording's wall_s in replay).
+/// in force with its outline (sampled with the core's curve code) and its keep-out zones, the tracked
+/// centre and its path, trails of the last seconds, the metric charts of the current epoch and the
+/// run's safety figures; and one frame of all that as JSON, the message the page draws. Fed by the
+/// live DDS readers (view/live.cpp) or by a recording (view/replay.hpp) through the same calls;
+/// `now_s` is the feeder's clock in seconds (the viewer's steady clock live, the recording's wall_s in
+/// replay).
 #include <cstddef>
 #include <cstdint>
 #include <map>
@@ -100,8 +101,14 @@ class Scene {
   ///  "agents": [{"id", "x1", "x2", "state", "model_time", "epoch", "heard", "lateness_us", "heading"}],
   ///  "outline": {"points": [[x1, x2], ...], "closed"} or null, "centre": [x1, x2] or null,
   ///  "centre_path": [[x1, x2], ...], "trails": [{"id", "points": [[x1, x2], ...]}],
-  ///  "chart": {"columns": ["model_time", "shape_error_mean", "gap_cv", "agents_alive"], "points": [[...], ...]},
-  ///  "metrics": {"agents_alive", <every metric of core::kMetricTable>}}.
+  ///  "keep_out": [{"circle": [cx, cy, r]} | {"polygon": [[x1, x2], ...]}] (the command's zones, [] without),
+  ///  "min_separation": the command's d (0: off),
+  ///  "chart": {"columns": ["model_time", "shape_error_mean", "gap_cv", "agents_alive", "min_separation",
+  ///                        "min_separation_run"], "points": [[...], ...]},
+  ///  "metrics": {"agents_alive", <every metric of core::kMetricTable>} or null,
+  ///  "safety": {"min_separation_run", "min_separation_run_time", "filter_interventions",
+  ///             "deadlock_sidesteps", "promises_broken", "agents_blocked", "fence_breaches",
+  ///             "agents_beyond_fence"}: the latest metrics' run figures, each null when undefined}.
   /// Agent positions are exact; outline, centre path and trail points are rounded to 1e-4. "heading" is
   /// the vehicle's (rad), null without a pose heard within dead_s.
   nlohmann::json frame(double now_s);

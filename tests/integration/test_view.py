@@ -3,8 +3,9 @@
 
 The page exposes what it drew as window.shapeformDrawn = {agents: [{id, x1, x2, state, model_time}],
 outline_points, chart_points, chart_model_time (of the charts' newest point), model_time, frames,
-mode, replay}; the test compares that with the
-supervisor's recording, never with pixels.
+mode, replay, zones (keep-out zones drawn), separation_points and separation_run_points (of the
+separation chart), separation_limit (its dashed line, null without), safety_shown (the safety line),
+blocked_mark}; the test compares that with the supervisor's recording, never with pixels.
 
 - live: the viewer and the page first, then an 8-agent lockstep swarm with the supervisor recording.
   In lockstep the supervisor records every agent's position at the model time of the row (the
@@ -13,10 +14,13 @@ supervisor's recording, never with pixels.
   (the same state twice), every one within 0.5 (the supervisor's label can be a step off when it heard
   an agent late: see the comment there).
   While the swarm forms: 8 agents drawn alive, the commanded outline drawn, the charts advancing,
-  frames at >= 10 per second.
+  frames at >= 10 per second. The command carries a small separation and two keep-out zones well
+  away from the agents' paths (the safety filter on, the zones never near an agent): both zones drawn,
+  the safety line shown, the separation chart with points and its dashed line at the separation.
 - replay: the same page on `shapeform_view --replay` of that recording: paused, the agents drawn are
   the recorded rows of the model time shown and the model time stands still; a seek (the page's
-  slider) shows the rows of the recording at the moment sought; play moves model time on.
+  slider) shows the rows of the recording at the moment sought; play moves model time on; the
+  recorded command brings its zones back.
 - screenshot (not in the suite; regenerates docs/figures/view.png): a 12-agent circle forming live.
       python3 tests/integration/test_view.py --bin build/bin --source . --domain 132 ViewTest.test_screenshot
 """
@@ -34,6 +38,10 @@ from selenium.webdriver.chrome.service import Service  # noqa: E402
 
 AGENTS = 8
 TOLERANCE = 0.05
+# A circle and a triangle outside the 10 x 10 start box (the circle of radius 4 forms inside it), and a
+# separation far below the agents' spacing: the filter runs on every step, no agent comes near a zone.
+MIN_SEPARATION = 0.05
+KEEP_OUT = "[{circle: [7.5, 0, 0.5]}, {polygon: [[-7.5, -7.5], [-6.5, -7.5], [-7, -6.5]]}]"
 CHROMEDRIVER = "/usr/bin/chromedriver"
 
 
@@ -119,7 +127,7 @@ class ViewTest(harness.SwarmTestCase):
         launching = self.launch_browser()  # meanwhile: the bad arguments, the viewer and the swarm
         self.check_bad_arguments()
         config = harness.scenario("circle")
-        extra = self.swarm_config()
+        extra = self.swarm_config(["safety.min_separation=%g" % MIN_SEPARATION, "safety.keep_out=" + KEEP_OUT])
         record = os.path.join(self.run_dir, "record")
         view, url = self.start_view(["--config", config, "--domain", str(self.domain)] + extra)
         sup, agents = self.start_commanded_swarm(AGENTS, config, extra=extra, record=record)
@@ -131,6 +139,9 @@ class ViewTest(harness.SwarmTestCase):
                  20, "the page to draw %d alive agents following epoch 1" % AGENTS)
         self.assertEqual(sorted(a["id"] for a in d["agents"]), list(range(AGENTS)))
         self.assertGreater(d["outline_points"], 0, "the commanded circle is drawn")
+        self.assertEqual(d["zones"], 2, "the command's keep-out zones are drawn")
+        self.assertEqual(d["separation_limit"], MIN_SEPARATION, "the separation's dashed line")
+        self.assertTrue(d["safety_shown"], "the safety line is shown while the command filters")
         seen = set()
         first = d
         t0 = time.monotonic()
@@ -143,6 +154,8 @@ class ViewTest(harness.SwarmTestCase):
         # The charts advance: their newest point is later (a long series is thinned, so its count may drop).
         self.assertGreater(last["chart_points"], 0, "chart points drawn")
         self.assertGreater(last["chart_model_time"], first["chart_model_time"], "the charts advance")
+        self.assertGreater(last["separation_points"], 0, "the snapshot's smallest separation charted")
+        self.assertGreater(last["separation_run_points"], 0, "the run's smallest separation charted")
         self.assertGreater(last["model_time"], first["model_time"], "model time advances on the page")
         self.assertGreaterEqual((last["frames"] - first["frames"]) / elapsed, 10, "frames per second")
         self.assertEqual({s[0] for s in seen}, set(range(AGENTS)))
@@ -201,8 +214,8 @@ class ViewTest(harness.SwarmTestCase):
         self.browser.execute_script(
             "const s = document.getElementById('seek'); s.value = arguments[0];"
             "s.dispatchEvent(new Event('change'));", commanded - start + 0.5)
-        poll(lambda: (lambda d: d["epoch"] == 1 and d["outline_points"] > 0)(self.drawn()), 5,
-             "the replay to draw the recorded command")
+        poll(lambda: (lambda d: d["epoch"] == 1 and d["outline_points"] > 0 and d["zones"] == 2)(self.drawn()), 5,
+             "the replay to draw the recorded command and its zones")
 
     def test_screenshot(self):
         """Regenerates docs/figures/view.png: a 12-agent circle forming live."""

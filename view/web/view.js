@@ -13,18 +13,31 @@ let frames = 0;
 const arrivals = [];    // arrival times of recent frames (ms), for the frame rate shown
 
 window.shapeformDrawn = { agents: [], outline_points: 0, chart_points: 0, chart_model_time: null, model_time: null,
-  frames: 0, mode: null, replay: null };
+  frames: 0, mode: null, replay: null, zones: 0, separation_points: 0, separation_run_points: 0,
+  separation_limit: null, safety_shown: false, blocked_mark: false };
+
+// The safety line's counts: [key of the frame's "safety", label].
+const SAFETY_COUNTS = [["filter_interventions", "interventions"], ["deadlock_sidesteps", "sidesteps"],
+  ["promises_broken", "broken promises"], ["agents_blocked", "agents blocked"], ["fence_breaches", "fence breaches"],
+  ["agents_beyond_fence", "beyond the fence now"]];
 
 function fmt(v, digits) {
   return v === null || v === undefined ? "–" : Number(v).toFixed(digits);
 }
 
-// The world square to show: alive agents, a closed outline, the centre and its path.
+// The corners of a keep-out zone's bounding box ({circle: [cx, cy, r]} or {polygon: [[x, y], ...]}).
+function zone_extent(z) {
+  if (z.circle) { const [x, y, r] = z.circle; return [[x - r, y - r], [x + r, y + r]]; }
+  return z.polygon;
+}
+
+// The world square to show: alive agents, a closed outline, keep-out zones, the centre and its path.
 function target_view(f) {
   const xs = [], ys = [];
   const add = (x, y) => { xs.push(x); ys.push(y); };
   for (const a of f.agents) if (a.state !== "dead") add(a.x1, a.x2);
   if (f.outline && f.outline.closed) for (const p of f.outline.points) add(p[0], p[1]);
+  for (const z of f.keep_out || []) for (const p of zone_extent(z)) add(p[0], p[1]);
   if (f.centre) add(f.centre[0], f.centre[1]);
   for (const p of f.centre_path) add(p[0], p[1]);
   if (xs.length === 0) return { cx: 0, cy: 0, half: 10 };
@@ -53,6 +66,47 @@ function polyline(points, closed) {
   ctx.stroke();
 }
 
+// A red hatch for keep-out zones, made once.
+let hatch = null;
+function zone_fill() {
+  if (hatch) return hatch;
+  const tile = document.createElement("canvas");
+  tile.width = tile.height = 8;
+  const g = tile.getContext("2d");
+  g.fillStyle = "rgba(198, 40, 40, 0.10)"; g.fillRect(0, 0, 8, 8);
+  g.strokeStyle = "rgba(198, 40, 40, 0.45)"; g.lineWidth = 1;
+  g.beginPath();  // one diagonal, continued across the tile's corners so that tiles join
+  g.moveTo(0, 8); g.lineTo(8, 0); g.moveTo(-2, 2); g.lineTo(2, -2); g.moveTo(6, 10); g.lineTo(10, 6);
+  g.stroke();
+  hatch = ctx.createPattern(tile, "repeat");
+  return hatch;
+}
+
+// The command's keep-out zones: hatched, outlined in red. Returns how many were drawn.
+function draw_zones(zones) {
+  let n = 0;
+  ctx.setLineDash([]); ctx.lineWidth = 1.5; ctx.strokeStyle = "#c62828"; ctx.fillStyle = zone_fill();
+  for (const z of zones) {
+    ctx.beginPath();
+    if (z.circle) {
+      const [x, y, r] = z.circle;
+      const [u, v] = to_px(x, y);
+      ctx.arc(u, v, (r * canvas.width) / (2 * view.half), 0, 2 * Math.PI);
+    } else if (z.polygon && z.polygon.length >= 3) {
+      z.polygon.forEach((p, i) => {
+        const [u, v] = to_px(p[0], p[1]);
+        if (i === 0) ctx.moveTo(u, v); else ctx.lineTo(u, v);
+      });
+      ctx.closePath();
+    } else {
+      continue;
+    }
+    ctx.fill(); ctx.stroke();
+    n += 1;
+  }
+  return n;
+}
+
 function draw_scene(f) {
   view = ease(view, target_view(f));
   ctx.clearRect(0, 0, canvas.width, canvas.height);
@@ -65,6 +119,9 @@ function draw_scene(f) {
   for (let g = Math.ceil((view.cy - view.half) / step) * step; g <= view.cy + view.half; g += step) {
     polyline([[view.cx - view.half, g], [view.cx + view.half, g]], false);
   }
+  // Under everything else: the safety filter's constraints. (The fence, safety.fence, is to be drawn here
+  // too, as an outlined polygon, once the frame carries it.)
+  const zones = draw_zones(f.keep_out || []);
   let outline_points = 0;
   if (f.outline) {
     ctx.strokeStyle = "#2e7d32"; ctx.lineWidth = 2; ctx.setLineDash([8, 6]);
@@ -88,6 +145,18 @@ function draw_scene(f) {
     ctx.beginPath(); ctx.moveTo(u - 7, v); ctx.lineTo(u + 7, v); ctx.moveTo(u, v - 7); ctx.lineTo(u, v + 7); ctx.stroke();
   }
   const drawn = [];
+  // With a separation d, each live agent's disc of radius d / 2: two discs that touch are at the limit.
+  const d = f.min_separation || 0;
+  if (d > 0) {
+    ctx.strokeStyle = "rgba(21, 101, 192, 0.35)"; ctx.lineWidth = 1; ctx.setLineDash([2, 3]);
+    const r = (0.5 * d * canvas.width) / (2 * view.half);
+    for (const a of f.agents) {
+      if (a.state === "dead" || r < 2) continue;
+      const [u, v] = to_px(a.x1, a.x2);
+      ctx.beginPath(); ctx.arc(u, v, r, 0, 2 * Math.PI); ctx.stroke();
+    }
+    ctx.setLineDash([]);
+  }
   for (const a of f.agents) {
     const [u, v] = to_px(a.x1, a.x2);
     ctx.lineWidth = 2;
@@ -107,33 +176,83 @@ function draw_scene(f) {
     }
     drawn.push({ id: a.id, x1: a.x1, x2: a.x2, state: a.state, model_time: a.model_time, heading: heading, u: u, v: v });
   }
-  return { drawn: drawn, outline_points: outline_points };
+  // Agents held by the safety filter: the frame counts them but does not say which, so the mark is the
+  // scene's, not an agent's.
+  const blocked = f.safety ? f.safety.agents_blocked || 0 : 0;
+  if (blocked > 0) {
+    const text = blocked === 1 ? "1 agent held by the safety filter" : blocked + " agents held by the safety filter";
+    ctx.font = "bold 13px sans-serif";
+    const w = ctx.measureText(text).width + 16;
+    ctx.fillStyle = "rgba(198, 40, 40, 0.9)"; ctx.fillRect(8, 8, w, 22);
+    ctx.fillStyle = "#fff"; ctx.fillText(text, 16, 24);
+  }
+  return { drawn: drawn, outline_points: outline_points, zones: zones, blocked_mark: blocked > 0 };
 }
 
-function draw_chart(id, f, column) {
+// One chart of model time: `series` = [{column, colour}, ...] of f.chart, `level` a dashed horizontal
+// line (null: none). Returns the points drawn of each series.
+function draw_series(id, f, series, level) {
   const c = document.getElementById(id), g = c.getContext("2d");
   g.clearRect(0, 0, c.width, c.height);
-  const k = f.chart.columns.indexOf(column);
-  const pts = f.chart.points.filter((p) => Number.isFinite(p[0]) && Number.isFinite(p[k]));
-  if (pts.length === 0) return 0;
-  const t0 = pts[0][0], t1 = Math.max(pts[pts.length - 1][0], t0 + 1e-9);
-  let lo = 0, hi = 0;
-  for (const p of pts) { lo = Math.min(lo, p[k]); hi = Math.max(hi, p[k]); }
+  const lines = series.map((s) => {
+    const k = f.chart.columns.indexOf(s.column);
+    const pts = k < 0 ? [] : f.chart.points.filter((p) => Number.isFinite(p[0]) && Number.isFinite(p[k]));
+    return { k: k, colour: s.colour, pts: pts };
+  });
+  const all = lines.flatMap((l) => l.pts);
+  if (all.length === 0) return lines.map(() => 0);
+  let t0 = Infinity, t1 = -Infinity, lo = 0, hi = 0;
+  for (const l of lines) {
+    for (const p of l.pts) {
+      t0 = Math.min(t0, p[0]); t1 = Math.max(t1, p[0]); lo = Math.min(lo, p[l.k]); hi = Math.max(hi, p[l.k]);
+    }
+  }
+  if (level !== null) { lo = Math.min(lo, level); hi = Math.max(hi, 1.1 * level); }
+  t1 = Math.max(t1, t0 + 1e-9);
   if (hi <= lo) hi = lo + 1;
   const L = 40, R = 8, T = 8, B = 18, w = c.width - L - R, h = c.height - T - B;
-  g.strokeStyle = "#b0bec5"; g.lineWidth = 1;
+  const y = (value) => T + h - (h * (value - lo)) / (hi - lo);
+  g.strokeStyle = "#b0bec5"; g.lineWidth = 1; g.setLineDash([]);
   g.strokeRect(L, T, w, h);
   g.fillStyle = "#555"; g.font = "10px sans-serif";
   g.fillText(hi.toPrecision(3), 2, T + 8); g.fillText(lo.toPrecision(3), 2, T + h);
   g.fillText(t0.toFixed(0), L, c.height - 4); g.fillText(t1.toFixed(0), L + w - 24, c.height - 4);
-  g.strokeStyle = "#1565c0"; g.lineWidth = 1.5;
-  g.beginPath();
-  pts.forEach((p, i) => {
-    const u = L + (w * (p[0] - t0)) / (t1 - t0), v = T + h - (h * (p[k] - lo)) / (hi - lo);
-    if (i === 0) g.moveTo(u, v); else g.lineTo(u, v);
-  });
-  g.stroke();
-  return pts.length;
+  if (level !== null) {
+    g.strokeStyle = "#c62828"; g.lineWidth = 1; g.setLineDash([5, 4]);
+    g.beginPath(); g.moveTo(L, y(level)); g.lineTo(L + w, y(level)); g.stroke();
+    g.setLineDash([]);
+  }
+  for (const l of lines) {
+    g.strokeStyle = l.colour; g.lineWidth = 1.5;
+    g.beginPath();
+    l.pts.forEach((p, i) => {
+      const u = L + (w * (p[0] - t0)) / (t1 - t0);
+      if (i === 0) g.moveTo(u, y(p[l.k])); else g.lineTo(u, y(p[l.k]));
+    });
+    g.stroke();
+  }
+  return lines.map((l) => l.pts.length);
+}
+
+function draw_chart(id, f, column) {
+  return draw_series(id, f, [{ column: column, colour: "#1565c0" }], null)[0];
+}
+
+// The safety line: shown when the command filters (a separation or a zone) or a figure is non-zero.
+function fill_safety(f) {
+  const box = document.getElementById("safety");
+  const s = f.safety || {};
+  const filters = (f.min_separation || 0) > 0 || (f.keep_out || []).length > 0;
+  const shown = filters || SAFETY_COUNTS.some(([k]) => s[k]);
+  box.hidden = !shown;
+  if (!shown) return false;
+  const parts = SAFETY_COUNTS.map(([k, label]) =>
+    `<span class="${s[k] ? "nonzero" : ""}">${label} <b>${s[k] === null || s[k] === undefined ? "–" : s[k]}</b></span>`);
+  const run = s.min_separation_run === null || s.min_separation_run === undefined ? "–" :
+    `${fmt(s.min_separation_run, 3)} (t = ${fmt(s.min_separation_run_time, 1)})`;
+  box.innerHTML = `<span>safety: d = <b>${fmt(f.min_separation || 0, 3)}</b>, ${(f.keep_out || []).length} zone(s); ` +
+    `closest <b>${run}</b></span> ` + parts.join(" ");
+  return true;
 }
 
 function fill_table(f) {
@@ -191,6 +310,11 @@ function on_frame(f) {
   const s = draw_scene(f);
   const chart_points = draw_chart("chart-error", f, "shape_error_mean") + draw_chart("chart-gap", f, "gap_cv") +
     draw_chart("chart-alive", f, "agents_alive");
+  const d = f.min_separation || 0;
+  const [separation_points, separation_run_points] = draw_series("chart-separation", f,
+    [{ column: "min_separation", colour: "#1565c0" }, { column: "min_separation_run", colour: "#c62828" }],
+    d > 0 ? d : null);
+  const safety_shown = fill_safety(f);
   fill_table(f);
   fill_header(f);
   fill_replay(f);
@@ -205,6 +329,12 @@ function on_frame(f) {
     frames: frames,
     mode: f.mode,
     replay: f.replay || null,
+    zones: s.zones,
+    separation_points: separation_points,
+    separation_run_points: separation_run_points,
+    separation_limit: d > 0 ? d : null,
+    safety_shown: safety_shown,
+    blocked_mark: s.blocked_mark,
   };
   window._shapeformPx = s.drawn;
 }

@@ -129,3 +129,28 @@ TEST_CASE("ReplayFeeder: the scene shows what was recorded up to the position; b
   CHECK(scene.agents().at(1).x == core::Vec2(1.0, -1.5));
   CHECK(scene.frame(1.0)["chart"]["points"].size() == 1);
 }
+
+TEST_CASE("ReplayFeeder: a recording older than the safety figures plays, them null; its zones drawn") {
+  // write_recording's metrics.csv has min_separation but none of the run's safety columns.
+  const fs::path dir = write_recording("safety");
+  std::ofstream(dir / "commands.csv")
+      << "wall_s,model_time,epoch,issuer,issuer_name,command\n"
+         "0.9,0,1,01.02,supervisor,\"{\"\"shape.kind\"\":\"\"circle\"\","
+         "\"\"safety.min_separation\"\":\"\"0.2\"\","
+         "\"\"safety.keep_out\"\":\"\"[{circle: [4, 0, 1]}, {polygon: [[0, 5], [1, 5], [0, 6]]}]\"\"}\"\n";
+  const auto r = view::load_recording(dir);
+  view::Scene scene;
+  view::ReplayFeeder feeder(r, 5.0);
+  feeder.advance(scene, 1.25);
+  const auto f = scene.frame(1.25);
+  CHECK(f["min_separation"] == 0.2);
+  REQUIRE(f["keep_out"].size() == 2);
+  CHECK(f["keep_out"][0]["circle"] == nlohmann::json({4.0, 0.0, 1.0}));
+  CHECK(f["keep_out"][1]["polygon"].size() == 3);
+  for (const auto& [name, value] : f["safety"].items()) CHECK(value.is_null());
+  REQUIRE(f["chart"]["points"].size() == 3);
+  for (const auto& p : f["chart"]["points"]) {
+    CHECK(p.size() == f["chart"]["columns"].size());
+    CHECK(p.back().is_null());  // min_separation_run: no column
+  }
+}

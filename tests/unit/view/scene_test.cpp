@@ -163,3 +163,69 @@ TEST_CASE("Scene: the centre and its path; a command without tracking hides the 
   scene.on_command(circle(1.0), 2);
   CHECK(scene.frame(0.0)["centre"].is_null());
 }
+
+TEST_CASE("Scene::frame: the command's keep-out zones with their geometry and its separation; none without") {
+  view::Scene scene;
+  CHECK(scene.frame(0.0)["keep_out"] == nlohmann::json::array());
+  CHECK(scene.frame(0.0)["min_separation"] == 0.0);
+  core::Command c = circle(4.0);
+  c.min_separation = 0.25;
+  core::KeepOutZone disc;
+  disc.kind = core::KeepOutZone::Kind::Circle;
+  disc.centre = {5.0, -0.5};
+  disc.radius = 1.25;
+  core::KeepOutZone triangle;
+  triangle.kind = core::KeepOutZone::Kind::Polygon;
+  triangle.vertices = {{-3.5, 3.8}, {-1.5, 3.8}, {-2.5, 5.2}};
+  c.keep_out = {disc, triangle};
+  scene.on_command(shapes::compile(c), 3);
+  const auto f = scene.frame(0.0);
+  CHECK(f["min_separation"] == 0.25);
+  REQUIRE(f["keep_out"].size() == 2);
+  CHECK(f["keep_out"][0] == nlohmann::json({{"circle", {5.0, -0.5, 1.25}}}));
+  CHECK(f["keep_out"][1] == nlohmann::json({{"polygon", {{-3.5, 3.8}, {-1.5, 3.8}, {-2.5, 5.2}}}}));
+  scene.on_command(circle(4.0), 4);  // a command without zones clears them
+  CHECK(scene.frame(0.0)["keep_out"].empty());
+  CHECK(scene.frame(0.0)["min_separation"] == 0.0);
+}
+
+TEST_CASE("Scene::frame: the run's safety figures, null until defined; the separation charted at the end") {
+  view::Scene scene;
+  auto f = scene.frame(0.0);
+  REQUIRE(f["safety"].size() == 8);
+  for (const auto& [name, value] : f["safety"].items()) CHECK(value.is_null());
+  const nlohmann::json columns = {"model_time",   "shape_error_mean", "gap_cv",
+                                  "agents_alive", "min_separation",   "min_separation_run"};
+  CHECK(f["chart"]["columns"] == columns);
+
+  core::Metrics m;
+  m.shape_error_mean = 0.5;
+  m.min_separation = 0.4;
+  m.min_separation_run = 0.3;
+  m.min_separation_run_time = 7.5;
+  m.filter_interventions = 12;
+  m.deadlock_sidesteps = 1;
+  m.promises_broken = 0;
+  m.agents_blocked = 2;
+  m.fence_breaches = 0;  // agents_beyond_fence left undefined
+  scene.on_metrics(10.0, 1, 5, m, false);
+  m.min_separation = 0.35;
+  scene.on_metrics(11.0, 1, 5, m, false);
+  f = scene.frame(0.0);
+  const auto& s = f["safety"];
+  CHECK(s["min_separation_run"] == 0.3);
+  CHECK(s["min_separation_run_time"] == 7.5);
+  CHECK(s["filter_interventions"] == 12);
+  CHECK(s["deadlock_sidesteps"] == 1);
+  CHECK(s["promises_broken"] == 0);
+  CHECK(s["agents_blocked"] == 2);
+  CHECK(s["fence_breaches"] == 0);
+  CHECK(s["agents_beyond_fence"].is_null());
+  CHECK(f["metrics"]["agents_blocked"] == 2);
+  const auto& pts = f["chart"]["points"];
+  REQUIRE(pts.size() == 2);
+  for (const auto& p : pts) REQUIRE(p.size() == columns.size());
+  CHECK(pts[0] == nlohmann::json({10.0, 0.5, nullptr, 5.0, 0.4, 0.3}));
+  CHECK(pts[1][4] == 0.35);
+  CHECK(pts[1][5] == 0.3);
+}
