@@ -96,7 +96,7 @@ std::vector<AgentRow> agent_rows(const SwarmMonitor& monitor, std::int64_t now_n
       if (st.beyond_fence) r.safety = "beyond the fence";
       else if (st.blocked)
         r.safety = st.blocked_by >= 0    ? "held by " + std::to_string(st.blocked_by)
-                   : st.blocked_by <= -2 ? "held by zone " + std::to_string(-2 - st.blocked_by)
+                   : st.blocked_by <= -2 ? "held by zone " + std::to_string(-1 - st.blocked_by)
                                          : "held by the fence";
     }
     rows.push_back(r);

@@ -31,7 +31,7 @@ struct AgentRow {
   std::optional<double> shape_error;    ///< |x - x_T(x)| when it follows the current command
   std::optional<int> neighbours_heard;  ///< from its latest AgentStatus
   /// The safety filter, from its latest status of the current command: "held by 3", "held by zone 0",
-  /// "held by the fence", "beyond the fence", or empty.
+  /// "held by the fence", "beyond the fence", or empty. Zones are numbered from 1, as `safety` lists them.
   std::string safety;
 };
 

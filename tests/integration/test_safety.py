@@ -7,6 +7,13 @@
   supervisor's recorded positions; the filter intervened, and the swarm still converges. The same start
   without the filter comes closer than 0.25 (so the start does force the crossing the filter prevents).
 
+- From the console, on a converged 12-agent arc circle: a keep-out zone over part of the circle (agents
+  leave it and never enter it; the agent whose slot it covers is held at its edge, the verdict blocked
+  and the status naming the zone); a fence that leaves part of the swarm outside with the action
+  return (each counted as a breach, they come back inside and stay, held by the fence); a fence with
+  the action hold (the supervisor holds the swarm and says so; after `resume` the agents outside
+  return inside).
+
 Run directly: test_safety.py --bin build/bin --source . --domain 112
 """
 import itertools
@@ -70,6 +77,55 @@ class SafetyTest(harness.LauncherTestCase):
         last = harness.read_csv(os.path.join(run, "record", "metrics.csv"), numeric=True)[-1]
         self.assertEqual(last["min_separation_run"], on["min_separation_run"])
         self.assertEqual(last["filter_interventions"], on["filter_interventions"])
+
+
+    def agents_where(self, sup, ok):
+        """Whether every agent's position satisfies ok(x, y), by the supervisor's status."""
+        rows = harness.status_rows(sup.ask("status", "status"))
+        return len(rows) == AGENTS and all(ok(r["x1"], r["x2"]) for r in rows.values())
+
+    def test_zones_and_fence_from_the_console(self):
+        sets = ["--set", "swarm.agents=%d" % AGENTS, "--set", "dynamics.max_speed=0.2"]
+        sup, _ = self.start_commanded_swarm(AGENTS, harness.scenario("arc_circle"), sets)
+        self.assertTrue(sup.wait_converged(60))
+        # A zone over a piece of the circle longer than the gap between slots: one slot at least is in it.
+        self.assertEqual(sup.command("safety keep_out add circle 0,4 1.5"), 2)
+        outside_zone = lambda x, y: math.dist((x, y), (0, 4)) >= 1.5 - 1e-6  # noqa: E731
+        harness.poll(lambda: self.agents_where(sup, outside_zone), 30, "every agent out of the zone")
+        harness.poll(lambda: sup.metrics()["verdict"] == "blocked", 30, "the verdict blocked")
+        for _ in range(5):  # and they stay out
+            self.assertTrue(self.agents_where(sup, outside_zone))
+        rows = harness.status_rows(sup.ask("status", "status"))
+        self.assertIn("held by zone 1", [a["safety"] for a in sup.ask("status", "status")["agents"]])
+        self.assertEqual(len(rows), AGENTS)
+        m = sup.metrics()
+        self.assertFalse(m["converged"])
+        self.assertGreater(m["filter_interventions"], 0)
+        self.assertGreaterEqual(m["agents_blocked"], 1)
+        # A fence that leaves the agents left of x1 = -2 outside, action return: breaches, they come back.
+        sup.command("safety keep_out clear")
+        self.assertEqual(sup.command('safety fence polygon "-2,-6;6,-6;6,6;-2,6" action=return'), 4)
+        harness.poll(lambda: self.agents_where(sup, lambda x, y: x >= -2 - 1e-6), 30, "every agent inside the fence")
+        # (The figures come with the agents' statuses, once a second.)
+        m = harness.poll(lambda: (lambda m: m if m["fence_breaches"] and m["verdict"] == "blocked" and
+                                  m["agents_beyond_fence"] == 0 else None)(sup.metrics()),
+                         30, "the breaches counted, nobody beyond the fence, the verdict blocked")
+        self.assertGreaterEqual(m["fence_breaches"], 2, "the agents the fence left outside")
+        self.assertIn("held by the fence", [a["safety"] for a in sup.ask("status", "status")["agents"]])
+        # Action hold: the supervisor holds the swarm on the breach, and says which agent.
+        since = sup.mark()
+        sup.command('safety fence polygon "-6,-6;6,-6;6,2;-6,2" action=hold')
+        breach = sup.wait_event("fence_breach", 30, since, what="the supervisor's fence_breach event")
+        self.assertEqual(breach["action"], "hold")
+        self.assertGreater(breach["y"], 2)
+        held = sup.wait_event("epoch", 30, since, where=lambda e: e.get("hold"), what="the held epoch")
+        harness.poll(lambda: all(r["epoch"] == held["epoch"] for r in harness.status_rows(sup.ask("status", "status")).values()),
+                     30, "every agent on the held epoch")
+        harness.poll(lambda: (sup.metrics()["agents_beyond_fence"] or 0) > 0, 30,
+                     "agents beyond the fence, held where they were")
+        sup.command("resume")
+        harness.poll(lambda: self.agents_where(sup, lambda x, y: y <= 2 + 1e-6), 30, "every agent back inside")
+        harness.poll(lambda: sup.metrics()["agents_beyond_fence"] == 0, 30, "nobody beyond the fence")
 
 
 if __name__ == "__main__":

@@ -315,7 +315,7 @@ TEST_CASE("status: what the safety filter does to each agent, from its status of
   st.blocked_by = 3;
   m.on_status(st);
   st.id = 1;
-  st.blocked_by = -2;  // zone 0
+  st.blocked_by = -2;  // the first zone
   m.on_status(st);
   st.id = 2;
   st.blocked_by = -1;
@@ -330,11 +330,11 @@ TEST_CASE("status: what the safety filter does to each agent, from its status of
   m.on_status(st);
   const auto rows = supervisor::agent_rows(m, now, 10.0);
   CHECK(rows[0].safety == "held by 3");
-  CHECK(rows[1].safety == "held by zone 0");
+  CHECK(rows[1].safety == "held by zone 1");
   CHECK(rows[2].safety == "held by the fence");
   CHECK(rows[3].safety == "beyond the fence");
   CHECK(rows[4].safety == "");
-  CHECK(supervisor::status_table(rows).find("held by zone 0") != std::string::npos);
+  CHECK(supervisor::status_table(rows).find("held by zone 1") != std::string::npos);
   core::Metrics metrics;
   m.run_figures(metrics, now);
   CHECK(metrics.agents_blocked == 3);
