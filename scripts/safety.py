@@ -193,6 +193,17 @@ def measure_processes(a, sizes):
     return rows, out
 
 
+def write_block(begin, body):
+    """Replaces the generated block that starts with `begin` in docs/SAFETY.md by body."""
+    with open(DOC) as f:
+        text = f.read()
+    head, rest = text.split(begin)
+    _, tail = rest.split(END, 1)
+    with open(DOC, "w") as f:
+        f.write(head + begin + body + END + tail)
+    print(f"safety: wrote {DOC}", file=sys.stderr)
+
+
 def read_text(path):
     with open(path) as f:
         return f.read()
@@ -291,7 +302,7 @@ def main():
     ap.add_argument("--processes", action="store_true",
                     help="agent processes (scripts/launch_swarm.sh, the integrator, free running) instead of the "
                          "simulator: default sizes 12,50 and 2 seeds")
-    ap.add_argument("--rate", type=float, default=50.0, help="with --processes: the agents' loop rate, Hz")
+    ap.add_argument("--rate", type=float, default=20.0, help="with --processes: the agents' loop rate, Hz")
     a = ap.parse_args()
     if a.processes:
         return main_processes(a)
@@ -325,13 +336,7 @@ def main():
     print(f"safety: wrote {out}", file=sys.stderr)
     if a.write_docs:
         figure(rows, os.path.join(ROOT, "docs", "figures", "safety.png"))
-        with open(DOC) as f:
-            text = f.read()
-        head, rest = text.split(BEGIN)
-        _, tail = rest.split(END, 1)
-        with open(DOC, "w") as f:
-            f.write(head + BEGIN + f"`{cmdline}`: " + summary + "\n" + md + END + tail)
-        print(f"safety: wrote {DOC}", file=sys.stderr)
+        write_block(BEGIN, f"`{cmdline}`: " + summary + "\n" + md)
     return 0
 
 
@@ -361,14 +366,7 @@ def main_processes(a):
     cmdline = " ".join(["scripts/safety.py"] + [x for x in sys.argv[1:] if x != "--write-docs"])
     print(summary + md)
     if a.write_docs:
-        begin, end = BEGIN.replace("-->", "(processes) -->"), END
-        with open(DOC) as f:
-            text = f.read()
-        head, rest = text.split(begin)
-        _, tail = rest.split(end, 1)
-        with open(DOC, "w") as f:
-            f.write(head + begin + f"`{cmdline}`: " + summary + "\n" + md + end + tail)
-        print(f"safety: wrote {DOC}", file=sys.stderr)
+        write_block(BEGIN.replace("-->", "(processes) -->"), f"`{cmdline}`: " + summary + "\n" + md)
     return 0
 
 

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "app/json.hpp"
+#include "core/enum_names.hpp"
 
 namespace shapeform::view {
 
@@ -219,9 +220,17 @@ nlohmann::json Scene::frame(double now_s) {
     for (const auto& x : outline(*command_, t, p_.outline_points)) pts.push_back(point(x));
     out["outline"] = {{"points", std::move(pts)}, {"closed", command_->curve().closed()}};
   }
-  // The safety filter's constraints (docs/SAFETY.md), drawn under the agents. The fence (safety.fence:
-  // a convex polygon, empty meaning the workspace box) belongs here too once core::Command has it.
+  // The safety filter's constraints (docs/SAFETY.md), drawn under the agents: the zones, and the fence
+  // when the command sets one (safety.fence; without one the workspace box is the fence, not drawn).
   out["keep_out"] = command_ ? zones_json(command_->keep_out) : json::array();
+  out["fence"] = nullptr;
+  if (command_ && !command_->fence.empty()) {
+    json pts = json::array();
+    for (const auto& v : command_->fence) pts.push_back(json::array({v.x(), v.y()}));
+    out["fence"] = {{"polygon", std::move(pts)},
+                    {"margin", command_->fence_margin},
+                    {"action", core::params::name_of(core::params::kBreachActionNames, command_->breach_action)}};
+  }
   out["min_separation"] = command_ ? command_->min_separation : 0.0;
   out["centre"] = centre_ ? point(*centre_) : json(nullptr);
   json path = json::array();

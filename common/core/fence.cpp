@@ -11,16 +11,6 @@ namespace shapeform::core {
 
 namespace {
 
-double cross(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
-
-/// The point of segment [a, b] nearest p.
-Vec2 segment_point(const Vec2& a, const Vec2& b, const Vec2& p) {
-  const Vec2 e = b - a;
-  const double l2 = e.squaredNorm();
-  const double t = l2 > 0.0 ? std::clamp((p - a).dot(e) / l2, 0.0, 1.0) : 0.0;
-  return a + t * e;
-}
-
 /// The outward half-planes of a counter-clockwise convex polygon's edges, each shrunk by margin.
 std::vector<HalfPlane> sides(const std::vector<Vec2>& v, double margin) {
   std::vector<HalfPlane> out;

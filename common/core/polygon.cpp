@@ -6,8 +6,6 @@ namespace shapeform::core {
 
 namespace {
 
-double cross(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
-
 /// Whether segments [a, b] and [c, d] meet (touching counts).
 bool segments_meet(const Vec2& a, const Vec2& b, const Vec2& c, const Vec2& d) {
   const auto side = [](const Vec2& p, const Vec2& q, const Vec2& r) {

@@ -17,16 +17,6 @@ constexpr double kPi = 3.14159265358979323846;
 /// Rounding allowance of a constraint n . p <= b: relative to the size of its numbers.
 double tol(double b) { return 1e-12 * (1.0 + std::abs(b)); }
 
-double cross(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
-
-/// The point of segment [a, b] nearest p.
-Vec2 segment_point(const Vec2& a, const Vec2& b, const Vec2& p) {
-  const Vec2 e = b - a;
-  const double l2 = e.squaredNorm();
-  const double t = l2 > 0.0 ? std::clamp((p - a).dot(e) / l2, 0.0, 1.0) : 0.0;
-  return a + t * e;
-}
-
 bool convex_ccw(const std::vector<Vec2>& v) {
   for (std::size_t i = 0; i < v.size(); ++i) {
     const Vec2& a = v[i];
@@ -354,6 +344,13 @@ SafetyOutcome safety_filter(const SafetyParams& p, SafetyState& state, std::int3
   // with the neighbour doing the same (or keeping to its exact half-plane), each moves at most half the
   // true gap beyond d, whatever the angle (|x_j^ - x| <= D + margin).
   double reach = std::numeric_limits<double>::infinity();
+  // A stale neighbour too near for any step (its disc has no room): straight away from it is still safe
+  // (the true gap grows along -n as long as it exceeds the margin), so with exactly one such neighbour
+  // the agent may back off along -n, which is how a deadlock between two of them is broken.
+  int too_near = 0;
+  Vec2 near_n = Vec2::Zero();
+  std::int32_t near_id = -1;
+  double reach_others = std::numeric_limits<double>::infinity();
   if (d > 0.0) {
     for (const SafetyNeighbour& j : nbrs) {
       bool broken = false;
@@ -364,10 +361,19 @@ SafetyOutcome safety_filter(const SafetyParams& p, SafetyState& state, std::int3
         nearest_broken = std::min(nearest_broken, (j.x - x).norm());
       }
       const double margin = j.max_speed * j.age_s;
-      if (!broken && margin != 0.0)
-        reach = std::min(reach, std::isfinite(margin) && margin > 0.0
-                                    ? std::max(0.0, 0.5 * ((j.x - x).norm() - margin - d))
-                                    : 0.0);
+      if (!broken && margin != 0.0) {
+        const double room = std::isfinite(margin) && margin > 0.0 ? 0.5 * ((j.x - x).norm() - margin - d) : -1.0;
+        if (room > 0.0) {
+          reach_others = std::min(reach_others, room);
+        } else if (std::isfinite(margin) && margin > 0.0 && (j.x - x).norm() > margin) {
+          ++too_near;
+          near_n = h.n;
+          near_id = j.id;
+        } else {
+          too_near += 2;  // no safe direction at all (an unknown margin, or within it)
+        }
+        reach = std::min(reach, std::max(room, 0.0));
+      }
       out.cell.push_back(h);
       source.push_back(j.id);
     }
@@ -390,10 +396,31 @@ SafetyOutcome safety_filter(const SafetyParams& p, SafetyState& state, std::int3
   }
   if (reach < std::numeric_limits<double>::infinity())
     out.max_step = p.max_step > 0.0 ? std::min(p.max_step, reach) : reach;
-  const bool frozen = reach == 0.0;  // a stale neighbour too near to move at all: stand still
-  out.still = frozen;
+  const bool frozen = reach == 0.0;  // a stale neighbour too near to move at all: stand still ...
+  const bool back_off = frozen && too_near == 1;  // ... or back straight away from the one
+  double ray = 0.0;                                // how far it may back off
+  if (back_off) {
+    ray = std::min(p.max_step > 0.0 ? p.max_step : std::numeric_limits<double>::infinity(), reach_others);
+    for (const HalfPlane& h : out.cell) {
+      const double toward = -h.n.dot(near_n);  // the rate at which backing off approaches h's line
+      if (toward > 0.0) ray = std::min(ray, std::max(0.0, (h.b - h.n.dot(x)) / toward));
+    }
+    if (!std::isfinite(ray)) ray = 0.0;
+    // The cell becomes the ray: the line through x along n (both sides) and the disc of radius `ray`.
+    const Vec2 side(-near_n.y(), near_n.x());
+    out.cell.push_back({side, side.dot(x)});
+    out.cell.push_back({-side, -side.dot(x)});
+    source.push_back(near_id);
+    source.push_back(near_id);
+    out.max_step = ray;
+  }
+  out.still = frozen && !back_off;
+  // While sidestepping, an agent that can only back off does (the right-hand turn has no room).
   const auto solve = [&](const Vec2& goal) {
-    return frozen ? x : closest_feasible(goal, out.cell, x, out.max_step);
+    if (!frozen) return closest_feasible(goal, out.cell, x, out.max_step);
+    if (!back_off) return x;
+    const Vec2 g = out.sidestep ? Vec2(x - ray * near_n) : goal;
+    return Vec2(x - std::clamp(-(g - x).dot(near_n), 0.0, ray) * near_n);
   };
   const Vec2 step = wanted - x;
   const double len = step.norm();

@@ -14,7 +14,7 @@ const arrivals = [];    // arrival times of recent frames (ms), for the frame ra
 
 window.shapeformDrawn = { agents: [], outline_points: 0, chart_points: 0, chart_model_time: null, model_time: null,
   frames: 0, mode: null, replay: null, zones: 0, separation_points: 0, separation_run_points: 0,
-  separation_limit: null, safety_shown: false, blocked_mark: false };
+  separation_limit: null, safety_shown: false, blocked_mark: false, fence_points: 0 };
 
 // The safety line's counts: [key of the frame's "safety", label].
 const SAFETY_COUNTS = [["filter_interventions", "interventions"], ["deadlock_sidesteps", "sidesteps"],
@@ -38,6 +38,7 @@ function target_view(f) {
   for (const a of f.agents) if (a.state !== "dead") add(a.x1, a.x2);
   if (f.outline && f.outline.closed) for (const p of f.outline.points) add(p[0], p[1]);
   for (const z of f.keep_out || []) for (const p of zone_extent(z)) add(p[0], p[1]);
+  if (f.fence) for (const p of f.fence.polygon) add(p[0], p[1]);
   if (f.centre) add(f.centre[0], f.centre[1]);
   for (const p of f.centre_path) add(p[0], p[1]);
   if (xs.length === 0) return { cx: 0, cy: 0, half: 10 };
@@ -119,8 +120,11 @@ function draw_scene(f) {
   for (let g = Math.ceil((view.cy - view.half) / step) * step; g <= view.cy + view.half; g += step) {
     polyline([[view.cx - view.half, g], [view.cx + view.half, g]], false);
   }
-  // Under everything else: the safety filter's constraints. (The fence, safety.fence, is to be drawn here
-  // too, as an outlined polygon, once the frame carries it.)
+  // Under everything else: the safety filter's constraints, the fence (safety.fence) and the zones.
+  if (f.fence) {
+    ctx.strokeStyle = "#ef6c00"; ctx.lineWidth = 2;
+    polyline(f.fence.polygon, true);
+  }
   const zones = draw_zones(f.keep_out || []);
   let outline_points = 0;
   if (f.outline) {
@@ -242,7 +246,7 @@ function draw_chart(id, f, column) {
 function fill_safety(f) {
   const box = document.getElementById("safety");
   const s = f.safety || {};
-  const filters = (f.min_separation || 0) > 0 || (f.keep_out || []).length > 0;
+  const filters = (f.min_separation || 0) > 0 || (f.keep_out || []).length > 0 || !!f.fence;
   const shown = filters || SAFETY_COUNTS.some(([k]) => s[k]);
   box.hidden = !shown;
   if (!shown) return false;
@@ -250,7 +254,8 @@ function fill_safety(f) {
     `<span class="${s[k] ? "nonzero" : ""}">${label} <b>${s[k] === null || s[k] === undefined ? "–" : s[k]}</b></span>`);
   const run = s.min_separation_run === null || s.min_separation_run === undefined ? "–" :
     `${fmt(s.min_separation_run, 3)} (t = ${fmt(s.min_separation_run_time, 1)})`;
-  box.innerHTML = `<span>safety: d = <b>${fmt(f.min_separation || 0, 3)}</b>, ${(f.keep_out || []).length} zone(s); ` +
+  box.innerHTML = `<span>safety: d = <b>${fmt(f.min_separation || 0, 3)}</b>, ${(f.keep_out || []).length} zone(s)` +
+    (f.fence ? `, fence of ${f.fence.polygon.length} sides (margin ${fmt(f.fence.margin, 3)}, on breach ${f.fence.action})` : "") + "; " +
     `closest <b>${run}</b></span> ` + parts.join(" ");
   return true;
 }
@@ -335,6 +340,7 @@ function on_frame(f) {
     separation_limit: d > 0 ? d : null,
     safety_shown: safety_shown,
     blocked_mark: s.blocked_mark,
+    fence_points: f.fence ? f.fence.polygon.length : 0,
   };
   window._shapeformPx = s.drawn;
 }

@@ -184,8 +184,18 @@ TEST_CASE("Scene::frame: the command's keep-out zones with their geometry and it
   REQUIRE(f["keep_out"].size() == 2);
   CHECK(f["keep_out"][0] == nlohmann::json({{"circle", {5.0, -0.5, 1.25}}}));
   CHECK(f["keep_out"][1] == nlohmann::json({{"polygon", {{-3.5, 3.8}, {-1.5, 3.8}, {-2.5, 5.2}}}}));
-  scene.on_command(circle(4.0), 4);  // a command without zones clears them
+  CHECK(f["fence"].is_null());  // no fence set: the workspace box, not drawn
+  c.fence = {{-6.0, -6.0}, {6.0, -6.0}, {6.0, 2.0}, {-6.0, 2.0}};
+  c.fence_margin = 0.5;
+  c.breach_action = core::BreachAction::Return;
+  scene.on_command(shapes::compile(c), 4);
+  const auto g = scene.frame(0.0);
+  CHECK(g["fence"] == nlohmann::json({{"polygon", {{-6.0, -6.0}, {6.0, -6.0}, {6.0, 2.0}, {-6.0, 2.0}}},
+                                      {"margin", 0.5},
+                                      {"action", "return"}}));
+  scene.on_command(circle(4.0), 5);  // a command without zones clears them
   CHECK(scene.frame(0.0)["keep_out"].empty());
+  CHECK(scene.frame(0.0)["fence"].is_null());
   CHECK(scene.frame(0.0)["min_separation"] == 0.0);
 }
 
