@@ -354,6 +354,47 @@ TEST_CASE("safety: two agents head-on are held, sidestep to their right, pass, a
   CHECK((x[1] - goal[1]).norm() < 1e-6);
 }
 
+TEST_CASE("safety: two agents seeing each other a step late, too near for any step, back off and pass",
+          "[safety]") {
+  // Within d + margin of each other's stale states: the stale disc leaves no room, so both would stand
+  // still for ever; backing off (while sidestepping) opens the gap, and then they pass to their right.
+  for (const bool back_off : {true, false}) {
+    CAPTURE(back_off);
+    SafetyParams p;
+    p.min_separation = 0.25;
+    p.max_step = 0.1;
+    Vec2 x[2] = {Vec2(-0.15, 0), Vec2(0.15, 0)};
+    Vec2 seen[2] = {x[0], x[1]};  // what the other heard: the state of one step earlier
+    const Vec2 goal[2] = {Vec2(2, 0), Vec2(-2, 0)};
+    SafetyState st[2];
+    double closest = 1e9;
+    for (int k = 0; k < 600; ++k) {
+      Vec2 next[2];
+      for (int i = 0; i < 2; ++i) {
+        const Vec2 step = goal[i] - x[i];
+        const Vec2 wanted = x[i] + (step.norm() > 0.1 ? Vec2(0.1 * step.normalized()) : step);
+        // The neighbour one step old: a margin of one step (0.1) at speed 0.1 per unit age.
+        SafetyNeighbour j{1 - i, seen[1 - i], 1.0, 0.1};
+        if (!back_off) j.age_s = 1e9;  // an unknown margin: no direction is safe, it stands still
+        next[i] = safety_filter(p, st[i], i, x[i], wanted, {j}, {}).x;
+      }
+      seen[0] = x[0];
+      seen[1] = x[1];
+      x[0] = next[0];
+      x[1] = next[1];
+      closest = std::min(closest, (x[0] - x[1]).norm());
+    }
+    CHECK(closest >= 0.25 - 1e-9);
+    if (back_off) {
+      CHECK((x[0] - goal[0]).norm() < 1e-6);  // both arrived
+      CHECK((x[1] - goal[1]).norm() < 1e-6);
+    } else {
+      CHECK(x[0] == Vec2(-0.15, 0));
+      CHECK(x[1] == Vec2(0.15, 0));
+    }
+  }
+}
+
 TEST_CASE("safety: without the sidestep the head-on pair stays held (the test above needs it)", "[safety]") {
   SafetyParams p;
   p.min_separation = 1.0;
