@@ -349,6 +349,15 @@ core::StepResult AgentLogic::filtered(const core::StepResult& r, std::optional<c
   const auto age = [&](std::int64_t seen_ns) {
     return (static_cast<double>(std::max<std::int64_t>(now_ns_ - seen_ns, 0)) * 1e-9 / period_s_ + 1.0) * cmd_.dt;
   };
+  // A state that spent long on the way (a transport slower than a period: an overloaded host) is older
+  // than its reception says. Agents on one command step once per tick from about the same moment, so
+  // how far the state's model time is behind this agent's own counts its steps since, with no common
+  // clock; a gap past kMaxLagSteps is clocks that started apart (a late joiner), not age.
+  const auto lag = [&](const Snapshot& snap) {
+    if (snap.command != followed) return 0.0;
+    const double behind = (t_ - snap.model_time) / cmd_.dt + 1.0;
+    return behind <= kMaxLagSteps ? behind * cmd_.dt : 0.0;
+  };
   // A neighbour known at the last step but no longer in the table: kept while its silence is short.
   const auto silent = [&](const Known& g) {
     if (now_ns_ - g.seen_ns > kSilentMemory_ns) return;
@@ -366,7 +375,7 @@ core::StepResult AgentLogic::filtered(const core::StepResult& r, std::optional<c
     if (lockstep_ && e.cur.command == followed && step_of(e.cur.model_time) > k && e.prev.command == followed)
       use = &e.prev;
     const bool exact = lockstep_ && use->command == followed && step_of(use->model_time) == k;
-    snbrs_.push_back({e.id, use->x, exact ? 0.0 : age(e.last_seen_ns), max_speed});
+    snbrs_.push_back({e.id, use->x, exact ? 0.0 : std::max(age(e.last_seen_ns), lag(*use)), max_speed});
     known_next_.push_back({e.id, e.cur.x, e.last_seen_ns});
   }
   for (; g != known_.end(); ++g) silent(*g);

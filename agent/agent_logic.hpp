@@ -196,9 +196,13 @@ class AgentLogic {
   /// timeout, a stalled or killed process, a robot without poses) as an obstacle at its last position,
   /// its margin growing with the silence: the law forgets it at once, the filter not.
   static constexpr std::int64_t kSilentMemory_ns = 1'000'000'000;
+  /// A neighbour state whose model time is up to this many steps behind the agent's own is taken to be
+  /// that old (the transport may take longer than a period); further behind, its clock started apart.
+  static constexpr double kMaxLagSteps = 40.0;
   /// The loop period, s: the safety filter takes a neighbour state received a seconds ago as
   /// a / period_s + 1 of its steps old (the steps it may have taken since, and one more while this agent
-  /// steps), each at most the command's and the vehicle's speed bound (core::safety_params).
+  /// steps), or as many steps as its model time is behind this agent's when that is more (up to
+  /// kMaxLagSteps), each at most the command's and the vehicle's speed bound (core::safety_params).
   void set_period(double period_s) { period_s_ = period_s; }
   const SafetyFigures& safety() const { return safety_; }
   /// Whether the agent is beyond the fence now (at its last step or check), and what it does about it.

@@ -827,7 +827,7 @@ TEST_CASE("safety filter: free-running agents with late and lost states never co
   std::vector<AgentLogic> agents;
   // Without the filter the crossing comes closer (so the start does force it).
   CHECK(free_running(line_90(0.0), start, 400, agents) < d);
-  for (const std::int64_t latency : {1 * kMs, 15 * kMs, 35 * kMs})
+  for (const std::int64_t latency : {1 * kMs, 15 * kMs, 35 * kMs, 150 * kMs})
     for (const double loss : {0.0, 0.3, 0.7}) {
       CAPTURE(latency, loss);
       CHECK(free_running(line_90(d), start, 400, agents, latency, loss) >= d - 1e-9);
