@@ -350,6 +350,9 @@ def main_processes(a):
         out = a.replot
     else:
         rows, out = measure_processes(a, sizes)
+        os.makedirs(out, exist_ok=True)
+        with open(os.path.join(out, "command.txt"), "w") as f:  # the command that measured, for --replot
+            f.write(" ".join(["scripts/safety.py"] + [x for x in sys.argv[1:] if x != "--write-docs"]) + "\n")
     md = table_processes(rows, a.rate)
     below = [r for r in rows if r["min_on"] < SEPARATION - 1e-9]
     ages = [r["age_p99_ms"] for r in rows if r["age_p99_ms"] is not None]
@@ -363,7 +366,8 @@ def main_processes(a):
         json.dump(rows, f, indent=1)
     with open(os.path.join(out, "table.md"), "w") as f:
         f.write(summary + "\n" + md)
-    cmdline = " ".join(["scripts/safety.py"] + [x for x in sys.argv[1:] if x != "--write-docs"])
+    command = os.path.join(out, "command.txt")
+    cmdline = read_text(command).strip() if os.path.exists(command) else "scripts/safety.py --processes"
     print(summary + md)
     if a.write_docs:
         write_block(BEGIN.replace("-->", "(processes) -->"), f"`{cmdline}`: " + summary + "\n" + md)
