@@ -287,7 +287,7 @@ def measure(a, sizes, vehicles):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0],
-                                 usage="scripts/safety.py [--build build] [--sizes 12,50,200] [--seeds 20] "
+                                 usage="scripts/safety.py [--processes [--rate 20]] [--build build] [--sizes 12,50,200] [--seeds 20] "
                                        "[--steps 400] [--jobs 1] [--out DIR] [--replot DIR] [--write-docs]")
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
     ap.add_argument("--sizes", default="12,50,200", help="swarm sizes, comma-separated")
