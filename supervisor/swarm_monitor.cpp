@@ -77,12 +77,6 @@ void SwarmMonitor::run_figures(core::Metrics& m, std::int64_t now_ns) const {
   m.agents_beyond_fence = beyond;
 }
 
-int SwarmMonitor::blocked_count(std::int64_t now_ns) const {
-  int n = 0;
-  for (const auto& [id, a] : agents_) n += alive(a, now_ns) && a.status.epoch == id_.epoch && a.status.blocked ? 1 : 0;
-  return n;
-}
-
 void SwarmMonitor::on_departed(std::int32_t id) {
   const auto it = agents_.find(id);
   if (it != agents_.end()) it->second.departed = true;
@@ -173,9 +167,12 @@ SwarmMonitor::Sample SwarmMonitor::update(double model_time, std::int64_t now_ns
     const std::optional<double>& low = s.metrics.min_separation;
     if (low && s.following == s.alive && (!sampled_min_ || *low < sampled_min_->first)) {
       sampled_min_ = std::make_pair(*low, model_time);
-      run_figures(s.metrics, now_ns);
+      if (!s.metrics.min_separation_run || *low < *s.metrics.min_separation_run) {
+        s.metrics.min_separation_run = *low;
+        s.metrics.min_separation_run_time = model_time;
+      }
     }
-    if (s.alive > 0 && s.following == s.alive && blocked_count(now_ns) > 0) {
+    if (s.alive > 0 && s.following == s.alive && s.metrics.agents_blocked.value_or(0) > 0) {
       detector_.blocked();  // the safety filter holds agents from their slots: never converged now
       hist_t_.push_back(model_time);
       hist_err_.push_back(s.metrics.shape_error_mean.value_or(0.0));

@@ -83,8 +83,6 @@ class SwarmMonitor {
   /// latest statuses of it and the metrics samples since the command; the fence and filter figures
   /// stay null until an agent reports one.
   void run_figures(core::Metrics& m, std::int64_t now_ns) const;
-  /// Alive agents whose latest status says the safety filter holds them (blocked).
-  int blocked_count(std::int64_t now_ns) const;
 
   /// The metrics of the alive agents at model time t. No command: all null.
   struct Sample {
