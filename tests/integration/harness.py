@@ -33,6 +33,7 @@ from shapeform_procs import (Proc, events, last_json_line, poll, processes_in_gr
 CONFIG = {"bin": None, "source": None, "domain": None, "work": None}
 
 LOG_TAIL_LINES = 30
+OUT_TAIL_LINES = 6
 
 
 def bin_path(name):
@@ -164,18 +165,33 @@ class SwarmTestCase(unittest.TestCase):
         if new_shm:
             problems.append("new Fast DDS shared-memory files in %s: %s" % (procs.SHM_DIR, new_shm))
         if failed or problems:
+            self.print_failure()
             self.print_logs()
         sys.stderr.write("[%s] %.1f s, run folder %s\n" % (self.id(), time.monotonic() - self.t0, self.run_dir))
         if problems:
             self.fail("after the test: " + "; ".join(problems))
 
-    def _failed(self):
+    def _failures(self):
+        """(test, traceback text) of this test's failures and errors so far; None when unknown."""
         outcome = getattr(self, "_outcome", None)
         result = getattr(outcome, "result", None)
         if result is None:
-            return True
+            return None
         # Sub-tests are recorded as _SubTest objects that point back to their test case.
-        return any(getattr(t, "test_case", t) is self for t, _ in list(result.failures) + list(result.errors))
+        return [(t, text) for t, text in list(result.failures) + list(result.errors)
+                if getattr(t, "test_case", t) is self]
+
+    def _failed(self):
+        failures = self._failures()
+        return failures is None or bool(failures)
+
+    def print_failure(self):
+        """The failure's own message first, so that a log cut for length still shows what failed."""
+        for _, text in self._failures() or []:
+            lines = text.rstrip().splitlines()
+            where = [l.strip() for l in lines if l.strip().startswith("File ")]
+            sys.stderr.write("===== %s failed at %s: %s\n"
+                             % (self.id(), where[-1] if where else "?", lines[-1] if lines else "?"))
 
     def print_logs(self):
         names = []
@@ -184,7 +200,8 @@ class SwarmTestCase(unittest.TestCase):
                 if f.endswith((".log", ".out")):
                     names.append(os.path.join(root, f))
         for path in sorted(names):
-            lines = tail(path)
+            # Logs are prose; the JSON event lines of .out files are long, so fewer of them.
+            lines = tail(path, LOG_TAIL_LINES if path.endswith(".log") else OUT_TAIL_LINES)
             if not lines:
                 continue
             sys.stderr.write("----- last %d lines of %s\n" % (len(lines), os.path.relpath(path, self.run_dir)))
