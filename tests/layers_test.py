@@ -31,7 +31,7 @@ ALLOWED = {
     "vehicle": {"core", "protocol", "dds", "config", "util", "app"},
     "supervisor": {"core", "shapes", "protocol", "dds", "config", "util", "app", "record"},
     "bench": {"core", "protocol", "dds", "config", "util", "app", "shapeform"},
-    "tools": {"core", "protocol", "dds", "config", "util", "app"},
+    "tools": {"core", "protocol", "dds", "config", "util", "app", "record"},  # shapeform_mcap reads record/mcap
     "view": {"core", "shapes", "protocol", "dds", "config", "util", "app", "record"},  # replay reads what record writes
 }
 # Third-party headers each folder may use: core is pure maths, and only common/dds sees Fast DDS.

@@ -744,6 +744,11 @@ McapReader::McapReader(const std::filesystem::path& file) : path_(file) {
 
 McapReader recover_mcap(const std::filesystem::path& in, const std::filesystem::path& out, McapOptions options) {
   McapReader reader(in);
+  rewrite_mcap(reader, out, std::move(options));
+  return reader;
+}
+
+void rewrite_mcap(const McapReader& reader, const std::filesystem::path& out, McapOptions options) {
   if (options.profile.empty()) options.profile = reader.profile();
   McapWriter writer(options);
   writer.open(out);
@@ -758,7 +763,7 @@ McapReader recover_mcap(const std::filesystem::path& in, const std::filesystem::
   for (const auto& m : reader.messages()) {
     const auto it = channel_ids.find(m.channel);
     if (it == channel_ids.end())
-      throw std::runtime_error(in.string() + ": a message on channel " + std::to_string(m.channel) +
+      throw std::runtime_error(reader.path().string() + ": a message on channel " + std::to_string(m.channel) +
                                ", which no channel record defines");
     writer.write(it->second, m.sequence, m.log_time, m.publish_time, m.data.data(), m.data.size());
   }
@@ -766,7 +771,6 @@ McapReader recover_mcap(const std::filesystem::path& in, const std::filesystem::
   if (writer.write_errors() != 0)
     throw std::runtime_error("writing " + out.string() + " failed (" + std::to_string(writer.write_errors()) +
                              " write errors: disk full?)");
-  return reader;
 }
 
 }  // namespace shapeform::record

@@ -162,6 +162,7 @@ class McapReader {
  public:
   explicit McapReader(const std::filesystem::path& file);
 
+  const std::filesystem::path& path() const { return path_; }
   const std::vector<McapSchema>& schemas() const { return schemas_; }
   const std::vector<McapChannel>& channels() const { return channels_; }
   const std::vector<McapChunkInfo>& chunks() const { return chunks_; }
@@ -190,5 +191,7 @@ class McapReader {
 /// of `in` (what was recovered). Throws as McapReader does, or std::runtime_error when `out` cannot be
 /// written (or was written with errors).
 McapReader recover_mcap(const std::filesystem::path& in, const std::filesystem::path& out, McapOptions options = {});
+/// What recover_mcap writes, from a reader already made.
+void rewrite_mcap(const McapReader& reader, const std::filesystem::path& out, McapOptions options = {});
 
 }  // namespace shapeform::record

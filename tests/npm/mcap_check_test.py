@@ -71,6 +71,14 @@ def main(fixture, tool, npm, work):
     info = json.loads(run([tool, "info", fixed, "--json"]))
     if not info["complete"] or info["messages"] != len(expected):
         sys.exit("FAIL: shapeform_mcap info on recovered.mcap: %s" % info)
+    # Bad input: exit 2 with the reason.
+    for args, words in (([tool, "info", os.path.join(work, "missing.mcap")], "does not exist"),
+                        ([tool, "info", os.path.join(work, "killed.expected.jsonl")], "not an MCAP file"),
+                        ([tool, "info", fixed, "--bogus"], "--bogus"),
+                        ([tool, "recover", killed, killed], "is IN")):
+        p = subprocess.run(args, capture_output=True, text=True, timeout=60)
+        if p.returncode != 2 or words not in p.stderr:
+            sys.exit("FAIL: %s: exit %d, stderr %r (expected 2 and %r)" % (" ".join(args), p.returncode, p.stderr, words))
     print("PASS")
 
 
