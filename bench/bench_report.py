@@ -596,11 +596,16 @@ def _rerun_and_method(store: dict, plan: dict) -> list[str]:
     return o
 
 
+def mcap_section() -> str:
+    """The MCAP recording's compression, measured by hand (notes.toml [mcap])."""
+    return "## MCAP recording: compression\n\n" + NOTES["mcap"]["section"] + "\n\n"
+
+
 def render(store: dict, path: Path, plan: dict) -> None:
     """Writes the report of `store` (a results file's contents) to `path`; plan: report_plan(store)."""
     rows = store.get("rows", {})
     o = (_header(store, plan) + _targets(store, plan) + _main_table(rows, plan) + _levers(rows, plan)
-         + [sim_section(store.get("sim") or {})] + _rerun_and_method(store, plan))
+         + [sim_section(store.get("sim") or {}), mcap_section()] + _rerun_and_method(store, plan))
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text("".join(o))
 

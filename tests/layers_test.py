@@ -30,7 +30,7 @@ ALLOWED = {
     "agent": {"core", "shapes", "protocol", "dds", "config", "util", "app"},
     "vehicle": {"core", "protocol", "dds", "config", "util", "app"},
     "supervisor": {"core", "shapes", "protocol", "dds", "config", "util", "app", "record"},
-    "bench": {"core", "protocol", "dds", "config", "util", "app", "shapeform"},
+    "bench": {"core", "protocol", "dds", "config", "util", "app", "shapeform", "record"},
     "tools": {"core", "protocol", "dds", "config", "util", "app", "record"},  # shapeform_mcap reads record/mcap
     "view": {"core", "shapes", "protocol", "dds", "config", "util", "app", "record"},  # replay reads what record writes
 }
