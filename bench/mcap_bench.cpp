@@ -89,40 +89,50 @@ Stream make_stream(int agents, double rate_hz, double seconds, int batch) {
 }
 
 int run(int argc, char** argv) {
-  app::App app("shapeform_bench_mcap",
-               "shapeform_bench_mcap: the MCAP recording of N agents' states at R Hz for S seconds, one message "
-               "per state and in batches of 50, with each chunk compression (none, lz4, zstd): file bytes per "
-               "agent-second and the writer's CPU time per message (docs/BENCHMARKS.md).");
+  app::App app(
+      "shapeform_bench_mcap",
+      "shapeform_bench_mcap: the MCAP recording of N agents' states at R Hz for S seconds, one message "
+      "per state and in batches of 50, with each chunk compression (none, lz4, zstd): file bytes per "
+      "agent-second and the writer's CPU time per message (docs/BENCHMARKS.md).");
   int agents = 1000;
   double rate_hz = 20.0, seconds = 30.0;
   std::size_t chunk_bytes = 1 << 20;
   std::string dir = fs::temp_directory_path().string();
   app.cli().add_option("--agents", agents, "agents (default 1000)")->check(CLI::Range(1, 100000));
-  app.cli().add_option("--rate", rate_hz, "states per agent per second (default 20)")->check(CLI::Range(0.1, 1000.0));
+  app.cli()
+      .add_option("--rate", rate_hz, "states per agent per second (default 20)")
+      ->check(CLI::Range(0.1, 1000.0));
   app.cli().add_option("--seconds", seconds, "recorded seconds (default 30)")->check(CLI::Range(0.1, 3600.0));
-  app.cli().add_option("--chunk-bytes", chunk_bytes, "chunk size before compression, bytes (default 1 MiB)")
+  app.cli()
+      .add_option("--chunk-bytes", chunk_bytes, "chunk size before compression, bytes (default 1 MiB)")
       ->check(CLI::Range(std::size_t(1024), std::size_t(1) << 30));
-  app.cli().add_option("--dir", dir, "where the files are written (and removed), default the temp dir")
+  app.cli()
+      .add_option("--dir", dir, "where the files are written (and removed), default the temp dir")
       ->check(app::writable_dir());
   if (const auto rc = app.parse(argc, argv)) return *rc;
   return app.run([&] {
     std::printf("%d agents, %.0f Hz, %.0f s, chunks of %zu bytes\n", agents, rate_hz, seconds, chunk_bytes);
-    std::printf("| messages | compression | file MB | bytes per agent-second | writer CPU ns per message | per state |\n");
+    std::printf(
+        "| messages | compression | file MB | bytes per agent-second | writer CPU ns per message | per state "
+        "|\n");
     std::printf("|---|---|---:|---:|---:|---:|\n");
     for (const int batch : {1, 50}) {
       const Stream s = make_stream(agents, rate_hz, seconds, batch);
       const std::size_t n = s.times.size();
       const double states = double(agents) * double(std::lround(rate_hz * seconds));
-      for (const auto c : {record::McapCompression::None, record::McapCompression::Lz4, record::McapCompression::Zstd}) {
-        const fs::path file = fs::path(dir) / ("shapeform_bench_mcap_" + std::string(record::to_string(c)) + ".mcap");
+      for (const auto c :
+           {record::McapCompression::None, record::McapCompression::Lz4, record::McapCompression::Zstd}) {
+        const fs::path file =
+            fs::path(dir) / ("shapeform_bench_mcap_" + std::string(record::to_string(c)) + ".mcap");
         record::McapOptions o;
         o.compression = c;
         o.chunk_bytes = chunk_bytes;
         record::McapWriter w(o);
         w.open(file);
-        const auto schema = w.add_schema(batch > 1 ? "shapeform::msg::AgentStateBatch" : "shapeform::msg::AgentState",
-                                         "omgidl", kIdl);
-        const auto ch = w.add_channel(schema, batch > 1 ? "/shapeform/states_batch" : "/shapeform/states", "cdr");
+        const auto schema = w.add_schema(
+            batch > 1 ? "shapeform::msg::AgentStateBatch" : "shapeform::msg::AgentState", "omgidl", kIdl);
+        const auto ch =
+            w.add_channel(schema, batch > 1 ? "/shapeform/states_batch" : "/shapeform/states", "cdr");
         const std::clock_t c0 = std::clock();
         for (std::size_t i = 0; i < n; ++i)
           w.write(ch, s.times[i], s.times[i], s.bytes.data() + s.offsets[i], s.offsets[i + 1] - s.offsets[i]);
@@ -131,9 +141,10 @@ int run(int argc, char** argv) {
         if (w.write_errors() != 0) throw std::runtime_error("write errors in " + file.string());
         const auto bytes = fs::file_size(file);
         fs::remove(file);
-        std::printf("| %s | %s | %.2f | %.1f | %.0f | %.0f |\n", batch > 1 ? "batches of 50" : "one per state",
-                    record::to_string(c), double(bytes) / 1e6, double(bytes) / (double(agents) * seconds),
-                    cpu_s * 1e9 / double(n), cpu_s * 1e9 / states);
+        std::printf("| %s | %s | %.2f | %.1f | %.0f | %.0f |\n",
+                    batch > 1 ? "batches of 50" : "one per state", record::to_string(c), double(bytes) / 1e6,
+                    double(bytes) / (double(agents) * seconds), cpu_s * 1e9 / double(n),
+                    cpu_s * 1e9 / states);
         std::fflush(stdout);
       }
     }

@@ -49,10 +49,11 @@ nlohmann::json info_json(const fs::path& file, const McapReader& r) {
           {"start_time_ns", start},
           {"end_time_ns", end},
           {"duration_s", double(end - start) * 1e-9},
-          {"chunks", {{"count", r.chunks().size()},
-                      {"compression", compression},
-                      {"compressed_bytes", compressed},
-                      {"uncompressed_bytes", uncompressed}}},
+          {"chunks",
+           {{"count", r.chunks().size()},
+            {"compression", compression},
+            {"compressed_bytes", compressed},
+            {"uncompressed_bytes", uncompressed}}},
           {"channels", channels}};
 }
 
@@ -63,39 +64,46 @@ std::string info_text(const nlohmann::json& j) {
     o << "state:    complete (read through its summary)\n";
   } else {
     o << "state:    recovered (no summary: read by scanning every record";
-    if (j["truncated"].get<bool>()) o << "; the last " << j["dropped_bytes"] << " bytes, a record cut short, dropped";
+    if (j["truncated"].get<bool>())
+      o << "; the last " << j["dropped_bytes"] << " bytes, a record cut short, dropped";
     o << "); `shapeform_mcap recover` makes it whole\n";
   }
-  o << "library:  " << j["library"].get<std::string>() << (j["profile"].get<std::string>().empty() ? "" : ", profile ")
-    << j["profile"].get<std::string>() << '\n';
-  o << "messages: " << j["messages"] << ", log time " << j["start_time_ns"] << " .. " << j["end_time_ns"] << " ns ("
-    << std::fixed << std::setprecision(3) << j["duration_s"].get<double>() << " s)\n";
+  o << "library:  " << j["library"].get<std::string>()
+    << (j["profile"].get<std::string>().empty() ? "" : ", profile ") << j["profile"].get<std::string>()
+    << '\n';
+  o << "messages: " << j["messages"] << ", log time " << j["start_time_ns"] << " .. " << j["end_time_ns"]
+    << " ns (" << std::fixed << std::setprecision(3) << j["duration_s"].get<double>() << " s)\n";
   const auto& c = j["chunks"];
   o << "chunks:   " << c["count"];
   for (const auto& [name, n] : c["compression"].items()) o << ", " << n << ' ' << name;
   o << "; " << c["compressed_bytes"] << " bytes stored, " << c["uncompressed_bytes"] << " uncompressed";
   if (c["compressed_bytes"].get<std::uint64_t>() > 0)
     o << " (x" << std::setprecision(2)
-      << double(c["uncompressed_bytes"].get<std::uint64_t>()) / double(c["compressed_bytes"].get<std::uint64_t>()) << ')';
+      << double(c["uncompressed_bytes"].get<std::uint64_t>()) /
+             double(c["compressed_bytes"].get<std::uint64_t>())
+      << ')';
   o << "\nchannels:\n";
   o << "  " << std::left << std::setw(4) << "id" << std::setw(36) << "topic" << std::setw(10) << "encoding"
-    << std::setw(40) << "schema" << "messages\n";
+    << std::setw(40) << "schema"
+    << "messages\n";
   for (const auto& ch : j["channels"]) {
     std::string schema = ch["schema"].get<std::string>();
     if (!schema.empty()) schema += " (" + ch["schema_encoding"].get<std::string>() + ")";
-    o << "  " << std::setw(4) << ch["id"].get<int>() << std::setw(36) << ch["topic"].get<std::string>() << std::setw(10)
-      << ch["message_encoding"].get<std::string>() << std::setw(40) << schema << ch["messages"] << '\n';
+    o << "  " << std::setw(4) << ch["id"].get<int>() << std::setw(36) << ch["topic"].get<std::string>()
+      << std::setw(10) << ch["message_encoding"].get<std::string>() << std::setw(40) << schema
+      << ch["messages"] << '\n';
   }
   return o.str();
 }
 
 int run(int argc, char** argv) {
-  app::App app("shapeform_mcap",
-               "shapeform_mcap: inspects an MCAP recording (run.mcap) or makes a killed one whole.\n"
-               "  shapeform_mcap info FILE [--json]   channels (schema, encoding, message count), time range,\n"
-               "                                      chunks and compression, complete or recovered\n"
-               "  shapeform_mcap recover IN OUT        rewrites a recording cut short (a hard kill) as a\n"
-               "                                      complete, indexed file: every complete chunk kept");
+  app::App app(
+      "shapeform_mcap",
+      "shapeform_mcap: inspects an MCAP recording (run.mcap) or makes a killed one whole.\n"
+      "  shapeform_mcap info FILE [--json]   channels (schema, encoding, message count), time range,\n"
+      "                                      chunks and compression, complete or recovered\n"
+      "  shapeform_mcap recover IN OUT        rewrites a recording cut short (a hard kill) as a\n"
+      "                                      complete, indexed file: every complete chunk kept");
   auto& cli = app.cli();
   cli.require_subcommand(1);
   std::string info_file, in_file, out_file, compression = "zstd";
@@ -103,7 +111,8 @@ int run(int argc, char** argv) {
   auto* info = cli.add_subcommand("info", "what FILE holds");
   info->add_option("FILE", info_file, "an MCAP file")->required()->check(CLI::ExistingFile);
   info->add_flag("--json", json, "one JSON object on stdout instead of the table");
-  auto* recover = cli.add_subcommand("recover", "IN (complete or cut short) rewritten as a complete, indexed OUT");
+  auto* recover =
+      cli.add_subcommand("recover", "IN (complete or cut short) rewritten as a complete, indexed OUT");
   recover->add_option("IN", in_file, "the MCAP file to recover")->required()->check(CLI::ExistingFile);
   recover->add_option("OUT", out_file, "the file to write (must not be IN)")->required();
   recover->add_option("--compression", compression, "chunk compression of OUT: zstd (default), lz4 or none")
@@ -137,12 +146,12 @@ int run(int argc, char** argv) {
   return app.run([&] {
     const auto& got = *r;
     record::rewrite_mcap(got, out_file, options);
-    std::cerr << "shapeform_mcap: recovered " << got.messages().size() << " messages on " << got.channels().size()
-              << " channels from " << in_file
-              << (got.complete() ? " (complete already)"
-                                 : got.truncated() ? " (cut short: the last " + std::to_string(got.dropped_bytes()) +
-                                                         " bytes, a record cut short, dropped)"
-                                                   : " (no summary)")
+    std::cerr << "shapeform_mcap: recovered " << got.messages().size() << " messages on "
+              << got.channels().size() << " channels from " << in_file
+              << (got.complete()    ? " (complete already)"
+                  : got.truncated() ? " (cut short: the last " + std::to_string(got.dropped_bytes()) +
+                                          " bytes, a record cut short, dropped)"
+                                    : " (no summary)")
               << " into " << out_file << '\n';
     return 0;
   });

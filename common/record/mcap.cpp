@@ -46,7 +46,8 @@ struct Crc32 {
   std::uint32_t update(std::uint32_t crc, const std::uint8_t* p, std::size_t n) const {
     crc = ~crc;
     while (n >= 4) {
-      crc ^= std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16 | std::uint32_t(p[3]) << 24;
+      crc ^= std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16 |
+             std::uint32_t(p[3]) << 24;
       crc = t[3][crc & 0xFF] ^ t[2][(crc >> 8) & 0xFF] ^ t[1][(crc >> 16) & 0xFF] ^ t[0][crc >> 24];
       p += 4;
       n -= 4;
@@ -70,7 +71,8 @@ void put_u16(std::vector<std::uint8_t>& b, std::uint16_t v) {
   b.insert(b.end(), x, x + 2);
 }
 void put_u32(std::vector<std::uint8_t>& b, std::uint32_t v) {
-  const std::uint8_t x[4] = {std::uint8_t(v), std::uint8_t(v >> 8), std::uint8_t(v >> 16), std::uint8_t(v >> 24)};
+  const std::uint8_t x[4] = {std::uint8_t(v), std::uint8_t(v >> 8), std::uint8_t(v >> 16),
+                             std::uint8_t(v >> 24)};
   b.insert(b.end(), x, x + 4);
 }
 void put_u64(std::vector<std::uint8_t>& b, std::uint64_t v) {
@@ -101,8 +103,8 @@ std::size_t begin_record(std::vector<std::uint8_t>& b, std::uint8_t op) {
 }
 void end_record(std::vector<std::uint8_t>& b, std::size_t at) { set_u64(b, at, b.size() - at - 8); }
 
-void put_schema(std::vector<std::uint8_t>& b, std::uint16_t id, std::string_view name, std::string_view encoding,
-                std::string_view data) {
+void put_schema(std::vector<std::uint8_t>& b, std::uint16_t id, std::string_view name,
+                std::string_view encoding, std::string_view data) {
   const auto at = begin_record(b, kSchema);
   put_u16(b, id);
   put_str(b, name);
@@ -110,8 +112,9 @@ void put_schema(std::vector<std::uint8_t>& b, std::uint16_t id, std::string_view
   put_str(b, data);  // bytes: the same u32 length prefix
   end_record(b, at);
 }
-void put_channel(std::vector<std::uint8_t>& b, std::uint16_t id, std::uint16_t schema_id, std::string_view topic,
-                 std::string_view encoding, const std::map<std::string, std::string>& metadata) {
+void put_channel(std::vector<std::uint8_t>& b, std::uint16_t id, std::uint16_t schema_id,
+                 std::string_view topic, std::string_view encoding,
+                 const std::map<std::string, std::string>& metadata) {
   const auto at = begin_record(b, kChannel);
   put_u16(b, id);
   put_u16(b, schema_id);
@@ -138,14 +141,19 @@ std::optional<McapCompression> parse_mcap_compression(std::string_view name) {
 
 const char* to_string(McapCompression c) {
   switch (c) {
-    case McapCompression::None: return "none";
-    case McapCompression::Zstd: return "zstd";
-    case McapCompression::Lz4: return "lz4";
+    case McapCompression::None:
+      return "none";
+    case McapCompression::Zstd:
+      return "zstd";
+    case McapCompression::Lz4:
+      return "lz4";
   }
   return "none";
 }
 
-const char* mcap_chunk_compression(McapCompression c) { return c == McapCompression::None ? "" : to_string(c); }
+const char* mcap_chunk_compression(McapCompression c) {
+  return c == McapCompression::None ? "" : to_string(c);
+}
 
 // ================================================================ writer
 
@@ -195,7 +203,8 @@ void McapWriter::open(const std::filesystem::path& file) {
   put(scratch_.data(), scratch_.size());
 }
 
-std::uint16_t McapWriter::add_schema(std::string_view name, std::string_view encoding, std::string_view data) {
+std::uint16_t McapWriter::add_schema(std::string_view name, std::string_view encoding,
+                                     std::string_view data) {
   if (schemas_.size() >= 0xFFFF) throw std::length_error("MCAP: more than 65535 schemas");
   schemas_.push_back(Schema{std::string(name), std::string(encoding), std::string(data), 0});
   return std::uint16_t(schemas_.size());
@@ -230,7 +239,8 @@ void McapWriter::write(std::uint16_t channel, std::uint32_t sequence, std::uint6
     throw std::invalid_argument("MCAP write: unknown channel id " + std::to_string(channel));
   if (!file_) return;
   Channel& c = channels_[channel - 1];
-  if (c.chunk != chunk_number_) {  // first message of this channel in this chunk: its schema and channel first
+  if (c.chunk !=
+      chunk_number_) {  // first message of this channel in this chunk: its schema and channel first
     if (c.schema_id != 0) {
       Schema& s = schemas_[c.schema_id - 1];
       if (s.chunk != chunk_number_) {
@@ -272,13 +282,15 @@ void McapWriter::put(const void* data, std::size_t size) {
 void McapWriter::compress_chunk() {
   compressed_.clear();
   switch (options_.compression) {
-    case McapCompression::None: return;
+    case McapCompression::None:
+      return;
     case McapCompression::Zstd: {
       if (!codec_->zstd) codec_->zstd = ZSTD_createCCtx();
       compressed_.resize(ZSTD_compressBound(chunk_.size()));
-      const std::size_t n =
-          ZSTD_compressCCtx(codec_->zstd, compressed_.data(), compressed_.size(), chunk_.data(), chunk_.size(), kZstdLevel);
-      if (ZSTD_isError(n)) throw std::runtime_error(std::string("zstd compression failed: ") + ZSTD_getErrorName(n));
+      const std::size_t n = ZSTD_compressCCtx(codec_->zstd, compressed_.data(), compressed_.size(),
+                                              chunk_.data(), chunk_.size(), kZstdLevel);
+      if (ZSTD_isError(n))
+        throw std::runtime_error(std::string("zstd compression failed: ") + ZSTD_getErrorName(n));
       compressed_.resize(n);
       return;
     }
@@ -287,8 +299,10 @@ void McapWriter::compress_chunk() {
       prefs = LZ4F_preferences_t{};
       prefs.frameInfo.contentSize = chunk_.size();
       compressed_.resize(LZ4F_compressFrameBound(chunk_.size(), &prefs));
-      const std::size_t n = LZ4F_compressFrame(compressed_.data(), compressed_.size(), chunk_.data(), chunk_.size(), &prefs);
-      if (LZ4F_isError(n)) throw std::runtime_error(std::string("lz4 compression failed: ") + LZ4F_getErrorName(n));
+      const std::size_t n =
+          LZ4F_compressFrame(compressed_.data(), compressed_.size(), chunk_.data(), chunk_.size(), &prefs);
+      if (LZ4F_isError(n))
+        throw std::runtime_error(std::string("lz4 compression failed: ") + LZ4F_getErrorName(n));
       compressed_.resize(n);
       return;
     }
@@ -537,9 +551,11 @@ struct Decompressor {
     if (lz4) LZ4F_freeDecompressionContext(lz4);
   }
   /// Empty string on success, else the reason.
-  std::string run(const std::string& compression, const std::uint8_t* in, std::size_t n, std::vector<std::uint8_t>& out) {
+  std::string run(const std::string& compression, const std::uint8_t* in, std::size_t n,
+                  std::vector<std::uint8_t>& out) {
     if (compression.empty()) {
-      if (n != out.size()) return "uncompressed size " + std::to_string(out.size()) + " != records size " + std::to_string(n);
+      if (n != out.size())
+        return "uncompressed size " + std::to_string(out.size()) + " != records size " + std::to_string(n);
       std::memcpy(out.data(), in, n);
       return "";
     }
@@ -547,7 +563,8 @@ struct Decompressor {
       if (!zstd) zstd = ZSTD_createDCtx();
       const std::size_t r = ZSTD_decompressDCtx(zstd, out.data(), out.size(), in, n);
       if (ZSTD_isError(r)) return std::string("zstd: ") + ZSTD_getErrorName(r);
-      if (r != out.size()) return "zstd: " + std::to_string(r) + " bytes, expected " + std::to_string(out.size());
+      if (r != out.size())
+        return "zstd: " + std::to_string(r) + " bytes, expected " + std::to_string(out.size());
       return "";
     }
     if (compression == "lz4") {
@@ -563,7 +580,8 @@ struct Decompressor {
         if (r == 0) break;
         if (src == 0 && dst == 0) return "lz4: frame cut short";
       }
-      if (done_out != out.size()) return "lz4: " + std::to_string(done_out) + " bytes, expected " + std::to_string(out.size());
+      if (done_out != out.size())
+        return "lz4: " + std::to_string(done_out) + " bytes, expected " + std::to_string(out.size());
       return "";
     }
     return "unknown compression \"" + compression + "\"";
@@ -583,9 +601,10 @@ McapReader::McapReader(const std::filesystem::path& file) : path_(file) {
   const std::uint8_t* base = bytes.data();
   const std::size_t size = bytes.size();
   if (size < sizeof kMagic || std::memcmp(base, kMagic, sizeof kMagic) != 0)
-    throw McapError(file, 0, size < sizeof kMagic && std::memcmp(base, kMagic, size) == 0
-                                 ? "file too short for MCAP (" + std::to_string(size) + " bytes)"
-                                 : "not an MCAP file (no MCAP magic at its start)");
+    throw McapError(file, 0,
+                    size < sizeof kMagic && std::memcmp(base, kMagic, size) == 0
+                        ? "file too short for MCAP (" + std::to_string(size) + " bytes)"
+                        : "not an MCAP file (no MCAP magic at its start)");
   auto at = [&](const std::uint8_t* p) { return std::uint64_t(p - base); };
   Decompressor dec;
   std::vector<std::uint8_t> records;
@@ -669,7 +688,8 @@ McapReader::McapReader(const std::filesystem::path& file) : path_(file) {
         }
         for (const auto& [off, len] : chunk_records) {
           Cursor c{base + off, base + off + len};
-          if (c.u8() != kChunk) throw McapError(file, off, "chunk index points at a record that is not a chunk");
+          if (c.u8() != kChunk)
+            throw McapError(file, off, "chunk index points at a record that is not a chunk");
           try {
             read_chunk(c.sub(c.u64()), off);
           } catch (const Short&) {
@@ -684,6 +704,7 @@ McapReader::McapReader(const std::filesystem::path& file) : path_(file) {
 
   // Otherwise (no summary: killed hard, or written without one): every record from the start.
   if (!done) {
+    bool in_summary = false;
     Cursor c{base + sizeof kMagic, base + size};
     while (c.left() > 0) {
       const std::uint8_t* rec_start = c.p;
@@ -704,7 +725,16 @@ McapReader::McapReader(const std::filesystem::path& file) : path_(file) {
         break;
       }
       try {
-        if (op == kHeader) {
+        if (op == kFooter) {  // only the closing magic may follow; a part of it is a cut too
+          if (c.left() > 0 && (c.left() != sizeof kMagic || std::memcmp(c.p, kMagic, sizeof kMagic) != 0)) {
+            truncated_ = true;
+            dropped_bytes_ = c.left();
+          }
+          break;
+        }
+        if (in_summary) {
+          // the summary repeats the data section's schemas and channels
+        } else if (op == kHeader) {
           profile_ = rec.str();
           library_ = rec.str();
         } else if (op == kSchema) {
@@ -717,8 +747,8 @@ McapReader::McapReader(const std::filesystem::path& file) : path_(file) {
           messages_.push_back(parse_message(rec));
         } else if (op == kChunk) {
           read_chunk(rec, offset);
-        } else if (op == kDataEnd || op == kFooter) {
-          break;  // what follows (a summary cut short) repeats what was read
+        } else if (op == kDataEnd) {
+          in_summary = true;  // what follows (a summary, maybe cut short) repeats what was read
         }
       } catch (const Short&) {
         throw McapError(file, offset, "record (opcode " + std::to_string(op) + ") shorter than its fields");
@@ -742,7 +772,8 @@ McapReader::McapReader(const std::filesystem::path& file) : path_(file) {
                    [](const McapMessage& a, const McapMessage& b) { return a.log_time < b.log_time; });
 }
 
-McapReader recover_mcap(const std::filesystem::path& in, const std::filesystem::path& out, McapOptions options) {
+McapReader recover_mcap(const std::filesystem::path& in, const std::filesystem::path& out,
+                        McapOptions options) {
   McapReader reader(in);
   rewrite_mcap(reader, out, std::move(options));
   return reader;
@@ -763,8 +794,8 @@ void rewrite_mcap(const McapReader& reader, const std::filesystem::path& out, Mc
   for (const auto& m : reader.messages()) {
     const auto it = channel_ids.find(m.channel);
     if (it == channel_ids.end())
-      throw std::runtime_error(reader.path().string() + ": a message on channel " + std::to_string(m.channel) +
-                               ", which no channel record defines");
+      throw std::runtime_error(reader.path().string() + ": a message on channel " +
+                               std::to_string(m.channel) + ", which no channel record defines");
     writer.write(it->second, m.sequence, m.log_time, m.publish_time, m.data.data(), m.data.size());
   }
   writer.close();

@@ -58,16 +58,17 @@ class McapWriter {
   std::uint16_t add_schema(std::string_view name, std::string_view encoding, std::string_view data);
   /// A channel on schema `schema_id` (0: no schema) with its message encoding ("cdr", "json"). Ids from
   /// 1. Throws std::invalid_argument on an unknown schema id.
-  std::uint16_t add_channel(std::uint16_t schema_id, std::string_view topic, std::string_view message_encoding,
+  std::uint16_t add_channel(std::uint16_t schema_id, std::string_view topic,
+                            std::string_view message_encoding,
                             const std::map<std::string, std::string>& metadata = {});
 
   /// One message; its sequence number is the channel's count of messages so far. A write error (disk
   /// full) is counted in write_errors(), never thrown. Throws std::invalid_argument on an unknown channel.
-  void write(std::uint16_t channel, std::uint64_t log_time_ns, std::uint64_t publish_time_ns, const std::uint8_t* data,
-             std::size_t size);
-  /// The same with the sequence number given (a copy of another file keeps its numbers).
-  void write(std::uint16_t channel, std::uint32_t sequence, std::uint64_t log_time_ns, std::uint64_t publish_time_ns,
+  void write(std::uint16_t channel, std::uint64_t log_time_ns, std::uint64_t publish_time_ns,
              const std::uint8_t* data, std::size_t size);
+  /// The same with the sequence number given (a copy of another file keeps its numbers).
+  void write(std::uint16_t channel, std::uint32_t sequence, std::uint64_t log_time_ns,
+             std::uint64_t publish_time_ns, const std::uint8_t* data, std::size_t size);
 
   /// Ends the current chunk (the chunk and its message indexes are written) and flushes the file.
   void flush();
@@ -90,11 +91,12 @@ class McapWriter {
     std::map<std::string, std::string> metadata;
     std::uint32_t next_sequence = 0;
     std::uint64_t count = 0;
-    std::uint64_t chunk = 0;  ///< the chunk this channel's record was last written into
+    std::uint64_t chunk = 0;           ///< the chunk this channel's record was last written into
     std::vector<std::uint64_t> index;  ///< this chunk's (log_time, offset) pairs, flattened
   };
   struct ChunkIndex {
-    std::uint64_t start = 0, end = 0, offset = 0, length = 0, index_length = 0, compressed = 0, uncompressed = 0;
+    std::uint64_t start = 0, end = 0, offset = 0, length = 0, index_length = 0, compressed = 0,
+                  uncompressed = 0;
     std::vector<std::pair<std::uint16_t, std::uint64_t>> index_offsets;
   };
 
@@ -107,9 +109,9 @@ class McapWriter {
   std::uint64_t offset_ = 0;
   std::uint64_t write_errors_ = 0;
   std::uint64_t message_count_ = 0;
-  std::uint64_t start_ = 0, end_ = 0;  ///< log-time range of every message written
-  std::vector<Schema> schemas_;        ///< id - 1
-  std::vector<Channel> channels_;      ///< id - 1
+  std::uint64_t start_ = 0, end_ = 0;          ///< log-time range of every message written
+  std::vector<Schema> schemas_;                ///< id - 1
+  std::vector<Channel> channels_;              ///< id - 1
   std::vector<std::uint16_t> chunk_channels_;  ///< channels with messages in the current chunk
   std::uint64_t chunk_number_ = 1;
   std::uint64_t chunk_start_ = 0, chunk_end_ = 0, chunk_messages_ = 0;
@@ -190,7 +192,8 @@ class McapReader {
 /// channels and messages (sequence numbers and times kept), in log-time order. Returns the reader's view
 /// of `in` (what was recovered). Throws as McapReader does, or std::runtime_error when `out` cannot be
 /// written (or was written with errors).
-McapReader recover_mcap(const std::filesystem::path& in, const std::filesystem::path& out, McapOptions options = {});
+McapReader recover_mcap(const std::filesystem::path& in, const std::filesystem::path& out,
+                        McapOptions options = {});
 /// What recover_mcap writes, from a reader already made.
 void rewrite_mcap(const McapReader& reader, const std::filesystem::path& out, McapOptions options = {});
 

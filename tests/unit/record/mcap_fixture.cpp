@@ -34,7 +34,8 @@ const char* kIdl = R"(module shapeform {
 };
 )";
 
-const char* kJsonSchema = R"({"type": "object", "properties": {"id": {"type": "integer"}, "note": {"type": "string"}}})";
+const char* kJsonSchema =
+    R"({"type": "object", "properties": {"id": {"type": "integer"}, "note": {"type": "string"}}})";
 
 /// XCDR1 little-endian, 4-byte encapsulation header 00 01 00 00; alignment counted after the header.
 std::vector<std::uint8_t> encode(std::uint32_t id, double x, std::int32_t step, const std::string& label) {
@@ -68,7 +69,10 @@ nlohmann::json decode(const std::vector<std::uint8_t>& b) {
   std::memcpy(&x, b.data() + 12, 8);
   std::memcpy(&step, b.data() + 20, 4);
   std::memcpy(&n, b.data() + 24, 4);
-  return {{"id", id}, {"x", x}, {"step", step}, {"label", std::string(reinterpret_cast<const char*>(b.data() + 28), n - 1)}};
+  return {{"id", id},
+          {"x", x},
+          {"step", step},
+          {"label", std::string(reinterpret_cast<const char*>(b.data() + 28), n - 1)}};
 }
 
 void write_file(const fs::path& path, McapCompression compression) {
@@ -86,7 +90,8 @@ void write_file(const fs::path& path, McapCompression compression) {
     const auto b = encode(i, 0.1 * i - 7.25, std::int32_t(i) * -3, "agent " + std::to_string(i % 17));
     w.write(samples, t, t, b.data(), b.size());
     if (i % 25 == 0) {
-      const std::string j = nlohmann::json{{"id", i}, {"note", "checkpoint \"" + std::to_string(i) + "\""}}.dump();
+      const std::string j =
+          nlohmann::json{{"id", i}, {"note", "checkpoint \"" + std::to_string(i) + "\""}}.dump();
       w.write(notes, t, t, reinterpret_cast<const std::uint8_t*>(j.data()), j.size());
     }
   }
@@ -104,7 +109,8 @@ void expect(const fs::path& path) {
     nlohmann::json message = c.message_encoding == "cdr"
                                  ? decode(m.data)
                                  : nlohmann::json::parse(std::string(m.data.begin(), m.data.end()));
-    out << nlohmann::json{{"topic", c.topic}, {"log_time", std::to_string(m.log_time)}, {"message", message}}.dump()
+    out << nlohmann::json{{"topic", c.topic}, {"log_time", std::to_string(m.log_time)}, {"message", message}}
+               .dump()
         << '\n';
   }
 }
@@ -137,7 +143,8 @@ int main(int argc, char** argv) {
     fs::resize_file(killed, fs::file_size(full) * 7 / 10);
     expect(killed);
     McapReader k(killed);
-    if (k.complete() || k.messages().empty()) throw std::runtime_error("killed.mcap: expected a partial file");
+    if (k.complete() || k.messages().empty())
+      throw std::runtime_error("killed.mcap: expected a partial file");
   } catch (const std::exception& e) {
     std::cerr << "shapeform_mcap_fixture: " << e.what() << '\n';
     return 1;

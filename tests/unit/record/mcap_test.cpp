@@ -65,6 +65,22 @@ std::vector<std::uint8_t> file_bytes(const fs::path& p) {
   return std::vector<std::uint8_t>(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
+/// Where each top-level record of a file ends (and 8, the end of the magic), walking opcode and length
+/// up to the footer: the places a cut leaves nothing cut short.
+std::vector<std::uint64_t> record_boundaries(const std::vector<std::uint8_t>& b) {
+  std::vector<std::uint64_t> ends{8};
+  std::uint64_t at = 8;
+  while (at + 9 <= b.size()) {
+    std::uint64_t len = 0;
+    for (int i = 7; i >= 0; --i) len = len << 8 | b[at + 1 + std::size_t(i)];
+    const bool footer = b[at] == 0x02;
+    at += 9 + len;
+    ends.push_back(at);
+    if (footer) break;
+  }
+  return ends;
+}
+
 void write_bytes(const fs::path& p, const std::uint8_t* data, std::size_t n) {
   std::ofstream out(p, std::ios::binary | std::ios::trunc);
   out.write(reinterpret_cast<const char*>(data), std::streamsize(n));
@@ -131,7 +147,8 @@ TEST_CASE("mcap round trip with every compression", "[mcap]") {
   REQUIRE(r.channels().size() == 3);
   CHECK(r.channels()[0].topic == "/a");
   CHECK(r.channels()[0].schema_id == 1);
-  CHECK(r.channels()[0].metadata == std::map<std::string, std::string>{{"k", "v"}, {"offered_qos", "reliable"}});
+  CHECK(r.channels()[0].metadata ==
+        std::map<std::string, std::string>{{"k", "v"}, {"offered_qos", "reliable"}});
   CHECK(r.channels()[2].schema_id == 0);
   CHECK(r.channels()[2].message_encoding == "bytes");
   CHECK(r.chunks().size() >= chunk_count_min);
@@ -147,8 +164,10 @@ TEST_CASE("mcap many channels and schemas, messages out of order come back sorte
   McapWriter w(o);
   w.open(file);
   std::vector<std::uint16_t> channels;
-  for (int s = 0; s < 40; ++s) w.add_schema("S" + std::to_string(s), "jsonschema", "{\"n\":" + std::to_string(s) + "}");
-  for (int c = 0; c < 300; ++c) channels.push_back(w.add_channel(std::uint16_t(1 + c % 40), "/t" + std::to_string(c), "json"));
+  for (int s = 0; s < 40; ++s)
+    w.add_schema("S" + std::to_string(s), "jsonschema", "{\"n\":" + std::to_string(s) + "}");
+  for (int c = 0; c < 300; ++c)
+    channels.push_back(w.add_channel(std::uint16_t(1 + c % 40), "/t" + std::to_string(c), "json"));
   std::vector<Written> written;
   std::vector<std::uint32_t> seq(301, 0);
   for (std::uint64_t i = 0; i < 6000; ++i) {
@@ -159,7 +178,8 @@ TEST_CASE("mcap many channels and schemas, messages out of order come back sorte
     written.push_back({ch, seq[ch]++, t, d});
   }
   w.close();
-  std::stable_sort(written.begin(), written.end(), [](const Written& a, const Written& b) { return a.log_time < b.log_time; });
+  std::stable_sort(written.begin(), written.end(),
+                   [](const Written& a, const Written& b) { return a.log_time < b.log_time; });
   McapReader r(file);
   CHECK(r.complete());
   REQUIRE(r.schemas().size() == 40);
@@ -200,9 +220,14 @@ TEST_CASE("mcap file cut anywhere keeps every complete chunk and no partial one"
   for (const auto& ch : full.chunks())
     chunk_ends.push_back(ch.offset + 9 + 8 + 8 + 8 + 4 + 4 + ch.compression.size() + 8 + ch.compressed_size);
   const auto bytes = file_bytes(file);
+  const auto boundaries = record_boundaries(bytes);
+  REQUIRE(boundaries.back() == bytes.size() - 8);  // the footer, then the closing magic
   const auto cut = tmp.path() / "cut.mcap";
   int cuts = 0;
-  for (std::size_t n = 8; n < bytes.size(); n += 97) {
+  std::vector<std::size_t> lengths;
+  for (std::size_t n = 8; n < bytes.size(); n += 97) lengths.push_back(n);
+  for (std::size_t n = bytes.size() - 40; n < bytes.size(); ++n) lengths.push_back(n);  // footer and magic
+  for (const std::size_t n : lengths) {
     INFO("cut at " << n << " of " << bytes.size());
     write_bytes(cut, bytes.data(), n);
     const McapReader r(cut);
@@ -213,8 +238,10 @@ TEST_CASE("mcap file cut anywhere keeps every complete chunk and no partial one"
     same_messages(r.messages(), want);
     CHECK(r.chunks().size() == complete_chunks);
     if (complete_chunks > 0) CHECK(r.channels().size() == 2);  // the chunk carries its channels
-    const bool at_boundary = r.dropped_bytes() == 0;
+    const bool at_boundary = std::count(boundaries.begin(), boundaries.end(), n) > 0;
     CHECK(r.truncated() == !at_boundary);
+    const auto last = *std::prev(std::upper_bound(boundaries.begin(), boundaries.end(), n));
+    CHECK(r.dropped_bytes() == n - last);
     ++cuts;
   }
   CHECK(cuts > 10);
@@ -224,6 +251,24 @@ TEST_CASE("mcap file cut anywhere keeps every complete chunk and no partial one"
   const McapReader clean(cut);
   CHECK_FALSE(clean.truncated());
   CHECK(clean.messages().size() == 30);
+}
+
+TEST_CASE("mcap file without messages is complete and keeps its channels", "[mcap]") {
+  TempDir tmp;
+  const auto file = tmp.path() / "empty.mcap";
+  {
+    McapWriter w;
+    w.open(file);
+    w.add_channel(w.add_schema("S", "jsonschema", "{}"), "/a", "json");
+    w.flush();
+  }
+  const McapReader r(file);
+  CHECK(r.complete());
+  CHECK_FALSE(r.truncated());
+  CHECK(r.messages().empty());
+  CHECK(r.chunks().empty());
+  REQUIRE(r.channels().size() == 1);
+  CHECK(r.channels()[0].topic == "/a");
 }
 
 TEST_CASE("mcap recover rewrites a cut file as a complete one", "[mcap]") {
