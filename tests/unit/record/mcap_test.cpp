@@ -4,6 +4,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
+#include <cstdlib>
+#include <new>
 #include <catch2/catch.hpp>
 #include <cstring>
 #include <filesystem>
@@ -13,6 +16,23 @@
 
 using namespace shapeform::record;
 namespace fs = std::filesystem;
+
+// Heap allocations counted while `g_count_allocations` is set: the writer's hot path must not allocate.
+namespace {
+std::atomic<bool> g_count_allocations{false};
+std::atomic<std::uint64_t> g_allocations{0};
+}  // namespace
+void* operator new(std::size_t n) {
+  if (g_count_allocations.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
+  throw std::bad_alloc();
+}
+// GCC sees the replaced operator new inlined as malloc's partner and warns about the pair it is.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+#pragma GCC diagnostic pop
 
 namespace {
 
@@ -382,4 +402,32 @@ TEST_CASE("mcap writer rejects unknown ids and unwritable paths", "[mcap]") {
   CHECK_THROWS_AS(w.add_channel(3, "/a", "cdr"), std::invalid_argument);
   const std::uint8_t b = 0;
   CHECK_THROWS_AS(w.write(1, 0, 0, &b, 1), std::invalid_argument);
+}
+
+TEST_CASE("mcap writer allocates nothing per message once its buffers have grown", "[mcap]") {
+  const auto c = GENERATE(McapCompression::None, McapCompression::Zstd, McapCompression::Lz4);
+  INFO(to_string(c));
+  TempDir tmp;
+  McapOptions o;
+  o.compression = c;
+  o.chunk_bytes = 64 * 1024;
+  McapWriter w(o);
+  w.open(tmp.path() / "a.mcap");
+  std::vector<std::uint16_t> channels;
+  for (int i = 0; i < 3; ++i) channels.push_back(w.add_channel(0, "/c" + std::to_string(i), "bytes"));
+  std::vector<std::uint8_t> d(44, 7);
+  auto burst = [&](std::uint64_t from, std::uint64_t count) {
+    for (std::uint64_t i = from; i < from + count; ++i) w.write(channels[i % 3], i, i, d.data(), d.size());
+  };
+  burst(0, 20000);  // warm-up: about 20 chunks, the buffers reach their working size
+  g_allocations = 0;
+  g_count_allocations = true;
+  burst(20000, 20000);
+  g_count_allocations = false;
+  const std::uint64_t allocations = g_allocations;
+  // Per chunk: its index entry (a few allocations, about 20 chunks); none per message.
+  CHECK(allocations < 200);
+  w.close();
+  CHECK(w.write_errors() == 0);
+  CHECK(McapReader(tmp.path() / "a.mcap").messages().size() == 40000);
 }
