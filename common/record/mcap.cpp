@@ -46,12 +46,12 @@ struct Crc32 {
   std::uint32_t update(std::uint32_t crc, const std::uint8_t* p, std::size_t n) const {
     crc = ~crc;
     while (n >= 8) {
-      const std::uint32_t lo =
-          crc ^ (std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16 | std::uint32_t(p[3]) << 24);
-      const std::uint32_t hi =
-          std::uint32_t(p[4]) | std::uint32_t(p[5]) << 8 | std::uint32_t(p[6]) << 16 | std::uint32_t(p[7]) << 24;
-      crc = t[7][lo & 0xFF] ^ t[6][(lo >> 8) & 0xFF] ^ t[5][(lo >> 16) & 0xFF] ^ t[4][lo >> 24] ^ t[3][hi & 0xFF] ^
-            t[2][(hi >> 8) & 0xFF] ^ t[1][(hi >> 16) & 0xFF] ^ t[0][hi >> 24];
+      const std::uint32_t lo = crc ^ (std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 |
+                                      std::uint32_t(p[2]) << 16 | std::uint32_t(p[3]) << 24);
+      const std::uint32_t hi = std::uint32_t(p[4]) | std::uint32_t(p[5]) << 8 | std::uint32_t(p[6]) << 16 |
+                               std::uint32_t(p[7]) << 24;
+      crc = t[7][lo & 0xFF] ^ t[6][(lo >> 8) & 0xFF] ^ t[5][(lo >> 16) & 0xFF] ^ t[4][lo >> 24] ^
+            t[3][hi & 0xFF] ^ t[2][(hi >> 8) & 0xFF] ^ t[1][(hi >> 16) & 0xFF] ^ t[0][hi >> 24];
       p += 8;
       n -= 8;
     }
@@ -611,6 +611,7 @@ McapReader::McapReader(const std::filesystem::path& file) : path_(file) {
   const auto bytes = read_all(file);
   const std::uint8_t* base = bytes.data();
   const std::size_t size = bytes.size();
+  if (size == 0) throw McapError(file, 0, "empty file, not MCAP");
   if (size < sizeof kMagic || std::memcmp(base, kMagic, sizeof kMagic) != 0)
     throw McapError(file, 0,
                     size < sizeof kMagic && std::memcmp(base, kMagic, size) == 0

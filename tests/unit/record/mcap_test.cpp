@@ -5,12 +5,12 @@
 
 #include <algorithm>
 #include <atomic>
-#include <cstdlib>
-#include <new>
 #include <catch2/catch.hpp>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -23,7 +23,8 @@ std::atomic<bool> g_count_allocations{false};
 std::atomic<std::uint64_t> g_allocations{0};
 }  // namespace
 void* operator new(std::size_t n) {
-  if (g_count_allocations.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (g_count_allocations.load(std::memory_order_relaxed))
+    g_allocations.fetch_add(1, std::memory_order_relaxed);
   if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
   throw std::bad_alloc();
 }
@@ -343,6 +344,10 @@ TEST_CASE("mcap reader errors name the file and the offset", "[mcap]") {
     CHECK(e.offset() == 0);
   }
   CHECK_THROWS_AS(McapReader(tmp.path() / "missing.mcap"), std::runtime_error);
+  { std::ofstream(tmp.path() / "empty.mcap"); }
+  CHECK_THROWS_WITH(McapReader(tmp.path() / "empty.mcap"), Catch::Contains("empty file"));
+  { std::ofstream(tmp.path() / "short.mcap") << "\x89MCA"; }
+  CHECK_THROWS_WITH(McapReader(tmp.path() / "short.mcap"), Catch::Contains("too short"));
 
   // A chunk whose records were changed on disk: the CRC says so, at the chunk's offset.
   const auto file = tmp.path() / "raw.mcap";
@@ -430,4 +435,60 @@ TEST_CASE("mcap writer allocates nothing per message once its buffers have grown
   w.close();
   CHECK(w.write_errors() == 0);
   CHECK(McapReader(tmp.path() / "a.mcap").messages().size() == 40000);
+}
+
+namespace {
+std::uint64_t le(const std::vector<std::uint8_t>& b, std::size_t at, int n) {
+  std::uint64_t v = 0;
+  for (int i = n - 1; i >= 0; --i) v = v << 8 | b[at + std::size_t(i)];
+  return v;
+}
+}  // namespace
+
+TEST_CASE("mcap message indexes point at their messages", "[mcap]") {
+  TempDir tmp;
+  const auto file = tmp.path() / "raw.mcap";
+  McapOptions o;
+  o.compression = McapCompression::None;  // the chunk's records readable in place
+  o.chunk_bytes = 3000;
+  {
+    McapWriter w(o);
+    w.open(file);
+    const auto a = w.add_channel(0, "/a", "bytes");
+    const auto b = w.add_channel(0, "/b", "bytes");
+    for (std::uint64_t i = 0; i < 700; ++i) {
+      const auto d = payload(i);
+      w.write(i % 4 == 0 ? b : a, 9000 - i, 0, d.data(), d.size());
+    }
+  }
+  const auto bytes = file_bytes(file);
+  std::size_t at = 8, chunks = 0, indexed = 0, messages = 0;
+  std::size_t records = 0, records_end = 0;              // the last chunk's records, in the file
+  while (at + 9 <= bytes.size() && bytes[at] != 0x0F) {  // up to DataEnd
+    const std::uint8_t op = bytes[at];
+    const std::size_t len = le(bytes, at + 1, 8), body = at + 9;
+    if (op == 0x06) {
+      ++chunks;
+      const std::size_t compression_len = le(bytes, body + 28, 4);
+      records = body + 32 + compression_len + 8;
+      records_end = records + le(bytes, body + 32 + compression_len, 8);
+      for (std::size_t r = records; r < records_end; r += 9 + le(bytes, r + 1, 8))
+        messages += bytes[r] == 0x05;
+    } else if (op == 0x07) {
+      const auto channel = le(bytes, body, 2);
+      const std::size_t n = le(bytes, body + 2, 4) / 16;
+      for (std::size_t k = 0; k < n; ++k) {
+        const auto time = le(bytes, body + 6 + 16 * k, 8), offset = le(bytes, body + 14 + 16 * k, 8);
+        REQUIRE(records + offset < records_end);
+        CHECK(bytes[records + offset] == 0x05);
+        CHECK(le(bytes, records + offset + 9, 2) == channel);
+        CHECK(le(bytes, records + offset + 15, 8) == time);
+        ++indexed;
+      }
+    }
+    at = body + len;
+  }
+  CHECK(chunks > 10);
+  CHECK(messages == 700);
+  CHECK(indexed == 700);
 }
