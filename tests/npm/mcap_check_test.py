@@ -79,6 +79,9 @@ def main(fixture, tool, npm, work):
         p = subprocess.run(args, capture_output=True, text=True, timeout=60)
         if p.returncode != 2 or words not in p.stderr:
             sys.exit("FAIL: %s: exit %d, stderr %r (expected 2 and %r)" % (" ".join(args), p.returncode, p.stderr, words))
+    helped = run([tool, "--help"])
+    if "recover IN OUT" not in helped or "info FILE" not in helped:
+        sys.exit("FAIL: shapeform_mcap --help does not describe info and recover:\n" + helped)
     print("PASS")
 
 
