@@ -266,6 +266,17 @@ TEST_CASE("mcap file cut anywhere keeps every complete chunk and no partial one"
     ++cuts;
   }
   CHECK(cuts > 10);
+  // A file system that leaves zeros after the last write (a crash before the size was final): the zeros
+  // are dropped like a record cut short.
+  {
+    std::vector<std::uint8_t> zeros(bytes.begin(), bytes.begin() + std::ptrdiff_t(full.chunks()[5].offset));
+    zeros.resize(zeros.size() + 4096, 0);
+    write_bytes(cut, zeros.data(), zeros.size());
+    const McapReader r(cut);
+    CHECK(r.truncated());
+    CHECK(r.dropped_bytes() == 4096);
+    CHECK(r.messages().size() == 50);
+  }
   // The file cut exactly after a chunk's message indexes (what flush() leaves on disk): nothing dropped.
   const std::uint64_t after_third = full.chunks()[3].offset;  // = end of the third chunk's message indexes
   write_bytes(cut, bytes.data(), after_third);
