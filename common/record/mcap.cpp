@@ -194,8 +194,13 @@ void McapWriter::open(const std::filesystem::path& file) {
   write_errors_ = 0;
   message_count_ = 0;
   start_ = end_ = 0;
-  schemas_.clear();
-  channels_.clear();
+  for (auto& sc : schemas_) sc.chunk = 0;  // kept from before open() or a previous file, written afresh
+  for (auto& ch : channels_) {
+    ch.chunk = 0;
+    ch.next_sequence = 0;
+    ch.count = 0;
+    ch.index.clear();
+  }
   chunk_channels_.clear();
   chunk_indexes_.clear();
   chunk_number_ = 1;

@@ -49,8 +49,9 @@ class McapWriter {
   McapWriter(const McapWriter&) = delete;
   McapWriter& operator=(const McapWriter&) = delete;
 
-  /// Creates (truncates) `file` and writes the magic and the header. Throws std::runtime_error naming
-  /// the path when it cannot be created.
+  /// Creates (truncates) `file` and writes the magic and the header (closing the file open before, if
+  /// any). Schemas and channels added before, or for a previous file, are kept (their sequence numbers
+  /// start again from 0). Throws std::runtime_error naming the path when it cannot be created.
   void open(const std::filesystem::path& file);
   bool is_open() const { return file_ != nullptr; }
 
@@ -63,7 +64,8 @@ class McapWriter {
                             const std::map<std::string, std::string>& metadata = {});
 
   /// One message; its sequence number is the channel's count of messages so far. A write error (disk
-  /// full) is counted in write_errors(), never thrown. Throws std::invalid_argument on an unknown channel.
+  /// full) is counted in write_errors(), never thrown. Throws std::invalid_argument on an unknown channel;
+  /// does nothing while no file is open.
   void write(std::uint16_t channel, std::uint64_t log_time_ns, std::uint64_t publish_time_ns,
              const std::uint8_t* data, std::size_t size);
   /// The same with the sequence number given (a copy of another file keeps its numbers).

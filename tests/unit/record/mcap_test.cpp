@@ -503,3 +503,25 @@ TEST_CASE("mcap message indexes point at their messages", "[mcap]") {
   CHECK(messages == 700);
   CHECK(indexed == 700);
 }
+
+TEST_CASE("mcap writer keeps its channels across files", "[mcap]") {
+  TempDir tmp;
+  McapWriter w;
+  const auto ch = w.add_channel(w.add_schema("S", "jsonschema", "{}"), "/a", "json");  // before open()
+  const std::uint8_t d[2] = {'{', '}'};
+  for (const char* name : {"one.mcap", "two.mcap"}) {
+    w.open(tmp.path() / name);
+    for (std::uint64_t i = 0; i < 3; ++i) w.write(ch, i, i, d, 2);
+  }
+  w.close();
+  for (const char* name : {"one.mcap", "two.mcap"}) {
+    INFO(name);
+    const McapReader r(tmp.path() / name);
+    CHECK(r.complete());
+    REQUIRE(r.schemas().size() == 1);
+    REQUIRE(r.channels().size() == 1);
+    REQUIRE(r.messages().size() == 3);
+    CHECK(r.messages()[0].sequence == 0);
+    CHECK(r.messages()[2].sequence == 2);
+  }
+}
