@@ -6,7 +6,8 @@
 // (scripts/install_deps.sh).
 //
 // node tests/npm/foxglove_client.mjs --url ws://127.0.0.1:P [--npm DIR] [--subprotocols a,b]
-//        [--topics shapeform/scene,shapeform/state,...] [--count N] [--timeout S] [--refused-check]
+//        [--topics shapeform/scene,shapeform/state,...] [--count N] [--timeout S] [--refused-check] [--brief]
+// --brief: each message line carries its size, receive time (recv_ms) and the scene's sphere count only.
 // Exits 0 when every client got at least N messages of every topic named that is advertised, 1 on a
 // timeout or an error (saying which), 2 on bad arguments or missing packages.
 import { createRequire } from "node:module";
@@ -16,7 +17,7 @@ import { fileURLToPath } from "node:url";
 
 const here = path.dirname(fileURLToPath(import.meta.url));
 const args = { url: "", npm: path.resolve(here, "../../build/npm"), subprotocols: "foxglove.sdk.v1,foxglove.websocket.v1",
-               topics: "shapeform/scene", count: 5, timeout: 30, refusedCheck: false, unsupportedOp: true };
+               topics: "shapeform/scene", count: 5, timeout: 30, refusedCheck: false, unsupportedOp: true, brief: false };
 for (let i = 2; i < process.argv.length; ++i) {
   const a = process.argv[i];
   const next = () => { if (i + 1 >= process.argv.length) bad(`${a} needs a value`); return process.argv[++i]; };
@@ -27,7 +28,8 @@ for (let i = 2; i < process.argv.length; ++i) {
   else if (a === "--count") args.count = Number(next());
   else if (a === "--timeout") args.timeout = Number(next());
   else if (a === "--refused-check") args.refusedCheck = true;
-  else if (a === "--help" || a === "-h") { console.log("usage: node foxglove_client.mjs --url ws://HOST:PORT [--npm DIR] [--subprotocols a,b] [--topics t1,t2] [--count N] [--timeout S] [--refused-check]"); process.exit(0); }
+  else if (a === "--brief") args.brief = true;  // per message: sizes and counts only (benchmarks)
+  else if (a === "--help" || a === "-h") { console.log("usage: node foxglove_client.mjs --url ws://HOST:PORT [--npm DIR] [--subprotocols a,b] [--topics t1,t2] [--count N] [--timeout S] [--refused-check] [--brief]"); process.exit(0); }
   else bad(`unknown argument ${a}`);
 }
 function bad(msg) { console.error(`foxglove_client: ${msg}`); process.exit(2); }
@@ -110,7 +112,14 @@ function runClient(protocol, index) {
       try { m = s.decode(new Uint8Array(data.buffer, data.byteOffset, data.byteLength)); }
       catch (e) { fail(`client ${index}: ${s.topic}: cannot decode: ${e.message}`); finish(false); return; }
       counts.set(s.topic, (counts.get(s.topic) ?? 0) + 1);
-      out({ event: "message", client: index, protocol, topic: s.topic, timestamp: timestamp.toString(), bytes: data.byteLength, ...summary(s.topic, m) });
+      const line = { event: "message", client: index, protocol, topic: s.topic, timestamp: timestamp.toString(), bytes: data.byteLength };
+      if (args.brief) {
+        line.recv_ms = performance.now();
+        if (s.topic === "shapeform/scene") line.spheres = m.entities.find((e) => e.id === "agents").spheres.length;
+        out(line);
+      } else {
+        out({ ...line, ...summary(s.topic, m) });
+      }
       if (done()) finish(true);
     });
     client.on("close", () => { if (!finished) { fail(`client ${index} (${protocol}): closed by the server`); finish(false); } });
