@@ -26,13 +26,14 @@ ALLOWED = {
     "common/config": {"core", "shapes", "util", "protocol"},
     "common/record": {"core", "config", "util"},
     "common/app": {"config", "core", "util", "protocol"},
-    "sim": {"core", "util", "app", "record"},
+    "common/viz": {"core"},  # what Foxglove draws: pure, no DDS; the viewer, the supervisor and the simulator may use it
+    "sim": {"core", "util", "app", "record", "viz"},
     "agent": {"core", "shapes", "protocol", "dds", "config", "util", "app"},
     "vehicle": {"core", "protocol", "dds", "config", "util", "app"},
-    "supervisor": {"core", "shapes", "protocol", "dds", "config", "util", "app", "record"},
+    "supervisor": {"core", "shapes", "protocol", "dds", "config", "util", "app", "record", "viz"},
     "bench": {"core", "protocol", "dds", "config", "util", "app", "shapeform", "record"},
     "tools": {"core", "protocol", "dds", "config", "util", "app", "record"},  # shapeform_mcap reads record/mcap
-    "view": {"core", "shapes", "protocol", "dds", "config", "util", "app", "record"},  # replay reads what record writes
+    "view": {"core", "shapes", "protocol", "dds", "config", "util", "app", "record", "viz"},  # replay reads what record writes
 }
 # Third-party headers each folder may use: core is pure maths, and only common/dds sees Fast DDS.
 FORBIDDEN_SYSTEM = {
@@ -44,6 +45,7 @@ FORBIDDEN_SYSTEM = {
     "sim": re.compile(r"^(fastdds|fastrtps|fastcdr|yaml-cpp)"),
     "common/app": re.compile(r"^(fastdds|fastrtps|fastcdr)"),
     "common/record": re.compile(r"^(fastdds|fastrtps|fastcdr|yaml-cpp)"),
+    "common/viz": re.compile(r"^(fastdds|fastrtps|fastcdr|yaml-cpp|websocketpp|asio)"),
     "agent": re.compile(r"^(fastdds|fastrtps|fastcdr|yaml-cpp)"),
     "vehicle": re.compile(r"^(fastdds|fastrtps|fastcdr|yaml-cpp)"),
     "supervisor": re.compile(r"^(fastdds|fastrtps|fastcdr|yaml-cpp)"),
@@ -56,6 +58,7 @@ FORBIDDEN_LINKS = {
     "common/protocol": ("shapeform_dds", "shapeform_config", "yaml-cpp", "fastrtps", "fastcdr"),
     "common/dds": ("shapeform_config", "yaml-cpp"),
     "common/util": ("shapeform_", "yaml-cpp", "fastrtps"),
+    "common/viz": ("shapeform_dds", "shapeform_config", "yaml-cpp", "fastrtps", "fastcdr"),
 }
 INCLUDE = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]', re.M)
 # The processes compile against the project's own API: no header of the project that their code includes

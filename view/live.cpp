@@ -10,6 +10,7 @@
 #include "dds/convert_ros2.hpp"
 #include "dds/node.hpp"
 #include "dds/state_input.hpp"
+#include "dds/wire.hpp"
 #include "protocol/command_arbiter.hpp"
 #include "util/log.hpp"
 
@@ -57,6 +58,16 @@ struct PoseFeed {
   }
 };
 
+/// The valid samples of buf to sink, serialized only when it wants the topic.
+template <class Msg>
+void forward(SampleSink* sink, const std::vector<dds::Received<Msg>>& buf) {
+  constexpr dds::TopicId topic = dds::MsgTraits<Msg>::topic;
+  if (sink == nullptr || buf.empty() || !sink->wants(topic)) return;
+  for (const auto& r : buf) {
+    if (r.valid_data) sink->on_sample(topic, dds::to_cdr(r.msg));
+  }
+}
+
 }  // namespace
 
 struct LiveFeed::Impl {
@@ -84,16 +95,26 @@ struct LiveFeed::Impl {
   std::vector<dds::Received<msg::SwarmMetrics>> metrics_buf;
   dds::CommandArbiter arbiter;
   std::map<std::int32_t, PoseFeed> poses;  ///< vehicle.interface ros2: one per agent id heard
+  SampleSink* sink = nullptr;
 };
 
 LiveFeed::LiveFeed(const config::Config& cfg) : impl_(std::make_unique<Impl>(cfg)) {}
 LiveFeed::~LiveFeed() = default;
+
+void LiveFeed::set_sink(SampleSink* sink) { impl_->sink = sink; }
+
+std::vector<dds::TopicId> LiveFeed::topics() {
+  return {dds::TopicId::State, dds::TopicId::StateBatch, dds::TopicId::Command,
+          dds::TopicId::Target, dds::TopicId::Metrics, dds::TopicId::Status};
+}
 
 void LiveFeed::drain(Scene& scene, double now_s, double period_s) {
   Impl& m = *impl_;
   m.node.recover_if_stalled(period_s);
   std::string why;
   m.states.drain(m.state_buf);
+  forward(m.sink, m.states.last_states());
+  forward(m.sink, m.states.last_batches());
   for (const auto& r : m.state_buf) {
     if (r.kind == dds::StateItem::Kind::Gone) {
       if (r.instance == dds::InstanceState::Disposed) scene.on_departed(r.id);
@@ -111,6 +132,7 @@ void LiveFeed::drain(Scene& scene, double now_s, double period_s) {
     }
   }
   m.statuses.drain(m.status_buf);
+  forward(m.sink, m.status_buf);
   for (const auto& r : m.status_buf) {
     dds::StatusSample s;
     if (r.valid_data && dds::from_msg(r.msg, s, why)) scene.on_status(s.id, s.neighbours_heard, s.lateness_p99_us);
@@ -120,6 +142,7 @@ void LiveFeed::drain(Scene& scene, double now_s, double period_s) {
   const std::uint64_t floor = scene.min_epoch_followed(now_s);
   bool adopted = false;
   m.commands.drain(m.command_buf);
+  forward(m.sink, m.command_buf);
   for (const auto& r : m.command_buf) {
     dds::CommandSample c;
     if (r.valid_data && dds::from_msg(r.msg, r.source, c, why)) {
@@ -129,11 +152,13 @@ void LiveFeed::drain(Scene& scene, double now_s, double period_s) {
   if (m.arbiter.has_refused() && m.arbiter.recheck(floor)) adopted = true;
   if (adopted) scene.on_command(m.arbiter.current().command, m.arbiter.current().id.epoch);
   m.targets.drain(m.target_buf);
+  forward(m.sink, m.target_buf);
   for (const auto& r : m.target_buf) {
     dds::TargetSample t;
     if (r.valid_data && dds::from_msg(r.msg, t, why) && t.command.epoch == m.arbiter.id().epoch) scene.on_centre(t.centre);
   }
   m.metrics.drain(m.metrics_buf);
+  forward(m.sink, m.metrics_buf);
   for (const auto& r : m.metrics_buf) {
     if (!r.valid_data || !std::isfinite(r.msg.model_time())) continue;
     scene.on_metrics(r.msg.model_time(), r.msg.epoch(), r.msg.agents_alive(), dds::from_msg(r.msg), r.msg.converged());

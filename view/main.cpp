@@ -1,11 +1,16 @@
 // shapeform_view: the swarm in a web browser, live from the DDS domain or replayed from a recording.
 #include <algorithm>
 #include <iostream>
+#include <limits>
+#include <map>
 #include <mutex>
 #include <optional>
 
 #include "app/app.hpp"
 #include "app/json.hpp"
+#include "dds/wire.hpp"
+#include "foxglove_scene.hpp"
+#include "foxglove_server.hpp"
 #include "live.hpp"
 #include "replay.hpp"
 #include "server.hpp"
@@ -19,6 +24,38 @@ namespace shapeform {
 namespace {
 
 double now_s() { return static_cast<double>(util::steady_ns()) * 1e-9; }
+
+/// The Foxglove server's channels: the scene's (viz::scene_channels), then, live, each topic the feed
+/// reads as its CDR bytes with its omgidl schema (dds::topic_schema).
+std::vector<viz::Channel> foxglove_channels(bool live) {
+  std::vector<viz::Channel> out = viz::scene_channels();
+  if (!live) return out;
+  for (const dds::TopicId t : view::LiveFeed::topics()) {
+    const dds::TopicSchema& s = dds::topic_schema(t);
+    out.push_back({dds::topic_name(t), s.name, std::string(s.encoding), s.text, std::string(s.message_encoding)});
+  }
+  return out;
+}
+
+/// The live feed's raw samples to the Foxglove server: serialized only for a channel someone subscribed to.
+class FoxgloveSink : public view::SampleSink {
+ public:
+  explicit FoxgloveSink(view::FoxgloveServer& server) : server_(server) {
+    const auto topics = view::LiveFeed::topics();
+    for (std::size_t i = 0; i < topics.size(); ++i) index_[topics[i]] = viz::scene_channels().size() + i;
+  }
+  bool wants(dds::TopicId topic) const override {
+    const auto it = index_.find(topic);
+    return it != index_.end() && server_.subscribed(it->second);
+  }
+  void on_sample(dds::TopicId topic, std::vector<std::uint8_t> cdr) override {
+    server_.publish(index_.at(topic), static_cast<std::uint64_t>(util::system_ns()), std::string(cdr.begin(), cdr.end()));
+  }
+
+ private:
+  view::FoxgloveServer& server_;
+  std::map<dds::TopicId, std::size_t> index_;
+};
 
 /// How agents are drawn, from the config: stale after the agents' own neighbour timeout (at least
 /// 0.3 s, so a recording's 10 Hz rows do not flicker), dead after the supervisor's agent timeout.
@@ -35,18 +72,29 @@ int run(int argc, char** argv) {
                "transport profile of the config; it writes no topic) and serves a page with the agents, the "
                "commanded shape, the tracked centre, trails, charts and an agent table, streamed as Server-Sent "
                "Events. --replay RUN_DIR plays a recording in the same page (play, pause, speed, seek; no DDS). "
-               "Prints the page's URL on stdout (with --json: a start event with \"url\").");
+               "Prints the page's URL on stdout (with --json: a start event with \"url\").\n\n"
+               "--foxglove-port P also serves the swarm to Foxglove or Lichtblick (Open connection > Foxglove "
+               "WebSocket > ws://127.0.0.1:P; docs/FOXGLOVE.md): a read-only Foxglove WebSocket server "
+               "(subprotocols foxglove.sdk.v1 and foxglove.websocket.v1, several clients at once) with the channel "
+               "shapeform/scene (foxglove.SceneUpdate, json: agents coloured by state, headings, outline, zones, "
+               "fence, centre; frame \"shapeform\", shape units as metres) and shapeform/agent_poses "
+               "(foxglove.PosesInFrame) at --fps, and, live, every topic the viewer reads (shapeform/state, "
+               "state_batch, command, target, metrics, status) as cdr with its omgidl schema, forwarded as samples "
+               "arrive to the clients subscribed to it. A client too far behind misses messages (counted in the "
+               "stop event). With --foxglove-port and no --port, no page is served. --bind applies to both.");
   app.add_config_options();
   std::string bind = "127.0.0.1";
   int port = 8080;
   double fps = 15.0;
+  int foxglove_port = -1;
   std::string replay_dir;
   bool json = false;
   app.cli().add_option("--bind", bind, "IPv4 address to serve on (default 127.0.0.1: this host only; 0.0.0.0: every interface)");
-  app.cli().add_option("--port", port, "TCP port (default 8080; 0: a free port, printed)")->check(CLI::Range(0, 65535));
+  auto* port_opt = app.cli().add_option("--port", port, "TCP port of the page (default 8080; 0: a free port, printed); with --foxglove-port the page is served only when --port is given")->check(CLI::Range(0, 65535));
+  app.cli().add_option("--foxglove-port", foxglove_port, "also serve a Foxglove WebSocket server on this TCP port (0: a free port, printed as \"foxglove_port\" and \"foxglove_url\")")->check(CLI::Range(0, 65535));
   app.cli().add_option("--fps", fps, "frames per second streamed to the page (default 15)")->check(CLI::Range(1.0, 60.0));
   app.cli().add_option("--replay", replay_dir, "play the recording of RUN_DIR (a launcher run folder or a record folder) instead of the live swarm");
-  app.cli().add_flag("--json", json, "machine output on stdout: JSON event lines (start with \"url\", stop)");
+  app.cli().add_flag("--json", json, "machine output on stdout: JSON event lines (start with \"url\" and/or \"foxglove_url\", stop with the Foxglove server's counts)");
   if (const auto rc = app.parse(argc, argv)) return *rc;
   if (!util::is_ipv4(bind)) return app.usage_error("--bind: expected an IPv4 address such as 127.0.0.1, got '" + bind.substr(0, 60) + "'");
   const auto cfg = app.load_config();
@@ -59,10 +107,15 @@ int run(int argc, char** argv) {
       return app.usage_error(std::string("--replay: ") + e.what());
     }
   }
+  const bool foxglove = foxglove_port >= 0;
+  const bool page = !foxglove || port_opt->count() > 0;
   util::log_init("view");
   util::install_stop_signals();
   return app.run([&] {
-    view::Scene scene(scene_params(*cfg));
+    view::SceneParams params = scene_params(*cfg);
+    // Without the page nothing draws trails: keep one point per agent (the page's frame prunes them).
+    if (!page) params.trail_step_s = std::numeric_limits<double>::infinity();
+    view::Scene scene(params);
     view::FrameBus bus;
     std::mutex clock_mutex;
     std::optional<view::ReplayClock> clock;
@@ -80,19 +133,45 @@ int run(int argc, char** argv) {
       live = std::make_unique<view::LiveFeed>(*cfg);
     }
     view::WebServer server(bus, control);
-    const int bound = server.start(bind, port);
-    const std::string url = "http://" + bind + ":" + std::to_string(bound) + "/";
+    std::string url;
+    int bound = -1;
+    if (page) {
+      bound = server.start(bind, port);
+      url = "http://" + bind + ":" + std::to_string(bound) + "/";
+    }
+    std::optional<view::FoxgloveServer> fox;
+    std::optional<FoxgloveSink> sink;
+    std::string fox_url;
+    int fox_bound = -1;
+    if (foxglove) {
+      fox.emplace(foxglove_channels(!recording));
+      fox_bound = fox->start(bind, foxglove_port);
+      fox_url = "ws://" + bind + ":" + std::to_string(fox_bound);
+      if (live) {
+        sink.emplace(*fox);
+        live->set_sink(&*sink);
+      }
+    }
     if (json) {
-      nlohmann::json start = {{"event", "start"}, {"mode", recording ? "replay" : "live"}, {"url", url}, {"port", bound},
-                              {"bind", bind}};
+      nlohmann::json start = {{"event", "start"}, {"mode", recording ? "replay" : "live"}, {"bind", bind}};
+      if (page) {
+        start["url"] = url;
+        start["port"] = bound;
+      }
+      if (foxglove) {
+        start["foxglove_url"] = fox_url;
+        start["foxglove_port"] = fox_bound;
+      }
       if (recording) start["recording"] = recording->dir.string();
       else start["config"] = app::config_json(*cfg);
       std::cout << start.dump() << std::endl;
     } else {
-      std::cout << url << std::endl;
+      if (page) std::cout << url << std::endl;
+      if (foxglove) std::cout << fox_url << std::endl;
     }
-    util::log_info(recording ? "replaying " + recording->dir.string() + " at " + url
-                             : "viewing domain " + std::to_string(cfg->transport.domain) + " at " + url);
+    const std::string where = (page ? url : "") + (page && foxglove ? " and " : "") + fox_url;
+    util::log_info(recording ? "replaying " + recording->dir.string() + " at " + where
+                             : "viewing domain " + std::to_string(cfg->transport.domain) + " at " + where);
     util::RateLoop loop(fps);
     const double t0 = now_s();
     while (loop.wait_next(util::stop_flag())) {
@@ -107,13 +186,34 @@ int run(int argc, char** argv) {
         frame["replay"] = view::clock_json(*clock, real);
       } else {
         live->drain(scene, real - t0, loop.period_s());
-        frame = scene.frame(real - t0);
-        frame["mode"] = "live";
+        if (page) {
+          frame = scene.frame(real - t0);
+          frame["mode"] = "live";
+        }
       }
-      bus.publish(frame.dump());
+      if (page) bus.publish(frame.dump());
+      if (fox && (fox->subscribed(viz::kSceneChannel) || fox->subscribed(viz::kPosesChannel))) {
+        double shown = real - t0;
+        if (recording) {
+          std::lock_guard<std::mutex> lock(clock_mutex);
+          shown = clock->position(real);
+        }
+        const viz::SceneSnapshot snap = view::foxglove_snapshot(scene, shown);
+        const auto stamp = static_cast<std::uint64_t>(util::system_ns());
+        if (fox->subscribed(viz::kSceneChannel)) fox->publish(viz::kSceneChannel, stamp, viz::scene_update_json(snap, stamp));
+        if (fox->subscribed(viz::kPosesChannel)) fox->publish(viz::kPosesChannel, stamp, viz::poses_json(snap, stamp));
+      }
     }
-    server.stop();
-    if (json) std::cout << nlohmann::json{{"event", "stop"}}.dump() << std::endl;
+    if (live) live->set_sink(nullptr);
+    if (page) server.stop();
+    nlohmann::json stop = {{"event", "stop"}};
+    if (fox) {
+      fox->stop();
+      const auto st = fox->stats();
+      stop["foxglove"] = {{"connections", st.connections}, {"messages_sent", st.messages_sent},
+                          {"messages_dropped", st.messages_dropped}, {"bytes_sent", st.bytes_sent}};
+    }
+    if (json) std::cout << stop.dump() << std::endl;
     return 0;
   });
 }

@@ -95,6 +95,10 @@ class Scene {
   std::uint64_t min_epoch_followed(double now_s) const;
   /// The model time shown: the latest metrics sample's, else the largest of the agents'.
   double model_time() const;
+  /// Read-only views for other drawings of the same scene (view/foxglove_scene.hpp).
+  const SceneParams& params() const { return p_; }
+  const std::optional<core::CompiledCommand>& command() const { return command_; }
+  const std::optional<core::Vec2>& centre() const { return centre_; }
 
   /// The frame the page draws at now_s (trails older than trail_s are dropped first):
   /// {"now_s", "model_time", "epoch", "converged",

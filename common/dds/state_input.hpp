@@ -45,6 +45,11 @@ class StateInput {
   /// instance, or one whose writer left, gives one Gone item for every id that instance last carried.
   void drain(std::vector<StateItem>& out);
 
+  /// The samples of each topic as the last drain took them (before validation), for who forwards them
+  /// raw (the viewer's Foxglove server): valid or not, as Fast DDS delivered them.
+  const std::vector<Received<msg::AgentState>>& last_states() const { return single_buf_; }
+  const std::vector<Received<msg::AgentStateBatch>>& last_batches() const { return batch_buf_; }
+
   /// Valid batches taken so far (each counted once, however many agents it carried).
   std::uint64_t batches() const { return batches_; }
 
