@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "dds/convert_ros2.hpp"
 
@@ -70,6 +71,24 @@ Polyline zone_outline(const core::KeepOutZone& z, int circle_points) {
     out.points.push_back(z.centre + z.radius * core::Vec2(std::cos(a), std::sin(a)));
   }
   return out;
+}
+
+MirrorScene mirror_scene(std::vector<MirrorAgent> agents, const core::CompiledCommand* cmd, double t,
+                         std::int64_t stamp_ns, std::string frame_id, bool commands) {
+  MirrorScene s;
+  s.stamp_ns = stamp_ns;
+  s.frame_id = std::move(frame_id);
+  s.agents = std::move(agents);
+  s.commands = commands;
+  if (!cmd) return s;
+  Polyline outline;
+  outline.points = core::outline(*cmd, t, outline.closed);
+  s.outline = std::move(outline);
+  for (const core::KeepOutZone& z : cmd->keep_out) s.keep_out.push_back(zone_outline(z));
+  if (!cmd->fence.empty()) s.fence = Polyline{cmd->fence, true};
+  if (cmd->tracking.enabled) s.centre = core::centre_at(cmd->tracking.path, t);
+  if (cmd->min_separation > 0) s.agent_diameter = cmd->min_separation;
+  return s;
 }
 
 void build_agents(const MirrorScene& s, ros2::PoseArray& out) {

@@ -54,6 +54,13 @@ struct MirrorScene {
 /// A keep-out zone as a closed polyline: a polygon's vertices, or a circle by `circle_points` points.
 Polyline zone_outline(const core::KeepOutZone& z, int circle_points = 64);
 
+/// The scene at model time t of the command in force (`cmd` null: none yet, the agents only): its outline
+/// (core::outline, 240 points), keep-out zones, fence (when the command has a polygon: the workspace box
+/// is not drawn), the tracked centre C(t) when tracking; spheres of diameter min_separation when it is
+/// set (two agents touch at the least distance allowed), 0.2 otherwise.
+MirrorScene mirror_scene(std::vector<MirrorAgent> agents, const core::CompiledCommand* cmd, double t,
+                         std::int64_t stamp_ns, std::string frame_id, bool commands);
+
 /// The scene's agents as a PoseArray: header (stamp, frame_id); one pose per agent in ascending id, the
 /// position (x, y, 0) and the heading of its velocity as a rotation about z (identity when at rest). Pose
 /// k is the k-th smallest id alive: the ids are the "agents" markers' ids (and their text), in the same
