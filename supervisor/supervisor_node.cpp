@@ -10,6 +10,7 @@
 #include <cmath>
 #include <exception>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <optional>
 
@@ -20,6 +21,7 @@
 #include "dds/convert.hpp"
 #include "dds/node.hpp"
 #include "dds/participant.hpp"
+#include "dds/ros2_mirror.hpp"
 #include "dds/state_input.hpp"
 #include "executor.hpp"
 #include "input_driver.hpp"
@@ -50,12 +52,13 @@ class SupervisorNode {
   int finish();
 
   /// One period of the loop.
-  void tick(std::int64_t now, bool metrics_due) {
+  void tick(std::int64_t now, bool metrics_due, bool mirror_due) {
     recover_from_stall();
     drain(now);
     membership_.update(monitor_, now, out_);
     publish_target(now);
     if (metrics_due) metrics_tick(now);
+    if (mirror_due) mirror_tick(now);
     run_input(now);
   }
   /// After a stall longer than the peers' lease the participant is recreated (dds::Node); participants
@@ -78,6 +81,8 @@ class SupervisorNode {
   bool owned(std::int32_t id, const dds::SourceId& source, std::int64_t now);
   void publish_target(std::int64_t now);
   void metrics_tick(std::int64_t now);
+  /// The ROS 2 mirror's publications (ros2.mirror).
+  void mirror_tick(std::int64_t now);
   void record_metrics(const SwarmMonitor::Sample& s, std::int64_t now);
   /// Handles Ctrl-C, runs input lines, tells the console whether the loop is busy.
   void run_input(std::int64_t now);
@@ -109,6 +114,12 @@ class SupervisorNode {
   std::vector<dds::StateItem> states_;
   std::vector<dds::Received<msg::AgentStatus>> statuses_;
   std::unique_ptr<ConsoleInput> console_;
+  // The ROS 2 mirror (ros2.mirror): writers created only when it is on.
+  dds::Writer<dds::ros2::PoseArray> ros2_agents_writer_;
+  dds::Writer<dds::ros2::MarkerArray> ros2_markers_writer_;
+  std::map<std::int32_t, core::Vec2> velocities_;  ///< each agent's latest velocity (its state's v)
+  dds::ros2::PoseArray ros2_agents_;                ///< reused between publications
+  dds::ros2::MarkerArray ros2_markers_;
 };
 
 SupervisorNode::SupervisorNode(const config::Config& cfg, const SupervisorOptions& opt)
@@ -140,8 +151,10 @@ int SupervisorNode::run() {
   const auto metrics_every =
       std::max<std::uint64_t>(1, static_cast<std::uint64_t>(std::llround(cfg_.supervisor.target_rate_hz /
                                                                          cfg_.supervisor.metrics_rate_hz)));
+  const auto mirror_every = std::max<std::uint64_t>(
+      1, static_cast<std::uint64_t>(std::llround(cfg_.supervisor.target_rate_hz / cfg_.ros2.rate_hz)));
   for (std::uint64_t ticks = 0; !input_.quitting() && loop.wait_next(util::stop_flag()); ++ticks) {
-    tick(util::steady_ns(), ticks % metrics_every == 0);
+    tick(util::steady_ns(), ticks % metrics_every == 0, cfg_.ros2.mirror && ticks % mirror_every == 0);
     if (input_.done() && !recorder_.is_open()) break;
   }
   return finish();
@@ -186,6 +199,12 @@ void SupervisorNode::open_dds() {
   state_input_ = dds::StateInput(*node_);
   status_reader_ = node_->reader<msg::AgentStatus>(dds::TopicId::Status);
   command_reader_ = node_->reader<msg::ShapeCommand>(dds::TopicId::Command);
+  if (cfg_.ros2.mirror) {
+    ros2_agents_writer_ = node_->writer<dds::ros2::PoseArray>(dds::TopicId::Ros2Agents);
+    ros2_markers_writer_ = node_->writer<dds::ros2::MarkerArray>(dds::TopicId::Ros2Markers);
+    util::log_info("ros2.mirror: publishing rt/shapeform/agents and rt/shapeform/markers in frame '" +
+                   cfg_.vehicle_link.frame + "'");
+  }
   char host[256] = {};
   if (gethostname(host, sizeof host - 1) != 0) host[0] = '\0';
   authority_.set_identity(node_->name() + " on " + host + " pid " + std::to_string(getpid()), node_->source(),
@@ -286,6 +305,7 @@ void SupervisorNode::drain_states(std::int64_t now) {
       continue;
     }
     monitor_.on_state(s.id, s.x, s.prev_x, s.command, s.model_time, now, r.source);
+    if (cfg_.ros2.mirror) velocities_[s.id] = s.v;
   }
 }
 
@@ -366,6 +386,23 @@ void SupervisorNode::metrics_tick(std::int64_t now) {
   if (epoch != 0) metrics_writer_.write(dds::to_msg(s.metrics, epoch, t, now, s.converged));
   record_metrics(s, now);
   if (progress_.due(s, epoch, now)) util::log_info(progress_line(s, authority_.current()));
+}
+
+void SupervisorNode::mirror_tick(std::int64_t now) {
+  std::vector<dds::MirrorAgent> agents;
+  for (const auto& [id, x] : monitor_.alive_positions(now)) {
+    const auto v = velocities_.find(id);
+    agents.push_back({id, x, v != velocities_.end() ? v->second : core::Vec2::Zero()});
+  }
+  const bool commanded = authority_.epoch() != 0;
+  const dds::MirrorScene scene =
+      dds::mirror_scene(std::move(agents), commanded ? &authority_.current() : nullptr,
+                        authority_.model_time(now), util::system_ns(), cfg_.vehicle_link.frame,
+                        cfg_.vehicle_link.ros2());
+  dds::build_agents(scene, ros2_agents_);
+  dds::build_markers(scene, ros2_markers_);
+  ros2_agents_writer_.write(ros2_agents_);
+  ros2_markers_writer_.write(ros2_markers_);
 }
 
 void SupervisorNode::record_metrics(const SwarmMonitor::Sample& s, std::int64_t now) {

@@ -11,9 +11,9 @@ import os
 import re
 import sys
 
-# The generated code of ROS 2's messages (idl/ros2: geometry_msgs/msg/Twist.h, ...), which only common/dds
-# includes.
-ROS2_MSGS = {"builtin_interfaces", "std_msgs", "geometry_msgs", "nav_msgs"}
+# The generated code of ROS 2's messages (idl/ros2: geometry_msgs/msg/Twist.h, ...: the vehicle interface's
+# and the ROS 2 mirror's), which only common/dds includes.
+ROS2_MSGS = {"builtin_interfaces", "std_msgs", "geometry_msgs", "nav_msgs", "sensor_msgs", "visualization_msgs"}
 # folder -> project folders its code may include (besides its own). "shapeform" is the generated IDL
 # code (shapeform/msg/*.h), which only common/dds and the benchmark include. A folder is a library (or
 # several): its name is the first path component of an include ("core/params.hpp").

@@ -1,6 +1,7 @@
 #include "traffic_json.hpp"
 
 #include <algorithm>
+#include <optional>
 #include <sstream>
 
 #include "app/json.hpp"
@@ -193,6 +194,41 @@ bool sample_json(const dds::ros2::Odometry& m, nlohmann::json& out, std::string&
 
 bool sample_json(const dds::ros2::PoseStamped& m, nlohmann::json& out, std::string& why) {
   return through(m, out, why, pose_json);
+}
+
+bool sample_json(const dds::ros2::PoseArray& m, nlohmann::json& out, std::string&) {
+  nlohmann::json poses = nlohmann::json::array();
+  for (const auto& p : m.poses()) {
+    const auto& q = p.orientation();
+    const std::optional<double> yaw = dds::yaw_of(q.x(), q.y(), q.z(), q.w());
+    poses.push_back({{"x", {p.position().x(), p.position().y()}},
+                     {"z", p.position().z()},
+                     {"yaw", yaw ? nlohmann::json(*yaw) : nlohmann::json(nullptr)}});
+  }
+  out = {{"frame_id", m.header().frame_id()},
+         {"stamp_ns", dds::stamp_ns(m.header().stamp().sec(), m.header().stamp().nanosec())},
+         {"poses", std::move(poses)}};
+  return true;
+}
+
+bool sample_json(const dds::ros2::MarkerArray& m, nlohmann::json& out, std::string&) {
+  nlohmann::json markers = nlohmann::json::array();
+  for (const auto& k : m.markers()) {
+    nlohmann::json points = nlohmann::json::array();
+    for (const auto& p : k.points()) points.push_back({p.x(), p.y(), p.z()});
+    const auto& x = k.pose().position();
+    markers.push_back({{"ns", k.ns()},
+                       {"id", k.id()},
+                       {"type", k.type()},
+                       {"action", k.action()},
+                       {"frame_id", k.header().frame_id()},
+                       {"stamp_ns", dds::stamp_ns(k.header().stamp().sec(), k.header().stamp().nanosec())},
+                       {"position", {x.x(), x.y(), x.z()}},
+                       {"points", std::move(points)},
+                       {"text", k.text()}});
+  }
+  out = {{"markers", std::move(markers)}};
+  return true;
 }
 
 }  // namespace shapeform::tools

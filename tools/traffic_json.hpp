@@ -11,6 +11,7 @@
 
 #include "dds/convert.hpp"
 #include "dds/convert_ros2.hpp"
+#include "dds/ros2_mirror.hpp"
 #include "dds/discovery.hpp"
 #include "dds/node.hpp"
 
@@ -43,6 +44,12 @@ bool sample_json(const dds::ros2::Twist& m, nlohmann::json& out, std::string& wh
 bool sample_json(const dds::ros2::TwistStamped& m, nlohmann::json& out, std::string& why);
 bool sample_json(const dds::ros2::Odometry& m, nlohmann::json& out, std::string& why);
 bool sample_json(const dds::ros2::PoseStamped& m, nlohmann::json& out, std::string& why);
+/// The ROS 2 mirror's topics (dds/ros2_mirror.hpp), written as they are (nothing to refuse): a PoseArray
+/// {"frame_id", "stamp_ns", "poses": [{"x": [x, y], "z", "yaw" (null when not a rotation)}, ...]}; a
+/// MarkerArray {"markers": [{"ns", "id", "type", "action", "frame_id", "stamp_ns", "position": [x, y, z],
+/// "points": [[x, y, z], ...], "text"}, ...]}.
+bool sample_json(const dds::ros2::PoseArray& m, nlohmann::json& out, std::string& why);
+bool sample_json(const dds::ros2::MarkerArray& m, nlohmann::json& out, std::string& why);
 
 /// One line of shapeform_echo for a sample taken from `topic`:
 ///  {"event": "sample", "topic", "data": sample_json} for valid data;

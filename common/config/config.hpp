@@ -103,6 +103,13 @@ struct SupervisorConfig {
   double flush_s = 1.0;               ///< recorder flush period
 };
 
+/// The ROS 2 mirror (docs/ROS2.md): the supervisor republishes the swarm on ROS 2 topics with ROS 2
+/// types (rt/shapeform/agents, rt/shapeform/markers), stamped in `vehicle.frame`.
+struct Ros2MirrorConfig {
+  bool mirror = false;   ///< off by default: nothing is published on the rt/shapeform/ topics
+  double rate_hz = 10.0; ///< publication rate of both topics
+};
+
 struct Config {
   int schema_version = kSchemaVersion;
   std::string name = "circle";  ///< scenario name (free text)
@@ -116,6 +123,7 @@ struct Config {
   VehicleLink vehicle_link;        ///< the vehicle.* keys of the interface
   VehicleSimConfig vehicle_sim;
   SupervisorConfig supervisor;
+  Ros2MirrorConfig ros2;
   dds::TransportConfig transport;  ///< filled and checked by dds::transport_problems
 };
 

@@ -303,6 +303,18 @@ std::vector<P> build() {
       "supervisor.converge.on_shape_abs", "shape units", params::at_least(0),
       "on the shape: ... or this many shape units, whichever is larger",
       [](auto& c) -> auto& { return c.supervisor.converge.on_shape_abs; }));
+  t.push_back(param<bool>(
+      Type::Bool, "ros2.mirror", "", {},
+      "the supervisor republishes the swarm for ROS 2 tools (`ros2 topic echo`, rviz2; docs/ROS2.md): every alive "
+      "agent's pose on `rt/shapeform/agents` (geometry_msgs/PoseArray, ascending id) and markers on "
+      "`rt/shapeform/markers` (visualization_msgs/MarkerArray: agents with their ids, the commanded outline, "
+      "keep-out zones, fence, tracked centre, and with `vehicle.interface: ros2` each agent's velocity), in the "
+      "frame `vehicle.frame`. Off: nothing is published on them",
+      [](auto& c) -> auto& { return c.ros2.mirror; }));
+  t.push_back(real(
+      "ros2.rate_hz", "Hz", params::above_up_to(0, kMaxRateHz),
+      "publication rate of the ROS 2 mirror's topics (at most `supervisor.target_rate_hz`: one per tick of its loop)",
+      [](auto& c) -> auto& { return c.ros2.rate_hz; }));
   for (const auto& p : dds::transport_table())
     t.push_back(params::lift<Config>(
         p, [](auto& c) -> auto& { return c.transport; }));

@@ -3,6 +3,7 @@
 /// compiled once where it enters (config loader, console, command topic), never per step; copies
 /// share the immutable curve.
 #include <memory>
+#include <vector>
 
 #include "command.hpp"
 #include "curve.hpp"
@@ -28,5 +29,13 @@ class CompiledCommand : public Command {
 /// cmd with the curve of its analytic shape or polygon (make_curve). Throws ShapeError for the
 /// expression kinds (shapes::compile builds every kind) and for bad parameters.
 CompiledCommand compile(const Command& cmd);
+
+/// Points of the commanded shape at model time t (tracked shapes about C(t)), in world coordinates:
+/// `n` points spread evenly by arc length on a closed curve (`closed` set true: the last joins the
+/// first), n + 1 from end to end on an open one, and for the (infinite) line n + 1 points over
+/// +-line_half_length (shape units, before scale) about the foot of the shape's origin. Empty when n < 2.
+/// (view::outline samples the same way: it should become a call to this one.)
+std::vector<Vec2> outline(const CompiledCommand& cmd, double t, bool& closed, int n = 240,
+                          double line_half_length = 100.0);
 
 }  // namespace shapeform::core

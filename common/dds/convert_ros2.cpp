@@ -36,25 +36,6 @@ bool stamp_ok(const builtin_interfaces::msg::dds_::Time_& t, const char* field, 
   return false;
 }
 
-builtin_interfaces::msg::dds_::Time_ stamp_msg(std::int64_t ns) {
-  builtin_interfaces::msg::dds_::Time_ t;
-  std::int64_t sec = ns / 1'000'000'000, rem = ns % 1'000'000'000;
-  if (rem < 0) {
-    rem += 1'000'000'000;
-    --sec;
-  }
-  t.sec(static_cast<std::int32_t>(sec));
-  t.nanosec(static_cast<std::uint32_t>(rem));
-  return t;
-}
-
-std_msgs::msg::dds_::Header_ header_msg(std::int64_t ns, const std::string& frame) {
-  std_msgs::msg::dds_::Header_ h;
-  h.stamp(stamp_msg(ns));
-  h.frame_id(frame);
-  return h;
-}
-
 geometry_msgs::msg::dds_::Twist_ twist_msg(double vx, double vy, double wz) {
   geometry_msgs::msg::dds_::Twist_ t;  // generated types start at 0
   t.linear().x(vx);
@@ -108,6 +89,26 @@ bool read_twist(const geometry_msgs::msg::dds_::Twist_& t, const std::string& pr
 }
 
 }  // namespace
+
+builtin_interfaces::msg::dds_::Time_ stamp_msg(std::int64_t ns) {
+  builtin_interfaces::msg::dds_::Time_ t;
+  std::int64_t sec = ns / 1'000'000'000, rem = ns % 1'000'000'000;
+  if (rem < 0) {
+    rem += 1'000'000'000;
+    --sec;
+  }
+  t.sec(static_cast<std::int32_t>(sec));
+  t.nanosec(static_cast<std::uint32_t>(rem));
+  return t;
+}
+
+std_msgs::msg::dds_::Header_ header_msg(std::int64_t ns, const std::string& frame) {
+  std_msgs::msg::dds_::Header_ h;
+  h.stamp(stamp_msg(ns));
+  h.frame_id(frame);
+  return h;
+}
+
 
 std::int64_t stamp_ns(std::int32_t sec, std::uint32_t nanosec) {
   return static_cast<std::int64_t>(sec) * 1'000'000'000 + static_cast<std::int64_t>(nanosec);

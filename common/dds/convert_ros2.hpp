@@ -45,6 +45,11 @@ void to_msg(const PoseSample& s, ros2::PoseStamped& out);
 bool from_msg(const ros2::Odometry& m, PoseSample& out, std::string& why);
 bool from_msg(const ros2::PoseStamped& m, PoseSample& out, std::string& why);
 
+/// ns since the clock's epoch -> builtin_interfaces/Time (sec, nanosec in [0, 1e9), sec rounded down).
+builtin_interfaces::msg::dds_::Time_ stamp_msg(std::int64_t ns);
+/// std_msgs/Header of a stamp (ns) and a frame.
+std_msgs::msg::dds_::Header_ header_msg(std::int64_t ns, const std::string& frame);
+
 /// ns <-> builtin_interfaces/Time (sec, nanosec): ns since the clock's epoch.
 std::int64_t stamp_ns(std::int32_t sec, std::uint32_t nanosec);
 

@@ -61,7 +61,15 @@
     "the driver's (`vehicle_sim.pose_rate_hz`, 50 Hz)")                                                          \
   X(Pose, "rt/{ns}/pose", geometry_msgs::msg::dds_::PoseStamped_, BestEffort, Volatile, NO_KEY, false,           \
     role::kVehicle, role::kAgent | role::kViewer,                                                                \
-    "motion capture or localisation; read with `vehicle.pose_type: pose_stamped`", "the source's")
+    "motion capture or localisation; read with `vehicle.pose_type: pose_stamped`", "the source's")          \
+  X(Ros2Agents, "rt/shapeform/agents", geometry_msgs::msg::dds_::PoseArray_, Reliable, Volatile, NO_KEY, false,  \
+    role::kSupervisor, role::kViewer,                                                                            \
+    "the supervisor with `ros2.mirror: true` (docs/ROS2.md): every alive agent's pose, ascending id",            \
+    "`ros2.rate_hz` (10 Hz)")                                                                                     \
+  X(Ros2Markers, "rt/shapeform/markers", visualization_msgs::msg::dds_::MarkerArray_, Reliable, Volatile, NO_KEY, \
+    false, role::kSupervisor, role::kViewer,                                                                     \
+    "the supervisor with `ros2.mirror: true`: agents, ids, outline, keep-out zones, fence, centre, commands",    \
+    "`ros2.rate_hz` (10 Hz)")
 // clang-format on
 
 /// The key column, read by the expansions: the field's name ("" without a key), and a function giving

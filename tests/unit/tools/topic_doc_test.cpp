@@ -50,7 +50,7 @@ TEST_CASE("every IDL type has a row of the topic table and every row an IDL type
   }
   std::size_t own_rows = 0;
   for (const dds::TopicInfo& t : dds::kTopicTable) {
-    if (dds::is_vehicle_topic(t.id)) continue;
+    if (std::string(t.name).rfind("rt/", 0) == 0) continue;  // ROS 2's topics: idl/ros2 (below)
     rows.insert(dds::message_name(t.id));
     ++own_rows;
   }
@@ -58,14 +58,20 @@ TEST_CASE("every IDL type has a row of the topic table and every row an IDL type
   CHECK(rows.size() == own_rows);  // one row per type
 }
 
-TEST_CASE("a vehicle's rows are ROS 2 types, each from its IDL file under idl/ros2", "[tools][topics]") {
-  int vehicle_rows = 0;
+TEST_CASE("ROS 2's rows (a vehicle's, the mirror's) are ROS 2 types, each from its IDL file under idl/ros2",
+          "[tools][topics]") {
+  int vehicle_rows = 0, ros2_rows = 0;
   for (const dds::TopicInfo& t : dds::kTopicTable) {
-    if (!dds::is_vehicle_topic(t.id)) continue;
-    ++vehicle_rows;
+    if (std::string(t.name).rfind("rt/", 0) != 0) continue;  // ROS 2's prefix
+    ++ros2_rows;
     const std::string message = dds::message_name(t.id);  // geometry_msgs/msg/Twist
     INFO(t.type << " from idl/ros2/" << message << ".idl");
-    CHECK(std::string(t.name).rfind("rt/{ns}/", 0) == 0);  // ROS 2's prefix and the vehicle's namespace
+    if (dds::is_vehicle_topic(t.id)) {
+      ++vehicle_rows;
+      CHECK(std::string(t.name).rfind("rt/{ns}/", 0) == 0);  // the vehicle's namespace
+    } else {
+      CHECK(std::string(t.name).rfind("rt/shapeform/", 0) == 0);  // the mirror's (docs/ROS2.md)
+    }
     const auto structs = idl_structs(std::string(SHAPEFORM_SOURCE_DIR) + "/idl/ros2/" + message + ".idl");
     const std::string name = message.substr(message.rfind('/') + 1) + "_";  // Twist_
     REQUIRE(structs.count(name) == 1);
@@ -76,6 +82,7 @@ TEST_CASE("a vehicle's rows are ROS 2 types, each from its IDL file under idl/ro
     CHECK(!dds::is_keyed(t.id));  // ROS 2's topics have no key
   }
   CHECK(vehicle_rows == 4);
+  CHECK(ros2_rows == 6);
   CHECK(dds::vehicle_topic_name("robot_3", "cmd_vel") == "rt/robot_3/cmd_vel");
   CHECK(dds::vehicle_topic_name("robot_3", "/mocap/pose") == "rt/mocap/pose");
   CHECK(dds::find_topic("rt/robot_3/odom") == dds::TopicId::Odom);
@@ -91,10 +98,9 @@ TEST_CASE("the topic table: ids in row order, names unique, types named after th
     CHECK(static_cast<std::size_t>(t.id) == k);
     CHECK(dds::kAllTopics[k] == t.id);
     CHECK(names.insert(std::string(t.name) + " " + t.type).second);
-    if (!dds::is_vehicle_topic(t.id)) {
+    if (!dds::is_vehicle_topic(t.id)) CHECK(dds::find_topic(t.name) == t.id);
+    if (std::string(t.name).rfind("rt/", 0) != 0)  // ROS 2's rows: the test above
       CHECK(std::string(t.type) == "shapeform::msg::" + dds::message_name(t.id));
-      CHECK(dds::find_topic(t.name) == t.id);
-    }
     CHECK(t.publishers != 0);                      // somebody may publish it...
     CHECK((t.readers & dds::role::kViewer) != 0);  // ...and the read-only monitors may read it
   }
@@ -108,8 +114,8 @@ TEST_CASE("the generated tables and rules follow the rows", "[tools][topics]") {
         std::string::npos);
   const std::string access = tools::access_markdown();
   CHECK(access.find("| `viewer` | nothing | every topic |") != std::string::npos);
-  CHECK(access.find("| `supervisor` | `shapeform/command`, `shapeform/target`, `shapeform/metrics` | ") !=
-        std::string::npos);
+  CHECK(access.find("| `supervisor` | `shapeform/command`, `shapeform/target`, `shapeform/metrics`, "
+                    "`rt/shapeform/agents`, `rt/shapeform/markers` | ") != std::string::npos);
   const std::string rules = tools::keystore_rules();
   CHECK(rules.rfind("rules() {", 0) == 0);
   CHECK(rules.find("    viewer)\n      echo '<subscribe><topics><topic>shapeform/state</topic>") !=
