@@ -15,6 +15,7 @@
 #include "core/params.hpp"
 #include "core/safety.hpp"
 #include "record/recorder.hpp"
+#include "util/clock.hpp"
 
 namespace shapeform {
 namespace {
@@ -121,7 +122,7 @@ struct Outputs {
     }
     if (!a.record_dir.empty()) {
       try {
-        recorder.open(a.record_dir);
+        recorder.open(a.record_dir, util::system_ns());  // run.mcap's log times: Unix time from here
       } catch (const std::exception& e) {
         throw std::runtime_error(std::string("--record: ") + e.what());
       }

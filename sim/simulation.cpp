@@ -27,16 +27,17 @@ std::string metric_csv_values(const core::Metrics& m) {
 }  // namespace
 
 namespace {
-/// One step of the recording: metrics, positions, and the tracked centre.
+/// One step of the recording: metrics, the tracked centre and positions.
 void record_step(record::Recorder& rec, double wall, long k, std::uint64_t epoch, const core::CompiledCommand& cmd,
                  double t, const std::vector<core::Vec2>& x, const core::Metrics& m, bool converged) {
   rec.write_metrics({wall, t, epoch, static_cast<int>(x.size()), m, converged});
-  for (std::size_t i = 0; i < x.size(); ++i)
-    rec.write_positions(wall, t, k, epoch, static_cast<std::int32_t>(i), x[i].x(), x[i].y());
-  if (cmd.tracking.enabled) {
+  if (cmd.tracking.enabled) {  // before the positions: the sample's drawing shows this centre
     const core::Vec2 c = core::centre_at(cmd.tracking.path, t);
     rec.write_centre(wall, t, epoch, c.x(), c.y());
   }
+  std::vector<record::AgentRow> agents(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i) agents[i] = {static_cast<std::int32_t>(i), epoch, x[i].x(), x[i].y(), {}};
+  rec.write_positions(wall, t, k, agents);
 }
 }  // namespace
 

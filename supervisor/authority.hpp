@@ -30,6 +30,9 @@ class CommandAuthority {
   CommandAuthority(const core::CompiledCommand& initial, double agent_rate_hz, bool lockstep,
                    std::int64_t start_ns, SwarmMonitor& monitor, record::Recorder& recorder, Output& out);
 
+  /// The steady-clock time (ns) of wall_s 0 of its recordings: when the supervisor started.
+  std::int64_t start_ns() const { return start_ns_; }
+
   /// How this supervisor names itself in its commands, its issuer (its first participant's GUID
   /// prefix, kept when a stall recreates the participant, so that its commands stay its own and keep
   /// their order) and where its commands go.

@@ -6,6 +6,7 @@
 
 #include "app/json.hpp"
 #include "console_parser.hpp"
+#include "util/clock.hpp"
 
 namespace shapeform::supervisor {
 
@@ -157,7 +158,8 @@ void Executor::execute(const Quit&, std::int64_t) { p_.input.quit(); }
 // Recording
 
 void Executor::start_recording(const std::string& dir, std::int64_t now_ns) {
-  p_.recorder.open(dir);                // closes the current recording only once the new one is open
+  // Closes the current recording only once the new one is open; run.mcap's log times are Unix times.
+  p_.recorder.open(dir, util::system_ns() - (now_ns - p_.authority.start_ns()));
   p_.authority.record_command(now_ns);  // a recording begins with the command its rows are measured against
   p_.out.event("record", {{"dir", dir}, {"open", true}});
 }

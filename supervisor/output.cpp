@@ -11,13 +11,14 @@ Output::Output(bool json, std::ostream& human, std::ostream& events, std::ostrea
     : json_(json), human_(&human), events_(&events), errors_(&errors) {}
 
 void Output::event(const char* name, nlohmann::json j) {
-  if (!json_) return;
+  if (!wants_events()) return;
   j["event"] = name;
-  *events_ << j.dump() << std::endl;
+  if (sink_) sink_(j);
+  if (json_) *events_ << j.dump() << std::endl;
 }
 
 void MembershipReport::update(const SwarmMonitor& monitor, std::int64_t now_ns, Output& out) {
-  if (!out.json()) return;
+  if (!out.wants_events()) return;
   std::set<std::int32_t> alive;
   for (const auto& [id, a] : monitor.agents())
     if (monitor.alive(a, now_ns)) alive.insert(id);

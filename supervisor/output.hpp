@@ -3,6 +3,7 @@
 /// on stderr, and on stdout only JSON lines, one event each. Errors about input go to stderr; logs
 /// (util/log.hpp) go to stderr, repeated ones throttled.
 #include <cstdint>
+#include <functional>
 #include <iosfwd>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -20,9 +21,13 @@ class Output {
   Output(bool json, std::ostream& human, std::ostream& events, std::ostream& errors);
 
   bool json() const { return json_; }
+  /// Who else takes every event (the recorder's shapeform/events channel), with or without --json.
+  void set_event_sink(std::function<void(const nlohmann::json&)> sink) { sink_ = std::move(sink); }
+  /// Whether events go anywhere (--json, or a sink): callers skip building them otherwise.
+  bool wants_events() const { return json_ || static_cast<bool>(sink_); }
   std::ostream& human() { return *human_; }
   std::ostream& errors() { return *errors_; }
-  /// With --json, `j` with "event": name as one line on the events stream.
+  /// With --json, `j` with "event": name as one line on the events stream; and to the sink.
   void event(const char* name, nlohmann::json j);
   /// Warnings and errors that may repeat in the loop: at most one per key every 5 s.
   util::ThrottledLog& throttled() { return throttled_; }
@@ -33,6 +38,7 @@ class Output {
   std::ostream* events_;
   std::ostream* errors_;
   util::ThrottledLog throttled_{5.0};
+  std::function<void(const nlohmann::json&)> sink_;
 };
 
 /// --json: an "agent" event for every agent that became alive ("joined") or stopped being alive

@@ -23,6 +23,7 @@
 #include "dds/participant.hpp"
 #include "dds/ros2_mirror.hpp"
 #include "dds/state_input.hpp"
+#include "dds/wire.hpp"
 #include "executor.hpp"
 #include "input_driver.hpp"
 #include "output.hpp"
@@ -87,6 +88,13 @@ class SupervisorNode {
   /// Handles Ctrl-C, runs input lines, tells the console whether the loop is busy.
   void run_input(std::int64_t now);
   Summary summary(std::int64_t now) const;
+  /// A channel of run.mcap for topic id: its name, its IDL as omgidl schema, CDR messages.
+  std::uint16_t wire_channel(dds::TopicId id);
+  /// msg as it travels, into run.mcap's channel (when recording).
+  template <class Msg>
+  void record_wire(std::uint16_t channel, std::int64_t now, const Msg& msg) {
+    if (recorder_.is_open()) recorder_.write_message(channel, wall_s(now), dds::to_cdr(msg));
+  }
   /// Seconds since the supervisor started: a recording's wall_s.
   double wall_s(std::int64_t now) const { return static_cast<double>(now - start_ns_) * 1e-9; }
 
@@ -113,6 +121,9 @@ class SupervisorNode {
   std::vector<dds::Received<msg::ShapeCommand>> commands_;
   std::vector<dds::StateItem> states_;
   std::vector<dds::Received<msg::AgentStatus>> statuses_;
+  std::vector<record::AgentRow> positions_;  ///< one recorded sample (reused)
+  /// run.mcap's channel of each topic the supervisor reads or writes (every sample, as CDR).
+  std::uint16_t state_ch_ = 0, batch_ch_ = 0, command_ch_ = 0, status_ch_ = 0, metrics_ch_ = 0, target_ch_ = 0;
   std::unique_ptr<ConsoleInput> console_;
   // The ROS 2 mirror (ros2.mirror): writers created only when it is on.
   dds::Writer<dds::ros2::PoseArray> ros2_agents_writer_;
@@ -138,6 +149,19 @@ SupervisorNode::SupervisorNode(const config::Config& cfg, const SupervisorOption
       executor_(cfg.command, opt.replace_on_start,
                 ExecutorParts{authority_, monitor_, recorder_, input_, progress_, out_}) {
   input_.set_dispatch([this](const Action& a, std::int64_t now) { executor_(a, now); });
+  state_ch_ = wire_channel(dds::TopicId::State);
+  batch_ch_ = wire_channel(dds::TopicId::StateBatch);
+  command_ch_ = wire_channel(dds::TopicId::Command);
+  status_ch_ = wire_channel(dds::TopicId::Status);
+  metrics_ch_ = wire_channel(dds::TopicId::Metrics);
+  target_ch_ = wire_channel(dds::TopicId::Target);
+  out_.set_event_sink([this](const nlohmann::json& e) { recorder_.write_event(wall_s(util::steady_ns()), e.dump()); });
+}
+
+std::uint16_t SupervisorNode::wire_channel(dds::TopicId id) {
+  const dds::TopicSchema& s = dds::topic_schema(id);
+  return recorder_.add_channel({dds::topic_name(id), s.name, std::string(s.encoding), std::string(s.text),
+                                std::string(s.message_encoding)});
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -267,6 +291,7 @@ void SupervisorNode::drain_commands(std::int64_t now) {
   command_reader_.drain(commands_);
   const std::uint64_t floor = monitor_.min_epoch_followed(now);
   for (const auto& r : commands_) {
+    if (r.valid_data) record_wire(command_ch_, now, r.msg);  // its own too: what every agent heard
     if (!r.valid_data || r.source == node_->source()) continue;  // our own publications are known
     dds::CommandSample c;
     std::string why;
@@ -280,6 +305,12 @@ void SupervisorNode::drain_commands(std::int64_t now) {
 
 void SupervisorNode::drain_states(std::int64_t now) {
   state_input_.drain(states_);
+  if (recorder_.is_open()) {  // every sample as it came, before validation
+    for (const auto& r : state_input_.last_states())
+      if (r.valid_data) record_wire(state_ch_, now, r.msg);
+    for (const auto& r : state_input_.last_batches())
+      if (r.valid_data) record_wire(batch_ch_, now, r.msg);
+  }
   for (const auto& r : states_) {
     if (r.kind == dds::StateItem::Kind::Gone) {
       // Disposed, or its writer left (its dispose, best effort, may be lost) while it was still heard:
@@ -312,6 +343,7 @@ void SupervisorNode::drain_states(std::int64_t now) {
 void SupervisorNode::drain_statuses(std::int64_t now) {
   status_reader_.drain(statuses_);
   for (const auto& r : statuses_) {
+    if (r.valid_data) record_wire(status_ch_, now, r.msg);
     dds::StatusSample s;
     std::string why;
     if (!r.valid_data || !dds::from_msg(r.msg, s, why) || !owned(s.id, r.source, now)) continue;
@@ -370,8 +402,10 @@ void SupervisorNode::publish_target(std::int64_t now) {
   if (!authority_.own() || !cmd.tracking.enabled || cmd.hold) return;
   const double t = authority_.model_time(now);
   const core::Vec2 c = core::centre_at(cmd.tracking.path, t);
-  target_writer_.write(dds::to_msg(
-      dds::TargetSample{authority_.id(), t, c, core::centre_velocity(cmd.tracking.path, t), now}));
+  const msg::TrackingTarget target =
+      dds::to_msg(dds::TargetSample{authority_.id(), t, c, core::centre_velocity(cmd.tracking.path, t), now});
+  target_writer_.write(target);
+  record_wire(target_ch_, now, target);
   recorder_.write_centre(wall_s(now), t, authority_.epoch(), c.x(), c.y());
 }
 
@@ -383,7 +417,11 @@ void SupervisorNode::metrics_tick(std::int64_t now) {
   const SwarmMonitor::Sample s =
       authority_.current().hold ? monitor_.measure(t, now) : monitor_.update(t, now);
   const std::uint64_t epoch = authority_.epoch();
-  if (epoch != 0) metrics_writer_.write(dds::to_msg(s.metrics, epoch, t, now, s.converged));
+  if (epoch != 0) {
+    const msg::SwarmMetrics m = dds::to_msg(s.metrics, epoch, t, now, s.converged);
+    metrics_writer_.write(m);
+    record_wire(metrics_ch_, now, m);
+  }
   record_metrics(s, now);
   if (progress_.due(s, epoch, now)) util::log_info(progress_line(s, authority_.current()));
 }
@@ -411,8 +449,10 @@ void SupervisorNode::record_metrics(const SwarmMonitor::Sample& s, std::int64_t 
   try {
     recorder_.write_metrics({wall, t, authority_.epoch(), s.alive, s.metrics, s.converged});
     const auto step = static_cast<std::int64_t>(std::llround(t / authority_.current().dt));
+    positions_.clear();
     for (const auto& [id, x] : monitor_.alive_positions(now, t))
-      recorder_.write_positions(wall, t, step, monitor_.agents().at(id).command.epoch, id, x.x(), x.y());
+      positions_.push_back({id, monitor_.agents().at(id).command.epoch, x.x(), x.y(), {}});
+    recorder_.write_positions(wall, t, step, positions_);
     recorder_.flush_if_due(record::Recorder::Clock::now());
   } catch (const std::exception& e) {
     out_.throttled().error("record", std::string("recording: ") + e.what());

@@ -24,7 +24,7 @@ ALLOWED = {
     "common/protocol": {"core", "util"},
     "common/dds": {"core", "shapes", "util", "protocol", "shapeform"} | ROS2_MSGS,
     "common/config": {"core", "shapes", "util", "protocol"},
-    "common/record": {"core", "config", "util"},
+    "common/record": {"core", "config", "util", "viz"},  # run.mcap holds the scene drawn for Foxglove
     "common/app": {"config", "core", "util", "protocol"},
     "common/viz": {"core"},  # what Foxglove draws: pure, no DDS; the viewer, the supervisor and the simulator may use it
     "sim": {"core", "util", "app", "record", "viz"},

@@ -102,8 +102,8 @@ int run(int argc, char** argv) {
   std::optional<view::Recording> recording;
   if (!replay_dir.empty()) {
     try {
-      recording = view::load_recording(replay_dir);
-    } catch (const view::RecordingError& e) {
+      recording = record::load_recording(replay_dir);
+    } catch (const record::RecordingError& e) {
       return app.usage_error(std::string("--replay: ") + e.what());
     }
   }

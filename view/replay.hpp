@@ -10,60 +10,14 @@
 
 #include "core/compiled_command.hpp"
 #include "core/metrics.hpp"
+#include "record/recording.hpp"
 #include "scene.hpp"
 
 namespace shapeform::view {
 
-/// A recording that cannot be read: the message names the file (and line).
-class RecordingError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-
-/// The recording's rows, each table in file order (wall_s ascending).
-struct Recording {
-  struct MetricsRow {
-    double wall_s = 0, model_time = 0;
-    std::uint64_t epoch = 0;
-    int agents_alive = 0;
-    core::Metrics metrics;
-    bool converged = false;
-  };
-  struct PositionRow {
-    double wall_s = 0, model_time = 0;
-    std::uint64_t epoch = 0;  ///< 0 when the file has no epoch column
-    std::int32_t agent = 0;
-    core::Vec2 x = core::Vec2::Zero();
-  };
-  struct CommandRow {
-    double wall_s = 0;
-    std::uint64_t epoch = 0;
-    core::CompiledCommand command;
-  };
-  struct CentreRow {
-    double wall_s = 0;
-    core::Vec2 c = core::Vec2::Zero();
-  };
-  std::filesystem::path dir;  ///< the folder holding the files
-  std::vector<MetricsRow> metrics;
-  std::vector<PositionRow> positions;
-  std::vector<CommandRow> commands;  ///< empty when commands.csv is absent (older recordings)
-  std::vector<CentreRow> centre;     ///< empty when centre.csv is absent (not tracking)
-  double start_s = 0, end_s = 0;     ///< wall_s of the first and last row of any table
-};
-
-/// The folder of a recording: `dir` when it holds metrics.csv, else dir/record (a launcher's run
-/// folder). Throws RecordingError naming the missing file.
-std::filesystem::path recording_dir(const std::filesystem::path& dir);
-
-/// A command of commands.csv: its JSON object of config keys to values (as --set takes them)
-/// loaded through the config loader. Throws RecordingError with the loader's problems.
-core::CompiledCommand command_from_json(const std::string& json_object);
-
-/// Reads metrics.csv and positions.csv (required) and commands.csv and centre.csv (when present)
-/// from recording_dir(dir). Columns are found by their header names. Throws RecordingError naming the
-/// file, the line and the column of the first problem.
-Recording load_recording(const std::filesystem::path& dir);
+/// The recording replayed: read by record::load_recording (CSV folder or run.mcap).
+using record::Recording;
+using record::RecordingError;
 
 /// The replay's clock: a position in recording time (wall_s) that advances at `speed` times real
 /// time while playing, clamped to [start_s, end_s]. `real_s` is any steady clock in seconds.

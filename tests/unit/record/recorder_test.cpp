@@ -143,9 +143,9 @@ TEST_CASE("position rows, with and without a step", "[record]") {
   TempDir tmp;
   Recorder rec;
   rec.open(tmp.path());
-  rec.write_positions(0.5, 12.0, 12, 2, 3, 1.25, -4.0);
-  rec.write_positions(0.5, 12.0, std::nullopt, 2, 17, 0.1, 1e-300);
-  rec.write_positions(0.75, 13.0, std::int64_t{1} << 40, 0, 0, 0.0, -0.0);
+  rec.write_positions(0.5, 12.0, 12, {{3, 2, 1.25, -4.0, {}}});
+  rec.write_positions(0.5, 12.0, std::nullopt, {{17, 2, 0.1, 1e-300, {}}});
+  rec.write_positions(0.75, 13.0, std::int64_t{1} << 40, {{0, 0, 0.0, -0.0, {}}});
   CHECK(rec.position_rows() == 3);
   rec.close();
   const auto lines = read_lines(tmp.path() / "positions.csv");
@@ -160,7 +160,7 @@ TEST_CASE("numbers round-trip exactly", "[record]") {
   Recorder rec;
   rec.open(tmp.path());
   const double x = 0.1 + 0.2;  // 0.30000000000000004
-  rec.write_positions(1.0 / 3.0, 2.0 / 3.0, 1, 1, 1, x, -x);
+  rec.write_positions(1.0 / 3.0, 2.0 / 3.0, 1, {{1, 1, x, -x, {}}});
   rec.close();
   const auto lines = read_lines(tmp.path() / "positions.csv");
   REQUIRE(lines.size() == 2);
@@ -179,7 +179,7 @@ TEST_CASE("flush_if_due flushes once flush_s has passed", "[record]") {
   Recorder rec(2.0);
   const auto t0 = Recorder::Clock::now();
   rec.open(tmp.path());
-  rec.write_positions(0.0, 1.0, 1, 1, 1, 2.0, 3.0);
+  rec.write_positions(0.0, 1.0, 1, {{1, 1, 2.0, 3.0, {}}});
   const fs::path file = tmp.path() / "positions.csv";
 
   // Not due yet: the row stays in the stream buffer (small rows are buffered by std::filebuf).
@@ -208,7 +208,7 @@ TEST_CASE("close flushes; closing twice and writing after close are harmless",
   rec.close();
   CHECK_FALSE(rec.is_open());
   rec.write_metrics(full_row());  // ignored
-  rec.write_positions(0.0, 0.0, 0, 0, 0, 0.0, 0.0);
+  rec.write_positions(0.0, 0.0, 0, {{0, 0, 0.0, 0.0, {}}});
   rec.write_centre(0.0, 0.0, 1, 0.0, 0.0);
   rec.flush();
   rec.flush_if_due(Recorder::Clock::now() + std::chrono::hours(1));
@@ -222,7 +222,7 @@ TEST_CASE("the destructor flushes and closes", "[record]") {
   {
     Recorder rec;
     rec.open(tmp.path());
-    rec.write_positions(0.0, 1.0, 1, 1, 1, 2.0, 3.0);
+    rec.write_positions(0.0, 1.0, 1, {{1, 1, 2.0, 3.0, {}}});
   }
   CHECK(read_lines(tmp.path() / "positions.csv").size() == 2);
 }

@@ -37,18 +37,18 @@ fs::path write_recording(const std::string& name, bool with_commands = true) {
 }  // namespace
 
 TEST_CASE("command_from_json: config keys to values, through the config loader") {
-  const auto c = view::command_from_json(R"({"shape.kind":"ellipse","shape.a":"5","shape.b":2})");
+  const auto c = record::command_from_json(R"({"shape.kind":"ellipse","shape.a":"5","shape.b":2})");
   CHECK(c.shape.kind == core::ShapeKind::Ellipse);
   CHECK(c.shape.a == 5.0);
   CHECK(c.shape.b == 2.0);
-  CHECK_THROWS_WITH(view::command_from_json(R"({"shape.r0":"-1"})"), Catch::Contains("shape.r0"));
-  CHECK_THROWS_AS(view::command_from_json("[1]"), view::RecordingError);
+  CHECK_THROWS_WITH(record::command_from_json(R"({"shape.r0":"-1"})"), Catch::Contains("shape.r0"));
+  CHECK_THROWS_AS(record::command_from_json("[1]"), view::RecordingError);
 }
 
 TEST_CASE("load_recording: a run folder or its record folder; every table read by column name") {
   const fs::path dir = write_recording("load");
   for (const fs::path& given : {dir, dir.parent_path()}) {
-    const auto r = view::load_recording(given);
+    const auto r = record::load_recording(given);
     CHECK(r.dir == dir);
     REQUIRE(r.metrics.size() == 3);
     CHECK(r.metrics[1].model_time == 5.0);
@@ -68,12 +68,12 @@ TEST_CASE("load_recording: a run folder or its record folder; every table read b
 
 TEST_CASE("load_recording: a missing or bad file is named, with its line and column") {
   const fs::path dir = write_recording("bad", false);
-  CHECK_NOTHROW(view::load_recording(dir));  // commands and centre are optional
-  CHECK_THROWS_WITH(view::load_recording(dir / "nowhere"), Catch::Contains("nowhere/metrics.csv"));
+  CHECK_NOTHROW(record::load_recording(dir));  // commands and centre are optional
+  CHECK_THROWS_WITH(record::load_recording(dir / "nowhere"), Catch::Contains("nowhere/metrics.csv"));
   fs::remove(dir / "positions.csv");
-  CHECK_THROWS_WITH(view::load_recording(dir), Catch::Contains("positions.csv"));
+  CHECK_THROWS_WITH(record::load_recording(dir), Catch::Contains("positions.csv"));
   std::ofstream(dir / "positions.csv") << "wall_s,model_time,agent,x1,x2\n1.0,0,0,abc,1\n";
-  CHECK_THROWS_WITH(view::load_recording(dir), Catch::Contains("positions.csv:2") && Catch::Contains("x1"));
+  CHECK_THROWS_WITH(record::load_recording(dir), Catch::Contains("positions.csv:2") && Catch::Contains("x1"));
 }
 
 TEST_CASE("ReplayClock: plays at its speed, pauses, seeks, clamps to the recording") {
@@ -111,7 +111,7 @@ TEST_CASE("apply_control: the page's actions, seek in seconds from the start; ba
 }
 
 TEST_CASE("ReplayFeeder: the scene shows what was recorded up to the position; back in time starts anew") {
-  const auto r = view::load_recording(write_recording("feed"));
+  const auto r = record::load_recording(write_recording("feed"));
   view::Scene scene;
   view::ReplayFeeder feeder(r, 5.0);
   feeder.advance(scene, 1.15);
@@ -138,7 +138,7 @@ TEST_CASE("ReplayFeeder: a recording older than the safety figures plays, them n
          "0.9,0,1,01.02,supervisor,\"{\"\"shape.kind\"\":\"\"circle\"\","
          "\"\"safety.min_separation\"\":\"\"0.2\"\","
          "\"\"safety.keep_out\"\":\"\"[{circle: [4, 0, 1]}, {polygon: [[0, 5], [1, 5], [0, 6]]}]\"\"}\"\n";
-  const auto r = view::load_recording(dir);
+  const auto r = record::load_recording(dir);
   view::Scene scene;
   view::ReplayFeeder feeder(r, 5.0);
   feeder.advance(scene, 1.25);
