@@ -9,7 +9,9 @@ frames/s delivered to the client, bytes per frame, the view's CPU (% of one core
 the server dropped for the client.
 
 usage: scripts/bench_foxglove.py [--build build] [--domain 151] [--agents 12,100,1000] [--fps 15]
-                                 [--seconds 10] [--group-size 250]
+                                 [--seconds 10] [--group-size 250] [--slow-client]
+--slow-client adds a row: the largest size again with a second client that subscribes and then stops
+reading; the measured client must keep its frame rate and the server count the dropped messages.
 Prints one JSON line per size and a Markdown table.
 """
 import argparse
@@ -33,7 +35,7 @@ def cpu_s(pid):
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
-def measure(args, n, work):
+def measure(args, n, work, stalled=0):
     bin_dir = os.path.join(args.build, "bin")
     npm = os.path.join(args.build, "npm")
     if not os.path.isdir(os.path.join(npm, "node_modules", "@foxglove", "ws-protocol")):
@@ -59,7 +61,7 @@ def measure(args, n, work):
             return any(json.loads(l).get("spheres") == n for l in r.stdout.splitlines() if l.strip())
         procs.poll(all_drawn, 180, "every one of %d agents drawn" % n, interval=1.0)
         cpu0, t0 = cpu_s(view.popen.pid), time.monotonic()
-        r = subprocess.run(client + ["--count", str(frames_needed)], capture_output=True, text=True, timeout=args.seconds + 180)
+        r = subprocess.run(client + ["--count", str(frames_needed), "--stalled", str(stalled)], capture_output=True, text=True, timeout=args.seconds + 180)
         cpu1, t1 = cpu_s(view.popen.pid), time.monotonic()
         if r.returncode != 0:
             sys.exit("bench_foxglove: the client failed: " + r.stderr[-1000:])
@@ -69,7 +71,7 @@ def measure(args, n, work):
         span_s = (msgs[-1]["recv_ms"] - msgs[0]["recv_ms"]) / 1000.0
         view.stop()
         stop = view.wait_event("stop", 10)
-        return {"agents": n, "fps": args.fps, "frames": len(msgs), "frames_with_every_agent": len(full),
+        return {"agents": n, "fps": args.fps, "stalled_clients": stalled, "frames": len(msgs), "frames_with_every_agent": len(full),
                 "frames_per_s": round((len(msgs) - 1) / span_s, 2) if span_s > 0 else None,
                 "bytes_per_frame": round(sum(m["bytes"] for m in msgs) / len(msgs)),
                 "view_cpu_percent": round(100.0 * (cpu1 - cpu0) / (t1 - t0), 1),
@@ -89,6 +91,8 @@ def main():
     p.add_argument("--fps", type=float, default=15.0, help="the view's --fps (default 15)")
     p.add_argument("--seconds", type=float, default=10.0, help="measured window per size (default 10)")
     p.add_argument("--group-size", type=int, default=250, help="agents per shapeform_agent_group process (default 250)")
+    p.add_argument("--slow-client", action="store_true",
+                   help="also measure the largest size with a second client that stops reading (its messages are dropped)")
     args = p.parse_args()
     args.build = os.path.abspath(args.build)
     work = tempfile.mkdtemp(prefix="bench_foxglove_")
@@ -97,10 +101,15 @@ def main():
         row = measure(args, n, work)
         print(json.dumps(row), flush=True)
         rows.append(row)
-    print("\n| agents | frames/s to one client | bytes per frame | view CPU (% of a core) | dropped |")
-    print("|---:|---:|---:|---:|---:|")
+    if args.slow_client:
+        row = measure(args, rows[-1]["agents"], work, stalled=1)
+        print(json.dumps(row), flush=True)
+        rows.append(row)
+    print("\n| agents | stalled clients | frames/s to one client | bytes per frame | view CPU (% of a core) | dropped |")
+    print("|---:|---:|---:|---:|---:|---:|")
     for r in rows:
-        print("| %d | %s | %d | %s | %d |" % (r["agents"], r["frames_per_s"], r["bytes_per_frame"], r["view_cpu_percent"], r["dropped"]))
+        print("| %d | %d | %s | %d | %s | %d |" % (r["agents"], r["stalled_clients"], r["frames_per_s"], r["bytes_per_frame"],
+                                               r["view_cpu_percent"], r["dropped"]))
     print("(logs in %s)" % work)
 
 

@@ -1,7 +1,6 @@
 #include "foxglove_protocol.hpp"
 
 #include <algorithm>
-
 #include <nlohmann/json.hpp>
 
 namespace shapeform::view::foxglove {
@@ -87,7 +86,8 @@ ClientOp parse_client_op(std::string_view text) {
       std::uint32_t id = 0, channel = 0;
       if (!s.is_object() || !s.contains("id") || !s.contains("channelId") || !as_u32(s["id"], id) ||
           !as_u32(s["channelId"], channel)) {
-        r.error = "subscribe: each subscription must be {\"id\": uint32, \"channelId\": uint32}, got " + s.dump().substr(0, 80);
+        r.error = "subscribe: each subscription must be {\"id\": uint32, \"channelId\": uint32}, got " +
+                  s.dump().substr(0, 80);
         return r;
       }
       r.subscribe.emplace_back(id, channel);
@@ -113,13 +113,16 @@ ClientOp parse_client_op(std::string_view text) {
   return r;
 }
 
-std::vector<std::string> Subscriptions::subscribe(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& subs,
-                                                  const std::vector<AdvertisedChannel>& channels) {
+std::vector<std::string> Subscriptions::subscribe(
+    const std::vector<std::pair<std::uint32_t, std::uint32_t>>& subs,
+    const std::vector<AdvertisedChannel>& channels) {
   std::vector<std::string> problems;
   for (const auto& [id, channel] : subs) {
-    const bool known = std::any_of(channels.begin(), channels.end(), [&](const auto& a) { return a.id == channel; });
+    const bool known =
+        std::any_of(channels.begin(), channels.end(), [&](const auto& a) { return a.id == channel; });
     if (!known) {
-      problems.push_back("subscription " + std::to_string(id) + ": channel " + std::to_string(channel) + " is not advertised");
+      problems.push_back("subscription " + std::to_string(id) + ": channel " + std::to_string(channel) +
+                         " is not advertised");
     } else if (by_id_.count(id) != 0) {
       problems.push_back("subscription " + std::to_string(id) + ": the id is already in use (channel " +
                          std::to_string(by_id_[id]) + "); unsubscribe it first");
@@ -147,7 +150,8 @@ std::vector<std::uint32_t> Subscriptions::of_channel(std::uint32_t channel_id) c
 }
 
 std::size_t Subscriptions::count(std::uint32_t channel_id) const {
-  return static_cast<std::size_t>(std::count_if(by_id_.begin(), by_id_.end(), [&](const auto& e) { return e.second == channel_id; }));
+  return static_cast<std::size_t>(
+      std::count_if(by_id_.begin(), by_id_.end(), [&](const auto& e) { return e.second == channel_id; }));
 }
 
 }  // namespace shapeform::view::foxglove

@@ -12,9 +12,9 @@ viz::SceneSnapshot foxglove_snapshot(const Scene& scene, double now_s) {
     d.id = id;
     d.x = a.x;
     const char* look = scene.state(a, now_s);
-    d.look = std::strcmp(look, "alive") == 0 ? viz::AgentLook::Alive
+    d.look = std::strcmp(look, "alive") == 0   ? viz::AgentLook::Alive
              : std::strcmp(look, "stale") == 0 ? viz::AgentLook::Stale
-                                                : viz::AgentLook::Dead;
+                                               : viz::AgentLook::Dead;
     if (a.heading && now_s - a.heading_seen_s <= scene.params().dead_s) d.heading = a.heading;
     s.agents.push_back(d);
   }

@@ -1,14 +1,12 @@
 #include "foxglove_server.hpp"
 
-
-#include <websocketpp/config/asio_no_tls.hpp>
-#include <websocketpp/server.hpp>
-
 #include <chrono>
 #include <map>
 #include <mutex>
 #include <stdexcept>
 #include <thread>
+#include <websocketpp/config/asio_no_tls.hpp>
+#include <websocketpp/server.hpp>
 
 #include "util/log.hpp"
 
@@ -54,18 +52,27 @@ struct FoxgloveServer::Impl {
     if (it == clients.end()) return;
     if (m->get_opcode() != websocketpp::frame::opcode::text) {
       send_text(h, foxglove::status_json(foxglove::StatusLevel::Error,
-                                         "shapeform_view is read-only: binary client messages (publish, service calls) are not accepted"));
+                                         "shapeform_view is read-only: binary client messages (publish, "
+                                         "service calls) are not accepted"));
       return;
     }
     const foxglove::ClientOp op = foxglove::parse_client_op(m->get_payload());
     std::vector<std::string> problems;
     switch (op.kind) {
-      case foxglove::ClientOp::Kind::Subscribe: problems = it->second.subs.subscribe(op.subscribe, channels); break;
-      case foxglove::ClientOp::Kind::Unsubscribe: problems = it->second.subs.unsubscribe(op.unsubscribe); break;
-      case foxglove::ClientOp::Kind::Unsupported:
-        problems.push_back("op \"" + op.op.substr(0, 40) + "\" is not supported: shapeform_view is read-only (subscribe and unsubscribe only)");
+      case foxglove::ClientOp::Kind::Subscribe:
+        problems = it->second.subs.subscribe(op.subscribe, channels);
         break;
-      case foxglove::ClientOp::Kind::Invalid: problems.push_back("bad message: " + op.error); break;
+      case foxglove::ClientOp::Kind::Unsubscribe:
+        problems = it->second.subs.unsubscribe(op.unsubscribe);
+        break;
+      case foxglove::ClientOp::Kind::Unsupported:
+        problems.push_back(
+            "op \"" + op.op.substr(0, 40) +
+            "\" is not supported: shapeform_view is read-only (subscribe and unsubscribe only)");
+        break;
+      case foxglove::ClientOp::Kind::Invalid:
+        problems.push_back("bad message: " + op.error);
+        break;
     }
     for (const auto& p : problems) send_text(h, foxglove::status_json(foxglove::StatusLevel::Error, p));
     recount();
@@ -100,7 +107,8 @@ FoxgloveServer::FoxgloveServer(std::vector<viz::Channel> channels, std::size_t m
     : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
   m.max_buffered = max_buffered_bytes;
-  for (std::size_t i = 0; i < channels.size(); ++i) m.channels.push_back({static_cast<std::uint32_t>(i + 1), std::move(channels[i])});
+  for (std::size_t i = 0; i < channels.size(); ++i)
+    m.channels.push_back({static_cast<std::uint32_t>(i + 1), std::move(channels[i])});
   m.subscribers = std::make_unique<std::atomic<int>[]>(m.channels.size());
   for (std::size_t i = 0; i < m.channels.size(); ++i) m.subscribers[i].store(0);
   m.session_id = std::to_string(std::chrono::system_clock::now().time_since_epoch().count());
@@ -119,7 +127,9 @@ int FoxgloveServer::start(const std::string& bind, int port) {
     const auto chosen = foxglove::choose_subprotocol(con->get_requested_subprotocols());
     if (!chosen) {
       con->set_status(websocketpp::http::status_code::bad_request);
-      con->set_body("shapeform_view: a Foxglove client must ask for the WebSocket subprotocol foxglove.sdk.v1 or foxglove.websocket.v1\n");
+      con->set_body(
+          "shapeform_view: a Foxglove client must ask for the WebSocket subprotocol foxglove.sdk.v1 or "
+          "foxglove.websocket.v1\n");
       return false;
     }
     con->select_subprotocol(*chosen);
@@ -134,12 +144,14 @@ int FoxgloveServer::start(const std::string& bind, int port) {
     m.n_clients = m.clients.size();
     m.send_text(h, foxglove::server_info_json("shapeform_view", m.session_id));
     m.send_text(h, foxglove::advertise_json(m.channels));
-    util::log_info("foxglove: client " + con->get_remote_endpoint() + " connected (" + con->get_subprotocol() + ")");
+    util::log_info("foxglove: client " + con->get_remote_endpoint() + " connected (" +
+                   con->get_subprotocol() + ")");
   });
   const auto gone = [&m](Hdl h) {
     const auto it = m.clients.find(h);
     if (it == m.clients.end()) return;
-    util::log_info("foxglove: client " + it->second.name + " left (" + std::to_string(it->second.dropped) + " messages dropped for it)");
+    util::log_info("foxglove: client " + it->second.name + " left (" + std::to_string(it->second.dropped) +
+                   " messages dropped for it)");
     m.clients.erase(it);
     m.n_clients = m.clients.size();
     m.recount();
@@ -151,7 +163,9 @@ int FoxgloveServer::start(const std::string& bind, int port) {
   const auto address = asio::ip::make_address(bind, ec);
   if (!ec) m.ws.listen(asio::ip::tcp::endpoint(address, static_cast<unsigned short>(port)), ec);
   if (!ec) m.ws.start_accept(ec);
-  if (ec) throw std::runtime_error("foxglove: cannot listen on " + bind + ":" + std::to_string(port) + ": " + ec.message());
+  if (ec)
+    throw std::runtime_error("foxglove: cannot listen on " + bind + ":" + std::to_string(port) + ": " +
+                             ec.message());
   const int bound = m.ws.get_local_endpoint(ec).port();
   if (ec) throw std::runtime_error("foxglove: no local port on " + bind + ": " + ec.message());
   m.running = true;
@@ -172,11 +186,13 @@ void FoxgloveServer::stop() {
   asio::post(m.ws.get_io_service(), [&m] {
     websocketpp::lib::error_code ec;
     m.ws.stop_listening(ec);
-    for (auto& [h, c] : m.clients) m.ws.close(h, websocketpp::close::status::going_away, "shapeform_view stopping", ec);
+    for (auto& [h, c] : m.clients)
+      m.ws.close(h, websocketpp::close::status::going_away, "shapeform_view stopping", ec);
   });
   // Closing handshakes get a second; a client that does not answer is cut.
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(1);
-  while (m.n_clients.load() > 0 && std::chrono::steady_clock::now() < deadline) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  while (m.n_clients.load() > 0 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
   m.ws.stop();
   if (m.thread.joinable()) m.thread.join();
 }
@@ -187,7 +203,9 @@ void FoxgloveServer::publish(std::size_t index, std::uint64_t stamp_ns, std::str
   Impl& m = *impl_;
   if (!m.running || index >= m.channels.size()) return;
   asio::post(m.ws.get_io_service(),
-             [&m, index, stamp_ns, p = std::make_shared<std::string>(std::move(payload))] { m.deliver(index, stamp_ns, *p); });
+             [&m, index, stamp_ns, p = std::make_shared<std::string>(std::move(payload))] {
+               m.deliver(index, stamp_ns, *p);
+             });
 }
 
 FoxgloveServer::Stats FoxgloveServer::stats() const {

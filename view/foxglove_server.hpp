@@ -35,9 +35,9 @@ class FoxgloveServer {
   void publish(std::size_t index, std::uint64_t stamp_ns, std::string payload);
 
   struct Stats {
-    std::uint64_t clients = 0;         ///< connected now
-    std::uint64_t connections = 0;     ///< accepted since start
-    std::uint64_t messages_sent = 0;   ///< message data frames handed to sockets
+    std::uint64_t clients = 0;           ///< connected now
+    std::uint64_t connections = 0;       ///< accepted since start
+    std::uint64_t messages_sent = 0;     ///< message data frames handed to sockets
     std::uint64_t messages_dropped = 0;  ///< not sent to a client that was too far behind
     std::uint64_t bytes_sent = 0;
   };

@@ -7,7 +7,8 @@
 namespace shapeform::dds {
 
 struct IdlFile {
-  std::string_view key;   ///< its path under idl/ (or idl/ros2) without ".idl": "AgentState", "geometry_msgs/msg/Twist"
+  std::string_view
+      key;  ///< its path under idl/ (or idl/ros2) without ".idl": "AgentState", "geometry_msgs/msg/Twist"
   std::string_view text;  ///< the IDL with every type it uses, includes inlined, #include lines dropped
 };
 

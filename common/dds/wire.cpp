@@ -1,9 +1,9 @@
 #include "dds/wire.hpp"
 
+#include <fastdds/rtps/common/SerializedPayload.h>
+
 #include <array>
 #include <cstring>
-
-#include <fastdds/rtps/common/SerializedPayload.h>
 
 #include "dds/idl_files.hpp"
 #include "shapeform/msg/all_pubsub_types.h"  // every idl/*.idl's PubSubType, generated
@@ -32,32 +32,33 @@ const TopicSchema& topic_schema(TopicId id) {
 
 // One definition of each per row of the topic table, with the type's generated PubSubType (whose
 // serialize writes the encapsulation header and the XCDR1 body, as the DataWriter does).
-#define SHAPEFORM_WIRE(Id, name, Type, ...)                                                                 \
-  template <>                                                                                               \
-  std::vector<std::uint8_t> to_cdr<Type>(const Type& msg) {                                                 \
-    Type##PubSubType type;                                                                                  \
-    eprosima::fastrtps::rtps::SerializedPayload_t payload(type.getSerializedSizeProvider(const_cast<Type*>(&msg))()); \
-    if (!type.serialize(const_cast<Type*>(&msg), &payload))                                                 \
-      throw std::logic_error(std::string("dds: serializing a ") + #Type + " failed");                       \
-    return std::vector<std::uint8_t>(payload.data, payload.data + payload.length);                          \
-  }                                                                                                         \
-  template <>                                                                                               \
-  Type from_cdr<Type>(const std::vector<std::uint8_t>& bytes) {                                             \
-    Type##PubSubType type;                                                                                  \
-    eprosima::fastrtps::rtps::SerializedPayload_t payload(static_cast<std::uint32_t>(bytes.size()));        \
-    if (!bytes.empty()) std::memcpy(payload.data, bytes.data(), bytes.size());                              \
-    payload.length = static_cast<std::uint32_t>(bytes.size());                                              \
-    Type msg;                                                                                               \
-    bool ok = bytes.size() >= 4;                                                                            \
-    try {                                                                                                   \
-      ok = ok && type.deserialize(&payload, &msg);                                                          \
-    } catch (...) { /* fastcdr's exceptions: a malformed payload */                                        \
-      ok = false;                                                                                           \
-    }                                                                                                       \
-    if (!ok)                                                                                                \
-      throw CdrError(std::string("dds: ") + std::to_string(bytes.size()) + " bytes are no CDR " + #Type +   \
-                     " (too short or malformed)");                                                          \
-    return msg;                                                                                             \
+#define SHAPEFORM_WIRE(Id, name, Type, ...)                                                               \
+  template <>                                                                                             \
+  std::vector<std::uint8_t> to_cdr<Type>(const Type& msg) {                                               \
+    Type##PubSubType type;                                                                                \
+    eprosima::fastrtps::rtps::SerializedPayload_t payload(                                                \
+        type.getSerializedSizeProvider(const_cast<Type*>(&msg))());                                       \
+    if (!type.serialize(const_cast<Type*>(&msg), &payload))                                               \
+      throw std::logic_error(std::string("dds: serializing a ") + #Type + " failed");                     \
+    return std::vector<std::uint8_t>(payload.data, payload.data + payload.length);                        \
+  }                                                                                                       \
+  template <>                                                                                             \
+  Type from_cdr<Type>(const std::vector<std::uint8_t>& bytes) {                                           \
+    Type##PubSubType type;                                                                                \
+    eprosima::fastrtps::rtps::SerializedPayload_t payload(static_cast<std::uint32_t>(bytes.size()));      \
+    if (!bytes.empty()) std::memcpy(payload.data, bytes.data(), bytes.size());                            \
+    payload.length = static_cast<std::uint32_t>(bytes.size());                                            \
+    Type msg;                                                                                             \
+    bool ok = bytes.size() >= 4;                                                                          \
+    try {                                                                                                 \
+      ok = ok && type.deserialize(&payload, &msg);                                                        \
+    } catch (...) { /* fastcdr's exceptions: a malformed payload */                                       \
+      ok = false;                                                                                         \
+    }                                                                                                     \
+    if (!ok)                                                                                              \
+      throw CdrError(std::string("dds: ") + std::to_string(bytes.size()) + " bytes are no CDR " + #Type + \
+                     " (too short or malformed)");                                                        \
+    return msg;                                                                                           \
   }
 SHAPEFORM_TOPICS(SHAPEFORM_WIRE)
 #undef SHAPEFORM_WIRE

@@ -17,9 +17,9 @@ namespace shapeform::dds {
 
 /// A topic's schema, as MCAP's Schema record and Foxglove's advertise need it.
 struct TopicSchema {
-  std::string name;            ///< the fully qualified IDL type, e.g. "shapeform::msg::AgentState"
-  std::string_view encoding;   ///< "omgidl"
-  std::string_view text;       ///< the IDL text (idl/X.idl with its includes inlined in dependency order)
+  std::string name;           ///< the fully qualified IDL type, e.g. "shapeform::msg::AgentState"
+  std::string_view encoding;  ///< "omgidl"
+  std::string_view text;      ///< the IDL text (idl/X.idl with its includes inlined in dependency order)
   std::string_view message_encoding;  ///< "cdr"
 };
 

@@ -39,7 +39,7 @@ struct AgentDraw {
   std::int32_t id = 0;
   core::Vec2 x = core::Vec2::Zero();  ///< shape units
   AgentLook look = AgentLook::Alive;
-  std::optional<double> heading;      ///< rad, counter-clockwise from x1; nullopt: unknown (no arrow)
+  std::optional<double> heading;  ///< rad, counter-clockwise from x1; nullopt: unknown (no arrow)
 };
 
 /// What is drawn at one instant.
@@ -48,8 +48,8 @@ struct SceneSnapshot {
   std::vector<core::Vec2> outline;  ///< the commanded shape's points (empty: no command)
   bool outline_closed = false;
   std::vector<core::KeepOutZone> keep_out;  ///< the command's keep-out zones
-  std::vector<core::Vec2> fence;   ///< the geofence polygon (convex, either orientation; empty: none drawn)
-  double fence_margin = 0.0;       ///< shape units; > 0 draws the fence shrunk by it too
+  std::vector<core::Vec2> fence;     ///< the geofence polygon (convex, either orientation; empty: none drawn)
+  double fence_margin = 0.0;         ///< shape units; > 0 draws the fence shrunk by it too
   std::optional<core::Vec2> centre;  ///< the tracked centre C(t)
 };
 
@@ -58,13 +58,14 @@ struct SceneStyle {
   double agent_diameter = 0.12;
   double arrow_length = 0.2;
   double centre_diameter = 0.2;
-  double line_width_px = 2.0;   ///< lines are scale-invariant (pixels)
-  int circle_segments = 48;     ///< a keep-out circle is drawn as a closed line of this many points
+  double line_width_px = 2.0;  ///< lines are scale-invariant (pixels)
+  int circle_segments = 48;    ///< a keep-out circle is drawn as a closed line of this many points
 };
 
 /// Entity ids of the SceneUpdate; every one is sent in every message (empty when nothing to draw), so
 /// each message replaces the last and nothing lingers.
-inline constexpr std::string_view kEntities[] = {"agents", "headings", "outline", "keep_out", "fence", "centre"};
+inline constexpr std::string_view kEntities[] = {"agents",   "headings", "outline",
+                                                 "keep_out", "fence",    "centre"};
 
 /// RGBA of an agent's sphere: alive green, stale amber, dead grey (translucent).
 struct Rgba {

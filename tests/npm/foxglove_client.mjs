@@ -8,6 +8,8 @@
 // node tests/npm/foxglove_client.mjs --url ws://127.0.0.1:P [--npm DIR] [--subprotocols a,b]
 //        [--topics shapeform/scene,shapeform/state,...] [--count N] [--timeout S] [--refused-check] [--brief]
 // --brief: each message line carries its size, receive time (recv_ms) and the scene's sphere count only.
+// --stalled N: N more clients subscribe to the same topics and then stop reading their socket (a slow
+// client: the server must drop messages for them, not stall the others).
 // Exits 0 when every client got at least N messages of every topic named that is advertised, 1 on a
 // timeout or an error (saying which), 2 on bad arguments or missing packages.
 import { createRequire } from "node:module";
@@ -17,7 +19,7 @@ import { fileURLToPath } from "node:url";
 
 const here = path.dirname(fileURLToPath(import.meta.url));
 const args = { url: "", npm: path.resolve(here, "../../build/npm"), subprotocols: "foxglove.sdk.v1,foxglove.websocket.v1",
-               topics: "shapeform/scene", count: 5, timeout: 30, refusedCheck: false, unsupportedOp: true, brief: false };
+               topics: "shapeform/scene", count: 5, timeout: 30, refusedCheck: false, unsupportedOp: true, brief: false, stalled: 0 };
 for (let i = 2; i < process.argv.length; ++i) {
   const a = process.argv[i];
   const next = () => { if (i + 1 >= process.argv.length) bad(`${a} needs a value`); return process.argv[++i]; };
@@ -29,6 +31,7 @@ for (let i = 2; i < process.argv.length; ++i) {
   else if (a === "--timeout") args.timeout = Number(next());
   else if (a === "--refused-check") args.refusedCheck = true;
   else if (a === "--brief") args.brief = true;  // per message: sizes and counts only (benchmarks)
+  else if (a === "--stalled") args.stalled = Number(next());
   else if (a === "--help" || a === "-h") { console.log("usage: node foxglove_client.mjs --url ws://HOST:PORT [--npm DIR] [--subprotocols a,b] [--topics t1,t2] [--count N] [--timeout S] [--refused-check] [--brief]"); process.exit(0); }
   else bad(`unknown argument ${a}`);
 }
@@ -136,5 +139,19 @@ function refusedCheck() {
   });
 }
 
+/// A client that subscribes, then never reads again.
+function stalledClient(index) {
+  const ws = new WebSocket(args.url, ["foxglove.websocket.v1"]);
+  const client = new FoxgloveClient({ ws });
+  client.on("error", () => {});
+  client.on("advertise", (channels) => {
+    for (const c of channels) if (wanted.includes(c.topic)) client.subscribe(c.id);
+    setTimeout(() => { ws._socket.pause(); out({ event: "stalled", client: index }); }, 200);
+  });
+  return ws;
+}
+const stalled = Array.from({ length: args.stalled }, (_, i) => stalledClient(protocols.length + i));
+
 const results = await Promise.all([...protocols.map(runClient), ...(args.refusedCheck ? [refusedCheck()] : [])]);
+for (const ws of stalled) ws.terminate();
 process.exit(results.every(Boolean) && !failed ? 0 : 1);

@@ -45,7 +45,8 @@ msg::AgentState a_state() {
   return m;
 }
 
-TEST_CASE("to_cdr of an AgentState is its XCDR1 bytes as written by hand, behind the CDR_LE header", "[dds][wire]") {
+TEST_CASE("to_cdr of an AgentState is its XCDR1 bytes as written by hand, behind the CDR_LE header",
+          "[dds][wire]") {
   HandCdr h;
   h.put<std::int32_t>(7);
   h.put<std::uint64_t>(123456789012ULL);  // aligned to 8: 4 padding bytes before it
@@ -53,7 +54,7 @@ TEST_CASE("to_cdr of an AgentState is its XCDR1 bytes as written by hand, behind
   h.put<std::uint64_t>(3);
   for (std::uint8_t i = 0; i < 12; ++i) h.put<std::uint8_t>(static_cast<std::uint8_t>(0xA0 + i));
   for (double d : {1.25, -2.5, 0.125, 1e-3, -4.0}) h.put<double>(d);  // model_time after 4 padding bytes
-  h.put<std::uint8_t>(1);                                           // has_arc
+  h.put<std::uint8_t>(1);                                             // has_arc
   for (double d : {9.75, -2.4, 0.1, 9.5}) h.put<double>(d);           // arc after 7 padding bytes
   REQUIRE(h.bytes.size() == 4 + 128);
   CHECK(dds::to_cdr(a_state()) == h.bytes);
@@ -98,11 +99,13 @@ TEST_CASE("a batch with states and a command with strings and sequences round-tr
 TEST_CASE("from_cdr refuses bytes that are not the message, naming the type", "[dds][wire]") {
   auto bytes = dds::to_cdr(a_state());
   bytes.resize(40);
-  CHECK_THROWS_WITH(dds::from_cdr<msg::AgentState>(bytes), Catch::Matchers::Contains("shapeform::msg::AgentState"));
+  CHECK_THROWS_WITH(dds::from_cdr<msg::AgentState>(bytes),
+                    Catch::Matchers::Contains("shapeform::msg::AgentState"));
   CHECK_THROWS_AS(dds::from_cdr<msg::AgentState>({0x00, 0x01}), dds::CdrError);
 }
 
-TEST_CASE("every topic has its omgidl schema: the fully qualified type and the IDL with its includes inlined", "[dds][wire]") {
+TEST_CASE("every topic has its omgidl schema: the fully qualified type and the IDL with its includes inlined",
+          "[dds][wire]") {
   for (const dds::TopicId id : dds::kAllTopics) {
     const dds::TopicSchema& s = dds::topic_schema(id);
     CAPTURE(dds::topic_name(id));

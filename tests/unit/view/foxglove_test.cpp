@@ -3,7 +3,6 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstring>
-
 #include <nlohmann/json.hpp>
 
 #include "core/command.hpp"
@@ -19,11 +18,13 @@ namespace fg = view::foxglove;
 
 std::vector<fg::AdvertisedChannel> two_channels() {
   std::vector<fg::AdvertisedChannel> out;
-  for (std::size_t i = 0; i < viz::scene_channels().size(); ++i) out.push_back({static_cast<std::uint32_t>(i + 1), viz::scene_channels()[i]});
+  for (std::size_t i = 0; i < viz::scene_channels().size(); ++i)
+    out.push_back({static_cast<std::uint32_t>(i + 1), viz::scene_channels()[i]});
   return out;
 }
 
-TEST_CASE("the subprotocol: the client's first Foxglove one, none when it asks for neither", "[view][foxglove]") {
+TEST_CASE("the subprotocol: the client's first Foxglove one, none when it asks for neither",
+          "[view][foxglove]") {
   CHECK(fg::choose_subprotocol({"foxglove.sdk.v1"}) == "foxglove.sdk.v1");
   CHECK(fg::choose_subprotocol({"foxglove.websocket.v1"}) == "foxglove.websocket.v1");
   CHECK(fg::choose_subprotocol({"x", "foxglove.websocket.v1", "foxglove.sdk.v1"}) == "foxglove.websocket.v1");
@@ -31,14 +32,17 @@ TEST_CASE("the subprotocol: the client's first Foxglove one, none when it asks f
   CHECK_FALSE(fg::choose_subprotocol({"foxglove.websocket.v2", "chat"}));
 }
 
-TEST_CASE("message data: opcode 1, subscription id and timestamp little endian, then the payload", "[view][foxglove]") {
+TEST_CASE("message data: opcode 1, subscription id and timestamp little endian, then the payload",
+          "[view][foxglove]") {
   const std::string f = fg::message_data(0x04030201u, 0x0C0B0A0908070605ull, "{}");
   REQUIRE(f.size() == fg::kMessageDataHeader + 2);
-  const unsigned char want[] = {0x01, 0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08, 0x09, 0x0A, 0x0B, 0x0C, '{', '}'};
+  const unsigned char want[] = {0x01, 0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07,
+                                0x08, 0x09, 0x0A, 0x0B, 0x0C, '{',  '}'};
   CHECK(std::memcmp(f.data(), want, sizeof want) == 0);
 }
 
-TEST_CASE("serverInfo is read-only and advertise carries each channel's schema and encodings", "[view][foxglove]") {
+TEST_CASE("serverInfo is read-only and advertise carries each channel's schema and encodings",
+          "[view][foxglove]") {
   const json info = json::parse(fg::server_info_json("shapeform_view", "s1"));
   CHECK(info["op"] == "serverInfo");
   CHECK(info["capabilities"].empty());  // no clientPublish, parameters, services
@@ -56,8 +60,10 @@ TEST_CASE("serverInfo is read-only and advertise carries each channel's schema a
   CHECK(st == json{{"op", "status"}, {"level", 2}, {"message", "no"}});
 }
 
-TEST_CASE("client ops: subscribe and unsubscribe parsed, others unsupported, bad ones invalid with a reason", "[view][foxglove]") {
-  auto op = fg::parse_client_op(R"({"op":"subscribe","subscriptions":[{"id":7,"channelId":1},{"id":8,"channelId":2}]})");
+TEST_CASE("client ops: subscribe and unsubscribe parsed, others unsupported, bad ones invalid with a reason",
+          "[view][foxglove]") {
+  auto op = fg::parse_client_op(
+      R"({"op":"subscribe","subscriptions":[{"id":7,"channelId":1},{"id":8,"channelId":2}]})");
   REQUIRE(op.kind == fg::ClientOp::Kind::Subscribe);
   CHECK(op.subscribe == std::vector<std::pair<std::uint32_t, std::uint32_t>>{{7, 1}, {8, 2}});
   op = fg::parse_client_op(R"({"op":"unsubscribe","subscriptionIds":[7]})");
@@ -66,9 +72,11 @@ TEST_CASE("client ops: subscribe and unsubscribe parsed, others unsupported, bad
   op = fg::parse_client_op(R"({"op":"advertise","channels":[]})");
   CHECK(op.kind == fg::ClientOp::Kind::Unsupported);
   CHECK(op.op == "advertise");
-  for (const char* bad : {"not json", "[1]", R"({"x":1})", R"({"op":"subscribe"})", R"({"op":"subscribe","subscriptions":[{"id":-1,"channelId":1}]})",
-                          R"({"op":"subscribe","subscriptions":[{"id":1}]})", R"({"op":"unsubscribe","subscriptionIds":["a"]})",
-                          R"({"op":"subscribe","subscriptions":[{"id":4294967296,"channelId":1}]})"}) {
+  for (const char* bad :
+       {"not json", "[1]", R"({"x":1})", R"({"op":"subscribe"})",
+        R"({"op":"subscribe","subscriptions":[{"id":-1,"channelId":1}]})",
+        R"({"op":"subscribe","subscriptions":[{"id":1}]})", R"({"op":"unsubscribe","subscriptionIds":["a"]})",
+        R"({"op":"subscribe","subscriptions":[{"id":4294967296,"channelId":1}]})"}) {
     CAPTURE(bad);
     op = fg::parse_client_op(bad);
     CHECK(op.kind == fg::ClientOp::Kind::Invalid);
@@ -76,7 +84,8 @@ TEST_CASE("client ops: subscribe and unsubscribe parsed, others unsupported, bad
   }
 }
 
-TEST_CASE("subscriptions: per channel, unknown channels and reused ids refused, unsubscribe forgets", "[view][foxglove]") {
+TEST_CASE("subscriptions: per channel, unknown channels and reused ids refused, unsubscribe forgets",
+          "[view][foxglove]") {
   fg::Subscriptions s;
   const auto channels = two_channels();
   CHECK(s.subscribe({{1, 1}, {2, 1}, {3, 2}}, channels).empty());
@@ -95,7 +104,8 @@ TEST_CASE("subscriptions: per channel, unknown channels and reused ids refused, 
   CHECK_THAT(problems[0], Catch::Matchers::Contains("42"));
 }
 
-TEST_CASE("the Foxglove snapshot of a scene: looks by age, headings only when fresh, the command's drawing", "[view][foxglove]") {
+TEST_CASE("the Foxglove snapshot of a scene: looks by age, headings only when fresh, the command's drawing",
+          "[view][foxglove]") {
   view::SceneParams p;
   p.stale_s = 0.3;
   p.dead_s = 1.0;

@@ -5,9 +5,8 @@
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <cmath>
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 namespace shapeform {
 namespace {
@@ -36,7 +35,8 @@ void check_against(const json& value, const json& schema, const std::string& pat
     for (const auto& [k, v] : schema["properties"].items()) CHECK(value.contains(k));
   } else if (type == "array") {
     REQUIRE(value.is_array());
-    for (std::size_t i = 0; i < value.size(); ++i) check_against(value[i], schema["items"], path + "[" + std::to_string(i) + "]");
+    for (std::size_t i = 0; i < value.size(); ++i)
+      check_against(value[i], schema["items"], path + "[" + std::to_string(i) + "]");
   } else if (type == "number") {
     CHECK(value.is_number());
   } else if (type == "integer") {
@@ -92,7 +92,8 @@ TEST_CASE("the scene's channels: SceneUpdate and PosesInFrame as json with their
   }
 }
 
-TEST_CASE("a SceneUpdate has every field of the schema, frame shapeform, spheres coloured by state", "[viz]") {
+TEST_CASE("a SceneUpdate has every field of the schema, frame shapeform, spheres coloured by state",
+          "[viz]") {
   const viz::SceneSnapshot s = a_snapshot();
   const std::uint64_t stamp = 12'345'678'901ULL;
   const json u = json::parse(viz::scene_update_json(s, stamp));
@@ -151,7 +152,8 @@ TEST_CASE("a SceneUpdate has every field of the schema, frame shapeform, spheres
   CHECK(centre[0]["pose"]["position"]["x"] == 0.25);
 }
 
-TEST_CASE("an empty snapshot still sends every entity, empty, so the last frame's drawing is replaced", "[viz]") {
+TEST_CASE("an empty snapshot still sends every entity, empty, so the last frame's drawing is replaced",
+          "[viz]") {
   const json u = json::parse(viz::scene_update_json(viz::SceneSnapshot{}, 0));
   check_against(u, json::parse(viz::scene_channels()[viz::kSceneChannel].schema), "SceneUpdate");
   REQUIRE(u["entities"].size() == std::size(viz::kEntities));
@@ -175,14 +177,15 @@ TEST_CASE("a SceneUpdate of 1000 agents is made in well under 5 ms", "[viz]") {
   viz::SceneSnapshot s = a_snapshot();
   s.agents.clear();
   for (int i = 0; i < 1000; ++i) {
-    s.agents.push_back({i, core::Vec2(std::cos(i * 0.01) * 7.123456789, std::sin(i * 0.01) * 3.3), viz::AgentLook::Alive,
-                        i % 2 ? std::optional<double>(i * 0.001) : std::nullopt});
+    s.agents.push_back({i, core::Vec2(std::cos(i * 0.01) * 7.123456789, std::sin(i * 0.01) * 3.3),
+                        viz::AgentLook::Alive, i % 2 ? std::optional<double>(i * 0.001) : std::nullopt});
   }
   std::string out;
   const auto t0 = std::chrono::steady_clock::now();
   constexpr int kRuns = 20;
   for (int r = 0; r < kRuns; ++r) out = viz::scene_update_json(s, static_cast<std::uint64_t>(r));
-  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() / kRuns;
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() / kRuns;
   WARN("SceneUpdate of 1000 agents: " << ms << " ms, " << out.size() << " bytes");
   CHECK(ms < 2.5);
   CHECK(json::parse(out)["entities"][0]["spheres"].size() == 1000);
