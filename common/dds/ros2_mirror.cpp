@@ -13,7 +13,8 @@ constexpr double kPi = 3.14159265358979323846;
 
 std::vector<MirrorAgent> sorted(const std::vector<MirrorAgent>& agents) {
   std::vector<MirrorAgent> out = agents;
-  std::stable_sort(out.begin(), out.end(), [](const MirrorAgent& a, const MirrorAgent& b) { return a.id < b.id; });
+  std::stable_sort(out.begin(), out.end(),
+                   [](const MirrorAgent& a, const MirrorAgent& b) { return a.id < b.id; });
   return out;
 }
 
@@ -121,14 +122,15 @@ void build_markers(const MirrorScene& s, ros2::MarkerArray& out) {
     ms.push_back(m);
     ros2::Marker t = marker(s, "agent_ids", a.id, ros2::kTextViewFacing);
     t.pose().position(point(a.x, s.agent_diameter));  // above the sphere
-    t.scale().z(s.agent_diameter);                     // TEXT_VIEW_FACING: scale.z is the height of a capital
+    t.scale().z(s.agent_diameter);                    // TEXT_VIEW_FACING: scale.z is the height of a capital
     t.color(colour(1.0f, 1.0f, 1.0f));
     t.text(std::to_string(a.id));
     ms.push_back(t);
   }
   if (s.outline) ms.push_back(line_strip(s, "outline", 0, *s.outline, colour(0.2f, 0.9f, 0.3f)));
   for (std::size_t k = 0; k < s.keep_out.size(); ++k)
-    ms.push_back(line_strip(s, "keep_out", static_cast<std::int32_t>(k), s.keep_out[k], colour(1.0f, 0.2f, 0.2f)));
+    ms.push_back(
+        line_strip(s, "keep_out", static_cast<std::int32_t>(k), s.keep_out[k], colour(1.0f, 0.2f, 0.2f)));
   if (s.fence) ms.push_back(line_strip(s, "fence", 0, *s.fence, colour(1.0f, 0.6f, 0.0f)));
   if (s.centre) {
     ros2::Marker c = marker(s, "centre", 0, ros2::kSphere);

@@ -39,16 +39,16 @@ struct Polyline {
 
 /// Everything the mirror publishes at one instant.
 struct MirrorScene {
-  std::int64_t stamp_ns = 0;          ///< header stamps: ns since the Unix epoch (ROS time = system clock)
-  std::string frame_id = "map";       ///< every header's frame (vehicle.frame)
-  std::vector<MirrorAgent> agents;    ///< alive agents, ascending id (build_* sort a copy otherwise)
-  bool commands = false;              ///< draw each agent's velocity (agents that drive vehicles)
-  std::optional<Polyline> outline;    ///< the commanded shape (core::outline)
-  std::vector<Polyline> keep_out;     ///< keep-out zones (zone_outline), closed
-  std::optional<Polyline> fence;      ///< the geofence polygon when the command has one, closed
-  std::optional<core::Vec2> centre;   ///< the tracked centre C(t) when tracking
-  double agent_diameter = 0.2;        ///< sphere diameter, shape units
-  double line_width = 0.02;           ///< line strips' width, shape units
+  std::int64_t stamp_ns = 0;         ///< header stamps: ns since the Unix epoch (ROS time = system clock)
+  std::string frame_id = "map";      ///< every header's frame (vehicle.frame)
+  std::vector<MirrorAgent> agents;   ///< alive agents, ascending id (build_* sort a copy otherwise)
+  bool commands = false;             ///< draw each agent's velocity (agents that drive vehicles)
+  std::optional<Polyline> outline;   ///< the commanded shape (core::outline)
+  std::vector<Polyline> keep_out;    ///< keep-out zones (zone_outline), closed
+  std::optional<Polyline> fence;     ///< the geofence polygon when the command has one, closed
+  std::optional<core::Vec2> centre;  ///< the tracked centre C(t) when tracking
+  double agent_diameter = 0.2;       ///< sphere diameter, shape units
+  double line_width = 0.02;          ///< line strips' width, shape units
 };
 
 /// A keep-out zone as a closed polyline: a polygon's vertices, or a circle by `circle_points` points.

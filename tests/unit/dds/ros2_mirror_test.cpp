@@ -3,13 +3,13 @@
 // bytes written by hand from the ROS 2 layout (geometry_msgs/PoseArray) and the XCDR1 rules.
 #include "dds/ros2_mirror.hpp"
 
+#include <fastrtps/rtps/common/SerializedPayload.h>
+
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstring>
 #include <string>
 #include <vector>
-
-#include <fastrtps/rtps/common/SerializedPayload.h>
 
 #include "dds/topics.hpp"
 #include "geometry_msgs/msg/PoseArrayPubSubTypes.h"
@@ -46,7 +46,8 @@ std::size_t count_ns(const dds::ros2::MarkerArray& a, const std::string& ns) {
 // ------------------------------------------------------------------------------------------------
 // The PoseArray
 
-TEST_CASE("the agents' PoseArray: header, ascending ids, positions, heading of the velocity", "[dds][ros2_mirror]") {
+TEST_CASE("the agents' PoseArray: header, ascending ids, positions, heading of the velocity",
+          "[dds][ros2_mirror]") {
   dds::ros2::PoseArray p;
   dds::build_agents(a_scene(), p);
   CHECK(p.header().frame_id() == "world");
@@ -89,8 +90,9 @@ TEST_CASE("a stamp before the epoch's second rounds down with nanosec in [0, 1e9
 // ------------------------------------------------------------------------------------------------
 // The MarkerArray
 
-TEST_CASE("markers: DELETEALL first, then per agent a sphere and its id as text, every one framed and stamped",
-          "[dds][ros2_mirror]") {
+TEST_CASE(
+    "markers: DELETEALL first, then per agent a sphere and its id as text, every one framed and stamped",
+    "[dds][ros2_mirror]") {
   dds::ros2::MarkerArray a;
   dds::build_markers(a_scene(), a);
   REQUIRE(!a.markers().empty());
@@ -237,7 +239,8 @@ TEST_CASE("the scene of a command: outline on the shape, zones, fence only when 
 // ------------------------------------------------------------------------------------------------
 // Names and QoS of the rows; the bytes on the wire
 
-TEST_CASE("the mirror's topics: ROS 2 names, registered type names, reliable volatile", "[dds][ros2_mirror]") {
+TEST_CASE("the mirror's topics: ROS 2 names, registered type names, reliable volatile",
+          "[dds][ros2_mirror]") {
   const dds::TopicInfo& agents = dds::topic_info(dds::TopicId::Ros2Agents);
   CHECK(std::string(agents.name) == "rt/shapeform/agents");
   CHECK(std::string(agents.type) == "geometry_msgs::msg::dds_::PoseArray_");
@@ -272,31 +275,34 @@ void put_f64(std::vector<unsigned char>& b, double v) {
 template <class PubSub, class Msg>
 std::vector<unsigned char> serialize(const Msg& m) {
   PubSub type;
-  eprosima::fastrtps::rtps::SerializedPayload_t payload(type.getSerializedSizeProvider(const_cast<Msg*>(&m))());
+  eprosima::fastrtps::rtps::SerializedPayload_t payload(
+      type.getSerializedSizeProvider(const_cast<Msg*>(&m))());
   REQUIRE(type.serialize(const_cast<Msg*>(&m), &payload));
   return std::vector<unsigned char>(payload.data, payload.data + payload.length);
 }
 
-TEST_CASE("a PoseArray_ on the wire is geometry_msgs/PoseArray in XCDR1, byte for byte", "[dds][ros2_mirror]") {
+TEST_CASE("a PoseArray_ on the wire is geometry_msgs/PoseArray in XCDR1, byte for byte",
+          "[dds][ros2_mirror]") {
   dds::MirrorScene s;
   s.stamp_ns = 5'000'000'007;  // sec 5, nanosec 7
   s.frame_id = "map";          // 3 characters + NUL: the sequence's length ends at 20, doubles start at 24
-  s.agents = {{0, core::Vec2(1.5, -2.0), core::Vec2::Zero()}, {1, core::Vec2(3.0, 4.0), core::Vec2(0.0, 1.0)}};
+  s.agents = {{0, core::Vec2(1.5, -2.0), core::Vec2::Zero()},
+              {1, core::Vec2(3.0, 4.0), core::Vec2(0.0, 1.0)}};
   dds::ros2::PoseArray p;
   dds::build_agents(s, p);
   const std::vector<unsigned char> got = serialize<geometry_msgs::msg::dds_::PoseArray_PubSubType>(p);
 
   std::vector<unsigned char> want = {0x00, 0x01, 0x00, 0x00};  // encapsulation: CDR, little endian
   // Alignment counts from the byte after the encapsulation.
-  put_u32(want, 5);                      // 0: header.stamp.sec (int32)
-  put_u32(want, 7);                      // 4: header.stamp.nanosec (uint32)
-  put_u32(want, 4);                      // 8: header.frame_id: length with the NUL
+  put_u32(want, 5);  // 0: header.stamp.sec (int32)
+  put_u32(want, 7);  // 4: header.stamp.nanosec (uint32)
+  put_u32(want, 4);  // 8: header.frame_id: length with the NUL
   for (char c : std::string("map")) want.push_back(static_cast<unsigned char>(c));
-  want.push_back(0);                     // 12..15: "map\0"
-  put_u32(want, 2);                      // 16: poses: sequence length
+  want.push_back(0);                              // 12..15: "map\0"
+  put_u32(want, 2);                               // 16: poses: sequence length
   for (int k = 0; k < 4; ++k) want.push_back(0);  // 20: padding to 8 for the first double
   // pose 1 moves +y: yaw pi/2, the quaternion (0, 0, sin pi/4, cos pi/4)
-  for (double v : {1.5, -2.0, 0.0, 0.0, 0.0, 0.0, 1.0}) put_f64(want, v);                      // 24: pose 0
+  for (double v : {1.5, -2.0, 0.0, 0.0, 0.0, 0.0, 1.0}) put_f64(want, v);  // 24: pose 0
   for (double v : {3.0, 4.0, 0.0, 0.0, 0.0, std::sin(kPi / 4), std::cos(kPi / 4)}) put_f64(want, v);  // 80
   REQUIRE(got.size() == want.size());  // 4 + 136
   CHECK(got == want);
@@ -323,7 +329,8 @@ TEST_CASE("a MarkerArray_ round-trips through its generated type with every fiel
   a.markers()[1].uv_coordinates().resize(1);
   a.markers()[1].mesh_file().filename("m.stl");
   a.markers()[1].mesh_use_embedded_materials(true);
-  const std::vector<unsigned char> bytes = serialize<visualization_msgs::msg::dds_::MarkerArray_PubSubType>(a);
+  const std::vector<unsigned char> bytes =
+      serialize<visualization_msgs::msg::dds_::MarkerArray_PubSubType>(a);
   visualization_msgs::msg::dds_::MarkerArray_PubSubType type;
   eprosima::fastrtps::rtps::SerializedPayload_t payload(static_cast<std::uint32_t>(bytes.size()));
   std::memcpy(payload.data, bytes.data(), bytes.size());
