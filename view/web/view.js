@@ -353,6 +353,7 @@ function apply(f) {
     // start the stream anew, which begins with a full frame.
     resyncs += 1;
     kept = null;
+    queue.length = 0;
     connect();
     return;
   }
@@ -397,7 +398,9 @@ function scene_of(k) {
     epoch: k.epoch, converged: k.converged, metrics: k.metrics, safety: k.safety, mode: k.mode, replay: k.replay };
 }
 
+let draw_ms = 0;       // how long the latest draw took
 function draw() {
+  const started = performance.now();
   const f = scene_of(kept);
   last = f;
   frames += 1;
@@ -435,20 +438,34 @@ function draw() {
     fence_points: f.fence ? f.fence.polygon.length : 0,
   };
   window._shapeformPx = s.drawn;
+  draw_ms = performance.now() - started;
+  window.shapeformDrawn.draw_ms = draw_ms;
 }
 
-// Frames are applied as they come and drawn once per animation frame: a page slower than the stream
-// draws less often, never late.
+// Frames are drawn one per animation frame, in order: two that arrive within one display refresh are
+// shown on consecutive refreshes, not merged. A page more than MAX_QUEUED frames behind applies the
+// older ones without drawing them: it never falls further behind the stream.
+const MAX_QUEUED = 3;
+const queue = [];
 let draw_pending = false;
 function on_frame(text) {
   received += 1;
   bytes += text.length;
   arrivals.push(performance.now());
-  apply(JSON.parse(text));
-  if (kept && !draw_pending) {
-    draw_pending = true;
-    requestAnimationFrame(() => { draw_pending = false; if (kept) draw(); });
-  }
+  queue.push(JSON.parse(text));
+  schedule();
+}
+
+function schedule() {
+  if (draw_pending || queue.length === 0) return;
+  draw_pending = true;
+  requestAnimationFrame(() => {
+    draw_pending = false;
+    while (queue.length > MAX_QUEUED) apply(queue.shift());
+    if (queue.length > 0) apply(queue.shift());
+    if (kept) draw();
+    schedule();
+  });
 }
 
 canvas.addEventListener("mousemove", (e) => {
@@ -474,6 +491,6 @@ function connect() {
   if (events) events.close();
   events = new EventSource("/events");
   events.onmessage = (e) => on_frame(e.data);
-  events.onerror = () => { document.getElementById("mode").textContent = "disconnected (retrying)"; kept = null; };
+  events.onerror = () => { document.getElementById("mode").textContent = "disconnected (retrying)"; kept = null; queue.length = 0; };
 }
 connect();
