@@ -20,6 +20,8 @@ const draws = [];       // times of recent draws (ms)
 const TABLE_ROWS = 100; // the agent table shows the first rows by id ...
 const TABLE_EVERY_MS = 500;  // ... rebuilt at most twice a second
 let table_at = -Infinity;
+const LOG_MAX = 5000;   // entries of window.shapeformLog
+window.shapeformLog = [];
 
 window.shapeformDrawn = { agents: [], outline_points: 0, chart_points: 0, chart_model_time: null, model_time: null,
   frames: 0, received: 0, bytes: 0, resyncs: 0, mode: null, replay: null, zones: 0, separation_points: 0, separation_run_points: 0,
@@ -438,6 +440,11 @@ function draw() {
     fence_points: f.fence ? f.fence.polygon.length : 0,
   };
   window._shapeformPx = s.drawn;
+  // Every alive agent state drawn, [id, model_time, x1, x2], for a test that reads (and empties) it now
+  // and then: what was drawn between its reads, not only what it caught (bounded: the newest LOG_MAX).
+  const log = window.shapeformLog;
+  for (const a of s.drawn) if (a.state === "alive") log.push([a.id, a.model_time, a.x1, a.x2]);
+  if (log.length > LOG_MAX) log.splice(0, log.length - LOG_MAX);
   draw_ms = performance.now() - started;
   window.shapeformDrawn.draw_ms = draw_ms;
 }
