@@ -10,12 +10,15 @@ Once the page draws N agents, over --seconds it measures, in the browser: frames
 utime + stime from /proc). Prints a Markdown table (and with --json one JSON line per N).
 
   scripts/bench_page.py [--build build] [--view PATH] [--agents 12,100,1000] [--seconds 10]
-                        [--steps 400] [--period 0.1] [--work DIR] [--json]
+                        [--steps 400] [--period 0.1] [--work DIR] [--json] [--save LABEL [--commit C]]
 
---view runs another shapeform_view binary (an older build, for a before/after comparison).
+--view runs another shapeform_view binary (an older build, for a before/after comparison). --save LABEL
+stores the rows under LABEL in docs/figures/page_results.json, which bench/bench_report.py renders into
+docs/BENCHMARKS.md ("The page at 12, 100 and 1000 agents"; `bench/bench_report.py --write-docs`).
 """
 import argparse
 import csv
+import datetime
 import json
 import os
 import shutil
@@ -125,7 +128,7 @@ def measure(args, b, n, work):
 def main():
     ap = argparse.ArgumentParser(prog="scripts/bench_page.py", description=__doc__.split("\n\n")[0],
                                  usage="scripts/bench_page.py [--build build] [--view PATH] [--agents 12,100,1000] "
-                                       "[--seconds 10] [--steps 400] [--period 0.1] [--work DIR] [--json]")
+                                       "[--seconds 10] [--steps 400] [--period 0.1] [--work DIR] [--json] [--save LABEL [--commit C]]")
     ap.add_argument("--build", default=os.path.join(ROOT, "build"), help="build folder (default build)")
     ap.add_argument("--view", help="the shapeform_view binary (default BUILD/bin/shapeform_view)")
     ap.add_argument("--agents", default="12,100,1000", help="comma-separated agent counts (default 12,100,1000)")
@@ -134,6 +137,8 @@ def main():
     ap.add_argument("--period", type=float, default=0.1, help="seconds of replay per step (default 0.1)")
     ap.add_argument("--work", help="folder for recordings and logs (default: a temporary one, removed)")
     ap.add_argument("--json", action="store_true", help="also print one JSON line per N")
+    ap.add_argument("--save", metavar="LABEL", help="store the rows under LABEL in docs/figures/page_results.json")
+    ap.add_argument("--commit", help="with --save: the commit --view was built from (default: this checkout's HEAD)")
     args = ap.parse_args()
     try:
         counts = [int(a) for a in args.agents.split(",")]
@@ -148,6 +153,7 @@ def main():
                  % (args.steps * args.period, args.seconds))
     work = args.work or tempfile.mkdtemp(prefix="bench_page.")
     os.makedirs(work, exist_ok=True)
+    load = os.getloadavg()[0]
     b = browser(work)
     rows = []
     try:
@@ -159,6 +165,17 @@ def main():
         b.quit()
         if not args.work:
             shutil.rmtree(work, ignore_errors=True)
+    if args.save:
+        commit = args.commit or subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"],
+                                               capture_output=True, text=True).stdout.strip() or "-"
+        path = os.path.join(ROOT, "docs", "figures", "page_results.json")
+        store = json.load(open(path)) if os.path.exists(path) else {}
+        store[args.save] = {"when": datetime.datetime.now().strftime("%Y-%m-%d %H:%M"), "commit": commit,
+                            "view": os.path.relpath(args.view, ROOT) if args.view.startswith(ROOT) else args.view,
+                            "load": load, "command": " ".join(["scripts/bench_page.py"] + sys.argv[1:]), "rows": rows}
+        with open(path, "w") as f:
+            json.dump(store, f, indent=1)
+            f.write("\n")
     print("| agents | frames/s received | frames/s drawn | characters per frame | view CPU (% of one core) |")
     print("|---|---|---|---|---|")
     for r in rows:
