@@ -450,9 +450,10 @@ function draw() {
 }
 
 // Frames are drawn one per animation frame, in order: two that arrive within one display refresh are
-// shown on consecutive refreshes, not merged. A page more than MAX_QUEUED frames behind applies the
+// shown on consecutive refreshes, not merged, and a page held up for a moment (a busy host) catches up
+// at the display's rate. A page more than MAX_QUEUED frames (0.4 s at 15 frames/s) behind applies the
 // older ones without drawing them: it never falls further behind the stream.
-const MAX_QUEUED = 3;
+const MAX_QUEUED = 6;
 const queue = [];
 let draw_pending = false;
 function on_frame(text) {
