@@ -49,8 +49,7 @@ class FrameBus {
   /// frame returned. nullopt on timeout or once closed.
   std::optional<std::vector<std::string>> wait_newer(std::uint64_t& sent, double timeout_s) {
     std::unique_lock<std::mutex> lock(mutex_);
-    const auto until = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                                              std::chrono::duration<double>(timeout_s));
+    const auto until = deadline(timeout_s);
     if (!cv_.wait_until(lock, until, [&] { return closed_ || seq_ > sent; }) || closed_) return std::nullopt;
     if (sent > 0 && seq_ - sent <= deltas_.size()) {
       std::vector<std::string> out(deltas_.end() - static_cast<std::ptrdiff_t>(seq_ - sent), deltas_.end());
@@ -66,8 +65,7 @@ class FrameBus {
   /// or on timeout).
   std::string latest(double timeout_s = 2.0) {
     std::unique_lock<std::mutex> lock(mutex_);
-    const auto until = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                                              std::chrono::duration<double>(timeout_s));
+    const auto until = deadline(timeout_s);
     if (!cv_.wait_until(lock, until, [&] { return closed_ || seq_ > 0; }) || closed_) return "";
     return snapshot_current(lock, until) ? snapshot_ : "";
   }
@@ -86,6 +84,11 @@ class FrameBus {
   }
 
  private:
+  static std::chrono::steady_clock::time_point deadline(double timeout_s) {
+    return std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                  std::chrono::duration<double>(timeout_s));
+  }
+
   /// Makes snapshot_ one of the newest frame (asking the loop for one unless it is): false on timeout
   /// or once closed.
   bool snapshot_current(std::unique_lock<std::mutex>& lock, std::chrono::steady_clock::time_point until) {

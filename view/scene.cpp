@@ -203,7 +203,8 @@ nlohmann::json Scene::build(double now_s, bool full, bool record) {
   for (auto& [id, a] : agents_) {
     auto& tr = a.trail;
     // The page drops a point by its time as sent (rounded) by the same rule: both keep the same points.
-    tr.erase(tr.begin(), std::find_if(tr.begin(), tr.end(), [&](const auto& p) { return round3(p.first) >= now_s - p_.trail_s; }));
+    tr.erase(tr.begin(), std::find_if(tr.begin(), tr.end(),
+                                      [&](const auto& p) { return round3(p.first) >= now_s - p_.trail_s; }));
     const bool fresh_heading = a.heading && now_s - a.heading_seen_s <= p_.dead_s;
     json row = json::array({id, round4(a.x.x()), round4(a.x.y()), state(a, now_s), a.model_time, a.epoch,
                             a.heard ? json(*a.heard) : json(nullptr),
@@ -232,7 +233,8 @@ nlohmann::json Scene::build(double now_s, bool full, bool record) {
   out["epoch"] = command_ ? epoch_ : chart_epoch_;  // a recording without commands.csv: the metrics' epoch
   out["converged"] = converged_;
   out["trail_s"] = p_.trail_s;
-  out["agent_columns"] = {"id", "x1", "x2", "state", "model_time", "epoch", "heard", "lateness_us", "heading"};
+  out["agent_columns"] = {"id",    "x1",    "x2",          "state",  "model_time",
+                          "epoch", "heard", "lateness_us", "heading"};
   out["agents"] = std::move(agents);
   out["trails"] = std::move(trails);
 
@@ -268,7 +270,8 @@ nlohmann::json Scene::build(double now_s, bool full, bool record) {
   out["centre"] = centre_ ? point(*centre_) : json(nullptr);
 
   // The series: the points added since the previous delta, or all of them when the page's copy is stale.
-  const auto series = [&](const Series& s, std::uint64_t& sent_generation, std::size_t& sent, const auto& to_json) {
+  const auto series = [&](const Series& s, std::uint64_t& sent_generation, std::size_t& sent,
+                          const auto& to_json) {
     const bool replace = full || s.generation() != sent_generation || s.size() < sent;
     json pts = json::array();
     for (std::size_t k = replace ? 0 : sent; k < s.size(); ++k) pts.push_back(to_json(s.points()[k]));
@@ -278,8 +281,10 @@ nlohmann::json Scene::build(double now_s, bool full, bool record) {
     }
     return json{{"replace", replace}, {"points", std::move(pts)}};
   };
-  out["centre_path"] = series(centre_path_, centre_path_sent_generation_, centre_path_sent_,
-                              [](const std::vector<double>& p) { return json::array({round4(p[0]), round4(p[1])}); });
+  out["centre_path"] =
+      series(centre_path_, centre_path_sent_generation_, centre_path_sent_, [](const std::vector<double>& p) {
+        return json::array({round4(p[0]), round4(p[1])});
+      });
   json chart = series(chart_, chart_sent_generation_, chart_sent_, [](const std::vector<double>& p) {
     json row = json::array();
     for (const double v : p) row.push_back(std::isfinite(v) ? json(v) : json(nullptr));

@@ -1,9 +1,9 @@
-#include <catch2/catch.hpp>
+#include "frame_bus.hpp"
+
 #include <atomic>
+#include <catch2/catch.hpp>
 #include <string>
 #include <thread>
-
-#include "frame_bus.hpp"
 
 using shapeform::view::FrameBus;
 using Frames = std::vector<std::string>;
@@ -14,7 +14,8 @@ namespace {
 void tick(FrameBus& bus, int& n) {
   ++n;
   const bool want = bus.snapshot_wanted();
-  bus.publish("d" + std::to_string(n), want ? std::optional<std::string>("s" + std::to_string(n)) : std::nullopt);
+  bus.publish("d" + std::to_string(n),
+              want ? std::optional<std::string>("s" + std::to_string(n)) : std::nullopt);
 }
 
 /// A loop publishing every millisecond until stopped.

@@ -23,7 +23,8 @@ core::CompiledCommand circle(double r0, core::Vec2 centre = core::Vec2::Zero()) 
 nlohmann::json agent(const nlohmann::json& f, std::size_t k) {
   nlohmann::json out = nlohmann::json::object();
   const auto& row = f["agents"].at(k);
-  for (std::size_t c = 0; c < f["agent_columns"].size(); ++c) out[f["agent_columns"][c].get<std::string>()] = row.at(c);
+  for (std::size_t c = 0; c < f["agent_columns"].size(); ++c)
+    out[f["agent_columns"][c].get<std::string>()] = row.at(c);
   return out;
 }
 
@@ -271,21 +272,24 @@ struct Page {
   nlohmann::json outline, keep_out, fence, min_separation, centre;
 
   void apply(const nlohmann::json& f) {
-    if (f["full"].get<bool>()) *this = Page{};
-    else REQUIRE(f["seq"].get<std::uint64_t>() == seq + 1);  // no gap
+    if (f["full"].get<bool>())
+      *this = Page{};
+    else
+      REQUIRE(f["seq"].get<std::uint64_t>() == seq + 1);  // no gap
     seq = f["seq"];
     for (const auto& row : f["agents"]) agents[row[0].get<std::int64_t>()] = row;
     const auto& t = f["trails"];
     for (std::size_t k = 0; k < t.size(); k += 4) trail.push_back({t[k], t[k + 1], t[k + 2], t[k + 3]});
     const double oldest = f["now_s"].get<double>() - f["trail_s"].get<double>();
-    trail.erase(std::remove_if(trail.begin(), trail.end(), [&](const nlohmann::json& p) { return p[1].get<double>() < oldest; }),
+    trail.erase(std::remove_if(trail.begin(), trail.end(),
+                               [&](const nlohmann::json& p) { return p[1].get<double>() < oldest; }),
                 trail.end());
     for (auto [key, kept] : {std::pair{"centre_path", &centre_path}, std::pair{"chart", &chart}}) {
       if (f[key]["replace"].get<bool>()) *kept = nlohmann::json::array();
       for (const auto& p : f[key]["points"]) kept->push_back(p);
     }
-    for (auto [key, kept] : {std::pair{"outline", &outline}, std::pair{"keep_out", &keep_out}, std::pair{"fence", &fence},
-                             std::pair{"min_separation", &min_separation}}) {
+    for (auto [key, kept] : {std::pair{"outline", &outline}, std::pair{"keep_out", &keep_out},
+                             std::pair{"fence", &fence}, std::pair{"min_separation", &min_separation}}) {
       if (f.contains(key)) *kept = f[key];
     }
     centre = f["centre"];
@@ -339,7 +343,7 @@ TEST_CASE("Scene::delta: a page applying every delta holds what a snapshot of th
       scene.on_command(shapes::compile(c), 2);  // a new command: zones, separation change
     }
     for (int id = 0; id < 5; ++id) {
-      if (id == 3 && k > 100) continue;  // falls silent: stale, then dead, still sent as it changes state
+      if (id == 3 && k > 100) continue;     // falls silent: stale, then dead, still sent as it changes state
       if (id == 4 && k % 3 != 0) continue;  // moves every third tick only
       scene.on_state(id, {std::sin(0.01 * k + id), std::cos(0.02 * k) + id}, 0.1 * k, k < 150 ? 1 : 2, now);
       if (k % 7 == 0) scene.on_status(id, 3, 100.0 + k);
@@ -400,7 +404,8 @@ TEST_CASE("Scene::delta: at 1000 agents a delta of moved agents stays compact") 
   view::Scene scene;
   for (int id = 0; id < 1000; ++id) scene.on_state(id, {0.123456789 * id, -0.987654321 * id}, 12.5, 1, 0.0);
   scene.delta(0.0);
-  for (int id = 0; id < 1000; ++id) scene.on_state(id, {0.123456789 * id + 0.01, -0.987654321 * id}, 12.6, 1, 0.1);
+  for (int id = 0; id < 1000; ++id)
+    scene.on_state(id, {0.123456789 * id + 0.01, -0.987654321 * id}, 12.6, 1, 0.1);
   const std::size_t bytes = scene.delta(0.1).dump().size();
   CHECK(bytes < 60 * 1000);  // under 60 bytes an agent (positions to 1e-4, no key names per agent)
 }
