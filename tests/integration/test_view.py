@@ -26,9 +26,11 @@ recording, never with pixels.
 - screenshot (not in the suite; regenerates docs/figures/view.png): a 12-agent circle forming live.
       python3 tests/integration/test_view.py --bin build/bin --source . --domain 132 ViewTest.test_screenshot
 """
+import json
 import os
 import sys
 import threading
+import urllib.request
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -117,6 +119,30 @@ class ViewTest(harness.SwarmTestCase):
         sys.stderr.write("%s: %d of %d drawn states with a recorded row, %d of them within %g of it\n"
                          % (what, matched, len(seen), close, tolerance))
         self.assertGreaterEqual(close, share * matched, "%s: drawn states within %g of the recorded row" % (what, tolerance))
+
+    def assert_page_keeps_snapshot(self, url, chart_points=1):
+        """Paused: what the page built from the snapshot and the deltas since (its agents, trails, centre
+        path, chart, command) equals a snapshot of now (GET /frame, view/scene.hpp)."""
+        with urllib.request.urlopen(url + "frame", timeout=10) as r:
+            snap = json.loads(r.read().decode())
+        page = self.browser.execute_script("return window.shapeformKept()")
+        self.assertTrue(snap["full"])
+        self.assertLessEqual(page["seq"], snap["seq"], "the page is not ahead of the newest frame")
+        self.assertGreater(page["seq"], 1, "the page applied deltas after its snapshot")
+        columns = snap["agent_columns"]
+        self.assertEqual([{c: a.get(c) for c in columns} for a in page["agents"]],
+                         [dict(zip(columns, row)) for row in snap["agents"]], "agents")
+        trails = {}
+        t = snap["trails"]
+        for k in range(0, len(t), 4):
+            trails.setdefault(str(t[k]), []).append([t[k + 1], t[k + 2], t[k + 3]])
+        self.assertEqual({i: p for i, p in page["trails"].items() if p}, trails, "trails")
+        self.assertGreater(sum(len(p) for p in trails.values()), AGENTS, "trails with points")
+        self.assertEqual(page["centre_path"], snap["centre_path"]["points"], "centre path")
+        self.assertEqual(page["chart_points"], snap["chart"]["points"], "chart points")
+        self.assertGreaterEqual(len(page["chart_points"]), chart_points, "chart points kept")
+        for key in ("outline", "keep_out", "fence", "min_separation"):
+            self.assertEqual(page[key], snap[key], key)
 
     def check_bad_arguments(self):
         """Bad flags and a missing recording: exit 2 at once, naming the flag or the file."""
@@ -212,6 +238,7 @@ class ViewTest(harness.SwarmTestCase):
             self.assertEqual(a["model_time"], d2["model_time"], "agents drawn at the model time shown")
         self.assert_drawn_match({(a["id"], a["model_time"], a["x1"], a["x2"]) for a in alive}, recorded,
                                 "replay (paused)", need=AGENTS, bound=ROUNDED, tolerance=ROUNDED)
+        self.assert_page_keeps_snapshot(url)
 
         # Seek with the page's slider to 1 s from the start: the rows of the last metrics tick by then.
         metrics = read_csv(os.path.join(record, "metrics.csv"), numeric=True)
@@ -238,6 +265,11 @@ class ViewTest(harness.SwarmTestCase):
             "s.dispatchEvent(new Event('change'));", commanded - start + 0.5)
         poll(lambda: (lambda d: d["epoch"] == 1 and d["outline_points"] > 0 and d["zones"] == 2)(self.drawn()), 5,
              "the replay to draw the recorded command and its zones")
+        # Paused again after a seek forward and some play: the page's history still equals a snapshot.
+        poll(lambda: self.drawn()["chart_points"] >= 15, 10, "five chart points of history after the seek")
+        self.browser.find_element("id", "play").click()  # pause
+        poll(lambda: (lambda d: d["replay"] and not d["replay"]["playing"])(self.drawn()), 5, "the replay to pause")
+        self.assert_page_keeps_snapshot(url, chart_points=5)
 
     def test_screenshot(self):
         """Regenerates docs/figures/view.png: a 12-agent circle forming live."""

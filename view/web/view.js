@@ -391,6 +391,18 @@ function apply(f) {
   kept.replay = f.replay || null;
 }
 
+// What the page keeps, as plain JSON (for the browser test, which compares it with a snapshot of GET
+// /frame): {seq, agents: [{id, ...}] by id, trails: {id: [[t, x1, x2], ...]}, centre_path, chart_points,
+// outline, keep_out, fence, min_separation}; null before the first frame.
+window.shapeformKept = () => {
+  if (!kept) return null;
+  const trails = {};
+  for (const [id, pts] of kept.trails) trails[id] = pts;
+  return { seq: kept.seq, agents: scene_of(kept).agents, trails: trails, centre_path: kept.centre_path,
+    chart_points: kept.chart_points, outline: kept.outline, keep_out: kept.keep_out, fence: kept.fence,
+    min_separation: kept.min_separation };
+};
+
 // The kept state as the drawing functions read it.
 function scene_of(k) {
   if (!k.sorted) k.sorted = [...k.agents.keys()].sort((a, b) => a - b);
