@@ -44,6 +44,7 @@ AGENTS = 8
 TOLERANCE = 0.05
 # The frame rounds positions to 1e-4 (view/scene.hpp): a replayed row is drawn within half of that.
 ROUNDED = 1e-4
+RECORDING_S = 7.0
 # A circle and a triangle outside the 10 x 10 start box (the circle of radius 4 forms inside it), and a
 # separation far below the agents' spacing: the filter runs on every step, no agent comes near a zone.
 MIN_SEPARATION = 0.05
@@ -162,6 +163,7 @@ class ViewTest(harness.SwarmTestCase):
         extra = self.swarm_config(["safety.min_separation=%g" % MIN_SEPARATION, "safety.keep_out=" + KEEP_OUT])
         record = os.path.join(self.run_dir, "record")
         view, url = self.start_view(["--config", config, "--domain", str(self.domain)] + extra)
+        recording_from = time.monotonic()
         sup, agents = self.start_commanded_swarm(AGENTS, config, extra=extra, record=record)
         self.open_page(launching, url)
 
@@ -206,6 +208,8 @@ class ViewTest(harness.SwarmTestCase):
         self.assertEqual(last["resyncs"], 0, "the stream never skipped a frame (the page never started anew)")
         self.assertEqual({s[0] for s in seen}, set(range(AGENTS)))
 
+        # A recording of 7 s at least: the replay's last check plays it past trail_s (5 s) after its start.
+        time.sleep(max(0.0, RECORDING_S - (time.monotonic() - recording_from)))
         sup.stop()  # flushes the recording
         harness.procs.stop_all(agents, grace=5.0)
         recorded = self.rows_by_state(read_csv(os.path.join(record, "positions.csv"), numeric=True))
@@ -265,10 +269,18 @@ class ViewTest(harness.SwarmTestCase):
             "s.dispatchEvent(new Event('change'));", commanded - start + 0.5)
         poll(lambda: (lambda d: d["epoch"] == 1 and d["outline_points"] > 0 and d["zones"] == 2)(self.drawn()), 5,
              "the replay to draw the recorded command and its zones")
-        # Paused again after a seek forward and some play: the page's history still equals a snapshot.
-        poll(lambda: self.drawn()["chart_points"] >= 15, 10, "five chart points of history after the seek")
-        self.browser.find_element("id", "play").click()  # pause
-        poll(lambda: (lambda d: d["replay"] and not d["replay"]["playing"])(self.drawn()), 5, "the replay to pause")
+        # Back to 0.2 s (a full frame), then played at 10x to the end: the page, fed only deltas since, has
+        # dropped the trail points older than trail_s (5 s) as the server did, appended the chart's points,
+        # and holds what a snapshot of the end says.
+        self.browser.execute_script(
+            "const s = document.getElementById('seek'); s.value = arguments[0];"
+            "s.dispatchEvent(new Event('change'));", 0.2)
+        poll(lambda: self.drawn()["replay"]["position_s"] < 1.0, 5, "the replay back near its start")
+        self.browser.execute_script(
+            "const s = document.getElementById('speed'); s.value = '10'; s.dispatchEvent(new Event('change'));")
+        d = poll(lambda: (lambda d: d if not d["replay"]["playing"] else None)(self.drawn()), 15,
+                 "the replay to play to its end")
+        self.assertGreater(d["replay"]["position_s"], 5.5, "played past trail_s after the seek back")
         self.assert_page_keeps_snapshot(url, chart_points=5)
 
     def test_screenshot(self):
