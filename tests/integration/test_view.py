@@ -20,9 +20,12 @@ recording, never with pixels.
   away from the agents' paths (the safety filter on, the zones never near an agent): both zones drawn,
   the safety line shown, the separation chart with points and its dashed line at the separation.
 - replay: the same page on `shapeform_view --replay` of that recording: paused, the agents drawn are
-  the recorded rows of the model time shown and the model time stands still; a seek (the page's
-  slider) shows the rows of the recording at the moment sought; play moves model time on; the
-  recorded command brings its zones back.
+  the recorded rows of the model time shown (within the frame's 1e-4 rounding) and the model time stands
+  still, and what the page kept from the stream (a snapshot, then only changes: window.shapeformKept)
+  equals a snapshot of GET /frame; a seek (the page's slider) shows the rows of the recording at the
+  moment sought; play moves model time on; the recorded command brings its zones back; played at 10x
+  from near its start to its end, the page's kept agents, trails (old points dropped), chart and
+  command still equal a snapshot.
 - screenshot (not in the suite; regenerates docs/figures/view.png): a 12-agent circle forming live.
       python3 tests/integration/test_view.py --bin build/bin --source . --domain 132 ViewTest.test_screenshot
 """
