@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <optional>
 
 #include "scene.hpp"
 #include "shapes/shapes.hpp"
@@ -327,6 +328,7 @@ TEST_CASE("Scene::delta: a page applying every delta holds what a snapshot of th
   p.centre_path_capacity = 8;
   view::Scene scene(p);
   Page page;
+  std::optional<Page> late;
   core::Command tracked = circle(3.0);
   tracked.tracking.enabled = true;
   tracked.tracking.path.kind = core::CentrePath::Kind::Line;
@@ -357,7 +359,13 @@ TEST_CASE("Scene::delta: a page applying every delta holds what a snapshot of th
     sizes += d.dump().size();
     fulls += d["full"].get<bool>();
     page.apply(d);
-    if (k % 10 == 0 || k == 201) page.require_same(Page::of(scene.snapshot(now)));
+    if (late) late->apply(d);
+    if (k == 50) late = Page::of(scene.snapshot(now));  // a stream that joins: the snapshot, then the deltas
+    if (k % 10 == 0 || k == 201) {
+      const Page now_page = Page::of(scene.snapshot(now));
+      page.require_same(now_page);
+      if (late) late->require_same(now_page);
+    }
   }
   CHECK(fulls == 2);  // the first delta and the one after clear()
   CHECK(scene.seq() == 300);
