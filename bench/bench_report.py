@@ -596,16 +596,44 @@ def _rerun_and_method(store: dict, plan: dict) -> list[str]:
     return o
 
 
+def foxglove_section() -> str:
+    """The Foxglove WebSocket server, measured by scripts/bench_foxglove.py (notes.toml [foxglove])."""
+    return "## Foxglove WebSocket\n\n" + NOTES["foxglove"]["section"] + "\n\n"
+
+
 def mcap_section() -> str:
     """The MCAP recording's compression, measured by hand (notes.toml [mcap])."""
     return "## MCAP recording: compression\n\n" + NOTES["mcap"]["section"] + "\n\n"
 
 
+# The viewer's page (scripts/bench_page.py --save writes this file: {label: {"when", "commit", "view",
+# "load", "command", "rows": [{agents, received_per_s, drawn_per_s, chars_per_frame, view_cpu_percent}]}}).
+PAGE_JSON = ROOT / "docs" / "figures" / "page_results.json"
+
+
+def page_section(page: dict) -> str:
+    """'The page at 12, 100 and 1000 agents': every measured version of the page, one row per N."""
+    if not page:
+        return ""
+    o = ["## The page at 12, 100 and 1000 agents\n\n", NOTES["page"]["intro"] + "\n\n",
+         "| version | agents | frames/s received | frames/s drawn | characters per frame | view CPU (% of one core) "
+         "| host load (1 min) |\n|---|---|---|---|---|---|---|\n"]
+    for label, run in page.items():
+        for r in run["rows"]:
+            o.append(f"| {label} (`{run['commit']}`, {run['when']}) | {r['agents']} | {r['received_per_s']:.1f} "
+                     f"| {r['drawn_per_s']:.1f} | {r['chars_per_frame']:,.0f} | {r['view_cpu_percent']:.1f} "
+                     f"| {run['load']:.1f} |\n")
+    o.append("\n" + NOTES["page"]["after"] + "\n\n")
+    o.append("Commands: " + ", ".join(f"{label}: `{run['command']}`" for label, run in page.items()) + ".\n\n")
+    return "".join(o)
+
+
 def render(store: dict, path: Path, plan: dict) -> None:
     """Writes the report of `store` (a results file's contents) to `path`; plan: report_plan(store)."""
     rows = store.get("rows", {})
+    page = json.loads(PAGE_JSON.read_text()) if PAGE_JSON.exists() else {}
     o = (_header(store, plan) + _targets(store, plan) + _main_table(rows, plan) + _levers(rows, plan)
-         + [sim_section(store.get("sim") or {}), mcap_section()] + _rerun_and_method(store, plan))
+         + [foxglove_section(), page_section(page), sim_section(store.get("sim") or {}), mcap_section()] + _rerun_and_method(store, plan))
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text("".join(o))
 

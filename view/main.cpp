@@ -176,22 +176,37 @@ int run(int argc, char** argv) {
     const double t0 = now_s();
     while (loop.wait_next(util::stop_flag())) {
       const double real = now_s();
+      // One delta per tick, and a snapshot of the same moment when a stream asked for one.
+      std::optional<std::string> snapshot;
+      const bool want = bus.snapshot_wanted();
       nlohmann::json frame;
       if (recording) {
         std::lock_guard<std::mutex> lock(clock_mutex);
         const double pos = clock->position(real);
         feeder->advance(scene, pos);
-        frame = scene.frame(pos);
+        const nlohmann::json replay = view::clock_json(*clock, real);
+        frame = scene.delta(pos);
         frame["mode"] = "replay";
-        frame["replay"] = view::clock_json(*clock, real);
+        frame["replay"] = replay;
+        if (want) {
+          nlohmann::json full = scene.snapshot(pos);
+          full["mode"] = "replay";
+          full["replay"] = replay;
+          snapshot = full.dump();
+        }
       } else {
         live->drain(scene, real - t0, loop.period_s());
         if (page) {
-          frame = scene.frame(real - t0);
+          frame = scene.delta(real - t0);
           frame["mode"] = "live";
+          if (want) {
+            nlohmann::json full = scene.snapshot(real - t0);
+            full["mode"] = "live";
+            snapshot = full.dump();
+          }
         }
       }
-      if (page) bus.publish(frame.dump());
+      if (page) bus.publish(frame.dump(), std::move(snapshot));
       if (fox && (fox->subscribed(viz::kSceneChannel) || fox->subscribed(viz::kPosesChannel))) {
         double shown = real - t0;
         if (recording) {

@@ -14,12 +14,9 @@ namespace shapeform::view {
 namespace {
 
 double round4(double v) { return std::round(v * 1e4) / 1e4; }
+double round3(double v) { return std::round(v * 1e3) / 1e3; }
 
 nlohmann::json point(const core::Vec2& x) { return nlohmann::json::array({round4(x.x()), round4(x.y())}); }
-
-nlohmann::json optional_number(const std::optional<double>& v) {
-  return v && std::isfinite(*v) ? nlohmann::json(*v) : nlohmann::json(nullptr);
-}
 
 /// The chart's columns, in the order of every point of Scene::chart_ (new columns go at the end: the
 /// page finds a column by name, a saved frame by position).
@@ -81,6 +78,7 @@ void Series::push(const std::vector<double>& point) {
       if (kept != i) points_[kept] = std::move(points_[i]);
     }
     points_.resize(kept);
+    ++generation_;
   }
   points_.push_back(point);
 }
@@ -95,8 +93,10 @@ void Scene::on_state(std::int32_t id, const core::Vec2& x, double model_time, st
   a.epoch = epoch;
   a.last_seen_s = now_s;
   a.departed = false;
+  if (!a.trail.empty() && now_s < a.trail.back().first) full_next_ = true;  // time went back: the page starts anew
   if (a.trail.empty() || now_s - a.trail.back().first >= p_.trail_step_s || now_s < a.trail.back().first) {
     a.trail.emplace_back(now_s, x);
+    ++a.trail_unsent;
   }
 }
 
@@ -162,6 +162,7 @@ void Scene::clear() {
   metrics_time_.reset();
   metrics_ = nullptr;
   converged_ = false;
+  full_next_ = true;
 }
 
 const char* Scene::state(const AgentInfo& a, double now_s) const {
@@ -185,66 +186,114 @@ double Scene::model_time() const {
   return t;
 }
 
-nlohmann::json Scene::frame(double now_s) {
+nlohmann::json Scene::delta(double now_s) {
+  ++seq_;
+  nlohmann::json out = build(now_s, full_next_, true);
+  full_next_ = false;
+  return out;
+}
+
+nlohmann::json Scene::snapshot(double now_s) { return build(now_s, true, false); }
+
+nlohmann::json Scene::build(double now_s, bool full, bool record) {
   using nlohmann::json;
   const double t = model_time();
   json agents = json::array();
   json trails = json::array();
   for (auto& [id, a] : agents_) {
     auto& tr = a.trail;
-    tr.erase(tr.begin(), std::find_if(tr.begin(), tr.end(), [&](const auto& p) { return p.first >= now_s - p_.trail_s; }));
+    // The page drops a point by its time as sent (rounded) by the same rule: both keep the same points.
+    tr.erase(tr.begin(), std::find_if(tr.begin(), tr.end(),
+                                      [&](const auto& p) { return round3(p.first) >= now_s - p_.trail_s; }));
     const bool fresh_heading = a.heading && now_s - a.heading_seen_s <= p_.dead_s;
-    agents.push_back({{"id", id},
-                      {"x1", a.x.x()},
-                      {"x2", a.x.y()},
-                      {"state", state(a, now_s)},
-                      {"model_time", a.model_time},
-                      {"epoch", a.epoch},
-                      {"heard", a.heard ? json(*a.heard) : json(nullptr)},
-                      {"lateness_us", optional_number(a.lateness_p99_us)},
-                      {"heading", fresh_heading ? json(*a.heading) : json(nullptr)}});
-    json pts = json::array();
-    for (const auto& p : tr) pts.push_back(point(p.second));
-    trails.push_back({{"id", id}, {"points", std::move(pts)}});
+    json row = json::array({id, round4(a.x.x()), round4(a.x.y()), state(a, now_s), a.model_time, a.epoch,
+                            a.heard ? json(*a.heard) : json(nullptr),
+                            a.lateness_p99_us && std::isfinite(*a.lateness_p99_us)
+                                ? json(std::round(*a.lateness_p99_us * 10.0) / 10.0)
+                                : json(nullptr),
+                            fresh_heading ? json(round4(*a.heading)) : json(nullptr)});
+    const std::size_t new_points = full ? tr.size() : std::min(a.trail_unsent, tr.size());
+    for (std::size_t k = tr.size() - new_points; k < tr.size(); ++k) {
+      trails.push_back(id);
+      trails.push_back(round3(tr[k].first));
+      trails.push_back(round4(tr[k].second.x()));
+      trails.push_back(round4(tr[k].second.y()));
+    }
+    if (record) a.trail_unsent = 0;
+    if (full || row != a.sent) {
+      if (record) a.sent = row;
+      agents.push_back(std::move(row));
+    }
   }
   json out = json::object();
+  out["seq"] = seq_;
+  out["full"] = full;
   out["now_s"] = now_s;
   out["model_time"] = t;
   out["epoch"] = command_ ? epoch_ : chart_epoch_;  // a recording without commands.csv: the metrics' epoch
   out["converged"] = converged_;
+  out["trail_s"] = p_.trail_s;
+  out["agent_columns"] = {"id",    "x1",    "x2",          "state",  "model_time",
+                          "epoch", "heard", "lateness_us", "heading"};
   out["agents"] = std::move(agents);
   out["trails"] = std::move(trails);
-  out["outline"] = nullptr;
+
+  // The command's parts: sent when they change (the outline moves with a tracked centre).
+  json outline_json = nullptr;
   if (command_) {
     json pts = json::array();
     for (const auto& x : outline(*command_, t, p_.outline_points)) pts.push_back(point(x));
-    out["outline"] = {{"points", std::move(pts)}, {"closed", command_->curve().closed()}};
+    outline_json = {{"points", std::move(pts)}, {"closed", command_->curve().closed()}};
   }
   // The safety filter's constraints (docs/SAFETY.md), drawn under the agents: the zones, and the fence
   // when the command sets one (safety.fence; without one the workspace box is the fence, not drawn).
-  out["keep_out"] = command_ ? zones_json(command_->keep_out) : json::array();
-  out["fence"] = nullptr;
+  json keep_out = command_ ? zones_json(command_->keep_out) : json::array();
+  json fence = nullptr;
   if (command_ && !command_->fence.empty()) {
     json pts = json::array();
     for (const auto& v : command_->fence) pts.push_back(json::array({v.x(), v.y()}));
-    out["fence"] = {{"polygon", std::move(pts)},
-                    {"margin", command_->fence_margin},
-                    {"action", core::params::name_of(core::params::kBreachActionNames, command_->breach_action)}};
+    fence = {{"polygon", std::move(pts)},
+             {"margin", command_->fence_margin},
+             {"action", core::params::name_of(core::params::kBreachActionNames, command_->breach_action)}};
   }
-  out["min_separation"] = command_ ? command_->min_separation : 0.0;
+  json min_separation = command_ ? command_->min_separation : 0.0;
+  const auto changed = [&](const char* key, json& value, json& sent) {
+    if (full || value != sent) {
+      if (record) sent = value;
+      out[key] = std::move(value);
+    }
+  };
+  changed("outline", outline_json, sent_outline_);
+  changed("keep_out", keep_out, sent_keep_out_);
+  changed("fence", fence, sent_fence_);
+  changed("min_separation", min_separation, sent_min_separation_);
   out["centre"] = centre_ ? point(*centre_) : json(nullptr);
-  json path = json::array();
-  for (const auto& p : centre_path_.points()) path.push_back(json::array({round4(p[0]), round4(p[1])}));
-  out["centre_path"] = std::move(path);
-  json chart = json::array();
-  for (const auto& p : chart_.points()) {
+
+  // The series: the points added since the previous delta, or all of them when the page's copy is stale.
+  const auto series = [&](const Series& s, std::uint64_t& sent_generation, std::size_t& sent,
+                          const auto& to_json) {
+    const bool replace = full || s.generation() != sent_generation || s.size() < sent;
+    json pts = json::array();
+    for (std::size_t k = replace ? 0 : sent; k < s.size(); ++k) pts.push_back(to_json(s.points()[k]));
+    if (record) {
+      sent_generation = s.generation();
+      sent = s.size();
+    }
+    return json{{"replace", replace}, {"points", std::move(pts)}};
+  };
+  out["centre_path"] =
+      series(centre_path_, centre_path_sent_generation_, centre_path_sent_, [](const std::vector<double>& p) {
+        return json::array({round4(p[0]), round4(p[1])});
+      });
+  json chart = series(chart_, chart_sent_generation_, chart_sent_, [](const std::vector<double>& p) {
     json row = json::array();
     for (const double v : p) row.push_back(std::isfinite(v) ? json(v) : json(nullptr));
-    chart.push_back(std::move(row));
-  }
+    return row;
+  });
   json columns = json::array();
   for (const char* c : kChartColumns) columns.push_back(c);
-  out["chart"] = {{"columns", std::move(columns)}, {"points", std::move(chart)}};
+  chart["columns"] = std::move(columns);
+  out["chart"] = std::move(chart);
   out["metrics"] = metrics_;
   json safety = json::object();
   for (const char* name : kSafetyFigures)

@@ -33,14 +33,21 @@ class Series {
   /// capacity >= 4 points of `width` numbers each.
   Series(std::size_t capacity, std::size_t width);
   void push(const std::vector<double>& point);
-  void clear() { points_.clear(); }
+  void clear() {
+    points_.clear();
+    ++generation_;
+  }
   std::size_t size() const { return points_.size(); }
+  /// Changes whenever points are dropped (thinning, clear): a reader that saw generation g and k
+  /// points may append points()[k..] while generation() is still g, else it reads them all again.
+  std::uint64_t generation() const { return generation_; }
   const std::vector<std::vector<double>>& points() const { return points_; }
 
  private:
   std::size_t capacity_;
   std::size_t width_;
   std::vector<std::vector<double>> points_;
+  std::uint64_t generation_ = 0;
 };
 
 struct SceneParams {
@@ -65,6 +72,8 @@ struct AgentInfo {
   std::optional<double> heading;           ///< its vehicle's heading, rad (vehicle.interface ros2: its pose)
   double heading_seen_s = 0.0;             ///< now_s of that pose
   std::vector<std::pair<double, core::Vec2>> trail;  ///< (now_s, x), oldest first
+  std::size_t trail_unsent = 0;   ///< trail points added since the last delta (the newest ones)
+  nlohmann::json sent;            ///< its row in the last delta (null: never sent)
 };
 
 class Scene {
@@ -100,22 +109,44 @@ class Scene {
   const std::optional<core::CompiledCommand>& command() const { return command_; }
   const std::optional<core::Vec2>& centre() const { return centre_; }
 
-  /// The frame the page draws at now_s (trails older than trail_s are dropped first):
-  /// {"now_s", "model_time", "epoch", "converged",
-  ///  "agents": [{"id", "x1", "x2", "state", "model_time", "epoch", "heard", "lateness_us", "heading"}],
-  ///  "outline": {"points": [[x1, x2], ...], "closed"} or null, "centre": [x1, x2] or null,
-  ///  "centre_path": [[x1, x2], ...], "trails": [{"id", "points": [[x1, x2], ...]}],
-  ///  "keep_out": [{"circle": [cx, cy, r]} | {"polygon": [[x1, x2], ...]}] (the command's zones, [] without),
-  ///  "min_separation": the command's d (0: off),
-  ///  "chart": {"columns": ["model_time", "shape_error_mean", "gap_cv", "agents_alive", "min_separation",
-  ///                        "min_separation_run"], "points": [[...], ...]},
+  /// The frames the page draws. A stream starts with a snapshot (full: everything the page keeps) and
+  /// goes on with deltas (what changed since the previous delta); the page keeps the trails, the
+  /// centre path and the charts itself. Both are one JSON object:
+  /// {"seq": the number of the delta this frame is (or, in a snapshot, the latest delta's),
+  ///  "full": true in a snapshot and in a delta that replaces everything (the first one, and the first
+  ///          after clear() or after now_s went back): the page forgets what it kept,
+  ///  "now_s", "model_time", "epoch", "converged", "trail_s" (every frame),
+  ///  "agent_columns": ["id", "x1", "x2", "state", "model_time", "epoch", "heard", "lateness_us", "heading"],
+  ///  "agents": [[...], ...]: one row per agent in those columns; a delta has only the agents whose row
+  ///            changed (position, state, status, heading); agents are never removed (dead stays drawn),
+  ///  "trails": [id, t, x1, x2, id, t, x1, x2, ...]: the trail points added (all of them when full), t
+  ///            the now_s they were added at; the page drops points older than now_s - trail_s,
+  ///  "centre": [x1, x2] or null (every frame),
+  ///  "centre_path": {"replace": bool, "points": [[x1, x2], ...]}: the points to append, or with replace
+  ///                 the whole path (full, thinned or started anew),
+  ///  "chart": {"columns": ["model_time", "shape_error_mean", "gap_cv", "agents_alive",
+  ///            "min_separation", "min_separation_run"], "replace": bool, "points": [[...], ...]}: likewise,
+  ///  "outline": {"points": [[x1, x2], ...], "closed"} or null, "keep_out": [{"circle": [cx, cy, r]} |
+  ///            {"polygon": [[x1, x2], ...]}] (the command's zones, [] without), "fence": {"polygon",
+  ///            "margin", "action"} or null, "min_separation": the command's d (0: off): in a delta only
+  ///            when changed since the previous delta (absent: as before),
   ///  "metrics": {"agents_alive", <every metric of core::kMetricTable>} or null,
   ///  "safety": {"min_separation_run", "min_separation_run_time", "filter_interventions",
   ///             "deadlock_sidesteps", "promises_broken", "agents_blocked", "fence_breaches",
   ///             "agents_beyond_fence"}: the latest metrics' run figures, each null when undefined}.
-  /// Agent positions are exact; outline, centre path and trail points are rounded to 1e-4. "heading" is
-  /// the vehicle's (rad), null without a pose heard within dead_s.
-  nlohmann::json frame(double now_s);
+  /// Rounding: agent, trail, outline and centre positions to 1e-4 (shape units; a 1000-unit-wide view on
+  /// a 10,000-pixel screen still shows no step), trail times to 1e-3 s, headings to 1e-4 rad,
+  /// lateness to 0.1 us; model times, chart values, zones and fence exact. "heading" is the vehicle's
+  /// (rad), null without a pose heard within dead_s. Trails older than trail_s are dropped first.
+
+  /// The next delta at now_s: numbered seq + 1, full when the page must start anew.
+  nlohmann::json delta(double now_s);
+  /// Everything at now_s, numbered like the latest delta, full. Called right after delta() with the same
+  /// now_s and no call between, it is the state the next delta applies to (what a stream that joins or
+  /// fell behind starts from).
+  nlohmann::json snapshot(double now_s);
+  /// The number of the latest delta (0: none yet).
+  std::uint64_t seq() const { return seq_; }
 
  private:
   SceneParams p_;
@@ -129,6 +160,14 @@ class Scene {
   std::optional<double> metrics_time_;
   nlohmann::json metrics_ = nullptr;
   bool converged_ = false;
+  // What the latest delta sent (the page holds it).
+  std::uint64_t seq_ = 0;
+  bool full_next_ = true;
+  std::uint64_t chart_sent_generation_ = 0, centre_path_sent_generation_ = 0;
+  std::size_t chart_sent_ = 0, centre_path_sent_ = 0;
+  nlohmann::json sent_outline_, sent_keep_out_, sent_fence_, sent_min_separation_;
+
+  nlohmann::json build(double now_s, bool full, bool record);
 };
 
 }  // namespace shapeform::view

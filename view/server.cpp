@@ -25,9 +25,10 @@ WebServer::WebServer(FrameBus& bus, ControlHandler control) : bus_(bus), server_
     res.set_chunked_content_provider("text/event-stream", [this, seen](std::size_t, httplib::DataSink& sink) {
       // One frame per call; a closed browser makes write() fail, which ends the stream.
       while (!bus_.closed()) {
-        if (const auto frame = bus_.wait_newer(*seen, 0.5)) {
-          const std::string event = "data: " + *frame + "\n\n";
-          return sink.write(event.data(), event.size());
+        if (const auto frames = bus_.wait_newer(*seen, 0.5)) {
+          std::string events;
+          for (const std::string& f : *frames) events += "data: " + f + "\n\n";
+          return sink.write(events.data(), events.size());
         }
         if (!sink.is_writable()) return false;
       }

@@ -22,7 +22,8 @@ using ControlHandler = std::function<std::string(const std::string& action, doub
 class WebServer {
  public:
   /// GET / (the page), /view.js, /view.css, /events (text/event-stream: one "data: FRAME" event per
-  /// frame), /frame (the newest frame); POST /control?action=A&value=V when `control` is set.
+  /// frame: a snapshot, then deltas; FrameBus::wait_newer), /frame (a snapshot of the newest frame);
+  /// POST /control?action=A&value=V when `control` is set.
   WebServer(FrameBus& bus, ControlHandler control);
   ~WebServer();  ///< stop()
   WebServer(const WebServer&) = delete;

@@ -45,13 +45,17 @@ def angle_diff(a, b):
 
 
 def get_frame(url):
-    """The view's newest frame (GET /frame), or None while it cannot answer."""
+    """The view's newest frame (GET /frame: a snapshot, view/scene.hpp) with its agents as objects of their
+    columns, or None while it cannot answer."""
     try:
-        with urllib.request.urlopen(url + "frame", timeout=2) as r:
+        with urllib.request.urlopen(url + "frame", timeout=3) as r:
             text = r.read().decode()
-        return json.loads(text) if text else None
+        frame = json.loads(text) if text else None
     except (OSError, ValueError):
         return None
+    if frame:
+        frame["agents"] = [dict(zip(frame["agent_columns"], row)) for row in frame["agents"]]
+    return frame
 
 
 class VehiclesLaunchTest(harness.LauncherTestCase):

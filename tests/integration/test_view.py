@@ -5,7 +5,9 @@ The page exposes what it drew as window.shapeformDrawn = {agents: [{id, x1, x2, 
 outline_points, chart_points, chart_model_time (of the charts' newest point), model_time, frames,
 mode, replay, zones (keep-out zones drawn), separation_points and separation_run_points (of the
 separation chart), separation_limit (its dashed line, null without), safety_shown (the safety line),
-blocked_mark}; the test compares that with the supervisor's recording, never with pixels.
+blocked_mark, frames (drawn), received, resyncs}, and every alive agent state of every draw as
+window.shapeformLog = [[id, model_time, x1, x2], ...]; the test compares that with the supervisor's
+recording, never with pixels.
 
 - live: the viewer and the page first, then an 8-agent lockstep swarm with the supervisor recording.
   In lockstep the supervisor records every agent's position at the model time of the row (the
@@ -18,15 +20,20 @@ blocked_mark}; the test compares that with the supervisor's recording, never wit
   away from the agents' paths (the safety filter on, the zones never near an agent): both zones drawn,
   the safety line shown, the separation chart with points and its dashed line at the separation.
 - replay: the same page on `shapeform_view --replay` of that recording: paused, the agents drawn are
-  the recorded rows of the model time shown and the model time stands still; a seek (the page's
-  slider) shows the rows of the recording at the moment sought; play moves model time on; the
-  recorded command brings its zones back.
+  the recorded rows of the model time shown (within the frame's 1e-4 rounding) and the model time stands
+  still, and what the page kept from the stream (a snapshot, then only changes: window.shapeformKept)
+  equals a snapshot of GET /frame; a seek (the page's slider) shows the rows of the recording at the
+  moment sought; play moves model time on; the recorded command brings its zones back; played at 10x
+  from near its start to its end, the page's kept agents, trails (old points dropped), chart and
+  command still equal a snapshot.
 - screenshot (not in the suite; regenerates docs/figures/view.png): a 12-agent circle forming live.
       python3 tests/integration/test_view.py --bin build/bin --source . --domain 132 ViewTest.test_screenshot
 """
+import json
 import os
 import sys
 import threading
+import urllib.request
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -38,6 +45,9 @@ from selenium.webdriver.chrome.service import Service  # noqa: E402
 
 AGENTS = 8
 TOLERANCE = 0.05
+# The frame rounds positions to 1e-4 (view/scene.hpp): a replayed row is drawn within half of that.
+ROUNDED = 1e-4
+RECORDING_S = 7.0
 # A circle and a triangle outside the 10 x 10 start box (the circle of radius 4 forms inside it), and a
 # separation far below the agents' spacing: the filter runs on every step, no agent comes near a zone.
 MIN_SEPARATION = 0.05
@@ -95,22 +105,48 @@ class ViewTest(harness.SwarmTestCase):
             out.setdefault(int(r["agent"]), {})[r["model_time"]] = (r["x1"], r["x2"])
         return out
 
-    def assert_drawn_match(self, seen, recorded, what, need, share=1.0, bound=TOLERANCE):
+    def assert_drawn_match(self, seen, recorded, what, need, share=1.0, bound=TOLERANCE, tolerance=TOLERANCE):
         """Of the drawn (id, model_time, x1, x2) with a recorded row of that agent at that model time (at
-        least `need` of them), at least `share` lie within TOLERANCE of it and every one within `bound`."""
+        least `need` of them), at least `share` lie within `tolerance` of it and every one within `bound`."""
         matched, close = 0, 0
         for (i, t, x1, x2) in seen:
+            i = int(i)
             row = recorded.get(i, {}).get(t)
             if row is None:
                 continue
             matched += 1
             off = max(abs(x1 - row[0]), abs(x2 - row[1]))
-            close += off <= TOLERANCE
+            close += off <= tolerance
             self.assertLessEqual(off, bound, "%s: agent %d at model time %g drawn at (%g, %g), recorded at (%g, %g)"
                                  % (what, i, t, x1, x2, row[0], row[1]))
         self.assertGreaterEqual(matched, need, "%s: drawn states with a recorded row at their model time" % what)
-        sys.stderr.write("%s: %d of %d drawn states within %g of the recorded row\n" % (what, close, matched, TOLERANCE))
-        self.assertGreaterEqual(close, share * matched, "%s: drawn states within %g of the recorded row" % (what, TOLERANCE))
+        sys.stderr.write("%s: %d of %d drawn states with a recorded row, %d of them within %g of it\n"
+                         % (what, matched, len(seen), close, tolerance))
+        self.assertGreaterEqual(close, share * matched, "%s: drawn states within %g of the recorded row" % (what, tolerance))
+
+    def assert_page_keeps_snapshot(self, url, chart_points=1):
+        """Paused: what the page built from the snapshot and the deltas since (its agents, trails, centre
+        path, chart, command) equals a snapshot of now (GET /frame, view/scene.hpp)."""
+        with urllib.request.urlopen(url + "frame", timeout=10) as r:
+            snap = json.loads(r.read().decode())
+        page = self.browser.execute_script("return window.shapeformKept()")
+        self.assertTrue(snap["full"])
+        self.assertLessEqual(page["seq"], snap["seq"], "the page is not ahead of the newest frame")
+        self.assertGreater(page["seq"], 1, "the page applied deltas after its snapshot")
+        columns = snap["agent_columns"]
+        self.assertEqual([{c: a.get(c) for c in columns} for a in page["agents"]],
+                         [dict(zip(columns, row)) for row in snap["agents"]], "agents")
+        trails = {}
+        t = snap["trails"]
+        for k in range(0, len(t), 4):
+            trails.setdefault(str(t[k]), []).append([t[k + 1], t[k + 2], t[k + 3]])
+        self.assertEqual({i: p for i, p in page["trails"].items() if p}, trails, "trails")
+        self.assertGreater(sum(len(p) for p in trails.values()), AGENTS, "trails with points")
+        self.assertEqual(page["centre_path"], snap["centre_path"]["points"], "centre path")
+        self.assertEqual(page["chart_points"], snap["chart"]["points"], "chart points")
+        self.assertGreaterEqual(len(page["chart_points"]), chart_points, "chart points kept")
+        for key in ("outline", "keep_out", "fence", "min_separation"):
+            self.assertEqual(page[key], snap[key], key)
 
     def check_bad_arguments(self):
         """Bad flags and a missing recording: exit 2 at once, naming the flag or the file."""
@@ -130,6 +166,7 @@ class ViewTest(harness.SwarmTestCase):
         extra = self.swarm_config(["safety.min_separation=%g" % MIN_SEPARATION, "safety.keep_out=" + KEEP_OUT])
         record = os.path.join(self.run_dir, "record")
         view, url = self.start_view(["--config", config, "--domain", str(self.domain)] + extra)
+        recording_from = time.monotonic()
         sup, agents = self.start_commanded_swarm(AGENTS, config, extra=extra, record=record)
         self.open_page(launching, url)
 
@@ -142,13 +179,25 @@ class ViewTest(harness.SwarmTestCase):
         self.assertEqual(d["zones"], 2, "the command's keep-out zones are drawn")
         self.assertEqual(d["separation_limit"], MIN_SEPARATION, "the separation's dashed line")
         self.assertTrue(d["safety_shown"], "the safety line is shown while the command filters")
-        seen = set()
-        first = d
+        # What the page drew over 3 s: every alive agent state of every draw (window.shapeformLog), and, for
+        # comparison, the states seen at this test's polls. The supervisor records a row at each metrics
+        # tick (10 Hz) while the agents step at 50 Hz: a drawn state has a row only when it is at a recorded
+        # step, about one in five. Polls alone caught few frames on a loaded host (a slow execute_script),
+        # and then, now and then, none at a recorded step ("0 of 8 drawn states matched"); every draw
+        # gives some 45 frames in 3 s.
+        self.browser.execute_script("window.shapeformLog = []")
+        at_reset = self.drawn()["frames"]
+        first = poll(lambda: (lambda d: d if d["frames"] > at_reset else None)(self.drawn()), 5,
+                     "a frame drawn after the log was emptied")
+        polled = set()
         t0 = time.monotonic()
         while time.monotonic() - t0 < 3.0:
             d = self.drawn()
-            seen |= {(a["id"], a["model_time"], a["x1"], a["x2"]) for a in d["agents"] if a["state"] == "alive"}
+            polled |= {(a["id"], a["model_time"], a["x1"], a["x2"]) for a in d["agents"] if a["state"] == "alive"}
             time.sleep(0.05)
+        seen = {tuple(e) for e in self.browser.execute_script(
+            "const l = window.shapeformLog; window.shapeformLog = []; return l;")}
+        self.assertLessEqual(polled, seen, "every state the polls saw is in the page's log of states drawn")
         last = self.drawn()
         elapsed = time.monotonic() - t0
         # The charts advance: their newest point is later (a long series is thinned, so its count may drop).
@@ -157,9 +206,13 @@ class ViewTest(harness.SwarmTestCase):
         self.assertGreater(last["separation_points"], 0, "the snapshot's smallest separation charted")
         self.assertGreater(last["separation_run_points"], 0, "the run's smallest separation charted")
         self.assertGreater(last["model_time"], first["model_time"], "model time advances on the page")
-        self.assertGreaterEqual((last["frames"] - first["frames"]) / elapsed, 10, "frames per second")
+        self.assertGreaterEqual((last["frames"] - first["frames"]) / elapsed, 10, "frames drawn per second")
+        self.assertGreaterEqual((last["received"] - first["received"]) / elapsed, 10, "frames received per second")
+        self.assertEqual(last["resyncs"], 0, "the stream never skipped a frame (the page never started anew)")
         self.assertEqual({s[0] for s in seen}, set(range(AGENTS)))
 
+        # A recording of 7 s at least: the replay's last check plays it past trail_s (5 s) after its start.
+        time.sleep(max(0.0, RECORDING_S - (time.monotonic() - recording_from)))
         sup.stop()  # flushes the recording
         harness.procs.stop_all(agents, grace=5.0)
         recorded = self.rows_by_state(read_csv(os.path.join(record, "positions.csv"), numeric=True))
@@ -169,6 +222,8 @@ class ViewTest(harness.SwarmTestCase):
         # agent by up to about 0.1. So most drawn states, not all, equal their row; every one lies within
         # 0.5 of it (a wrong agent, axis or scale would be off by a neighbour's distance, about 2).
         self.assert_drawn_match(seen, recorded, "live", need=AGENTS, share=0.7, bound=0.5)
+        polled_matched = sum(recorded.get(i, {}).get(t) is not None for (i, t, _, _) in polled)
+        sys.stderr.write("live, as polled: %d of %d states with a recorded row\n" % (polled_matched, len(polled)))
         view.stop()
 
         # -- replay of that recording, in the same page
@@ -189,7 +244,8 @@ class ViewTest(harness.SwarmTestCase):
         for a in alive:
             self.assertEqual(a["model_time"], d2["model_time"], "agents drawn at the model time shown")
         self.assert_drawn_match({(a["id"], a["model_time"], a["x1"], a["x2"]) for a in alive}, recorded,
-                                "replay (paused)", need=AGENTS)
+                                "replay (paused)", need=AGENTS, bound=ROUNDED, tolerance=ROUNDED)
+        self.assert_page_keeps_snapshot(url)
 
         # Seek with the page's slider to 1 s from the start: the rows of the last metrics tick by then.
         metrics = read_csv(os.path.join(record, "metrics.csv"), numeric=True)
@@ -204,7 +260,7 @@ class ViewTest(harness.SwarmTestCase):
         self.assertEqual(d["model_time"], expect_t)
         alive = [a for a in d["agents"] if a["state"] == "alive"]
         self.assert_drawn_match({(a["id"], a["model_time"], a["x1"], a["x2"]) for a in alive}, recorded,
-                                "replay (after the seek)", need=len(alive))
+                                "replay (after the seek)", need=len(alive), bound=ROUNDED, tolerance=ROUNDED)
         self.assertTrue(all(a["model_time"] == expect_t for a in alive))
 
         self.browser.find_element("id", "play").click()  # play
@@ -216,6 +272,19 @@ class ViewTest(harness.SwarmTestCase):
             "s.dispatchEvent(new Event('change'));", commanded - start + 0.5)
         poll(lambda: (lambda d: d["epoch"] == 1 and d["outline_points"] > 0 and d["zones"] == 2)(self.drawn()), 5,
              "the replay to draw the recorded command and its zones")
+        # Back to 0.2 s (a full frame), then played at 10x to the end: the page, fed only deltas since, has
+        # dropped the trail points older than trail_s (5 s) as the server did, appended the chart's points,
+        # and holds what a snapshot of the end says.
+        self.browser.execute_script(
+            "const s = document.getElementById('seek'); s.value = arguments[0];"
+            "s.dispatchEvent(new Event('change'));", 0.2)
+        poll(lambda: self.drawn()["replay"]["position_s"] < 1.0, 5, "the replay back near its start")
+        self.browser.execute_script(
+            "const s = document.getElementById('speed'); s.value = '10'; s.dispatchEvent(new Event('change'));")
+        d = poll(lambda: (lambda d: d if not d["replay"]["playing"] else None)(self.drawn()), 15,
+                 "the replay to play to its end")
+        self.assertGreater(d["replay"]["position_s"], 5.5, "played past trail_s after the seek back")
+        self.assert_page_keeps_snapshot(url, chart_points=5)
 
     def test_screenshot(self):
         """Regenerates docs/figures/view.png: a 12-agent circle forming live."""

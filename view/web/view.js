@@ -1,6 +1,8 @@
 // shapeform view: draws the frames that shapeform_view streams (Server-Sent Events on /events). Every
 // coordinate comes from the server, the commanded shape too (sampled with the project's curve code):
-// this page only draws. What it drew is exposed as window.shapeformDrawn for tests.
+// this page only draws. The stream starts with a full frame and goes on with what changed (view/scene.hpp
+// documents the frame): the page keeps the agents, trails, centre path and charts itself, and draws the
+// newest state once per animation frame. What it drew is exposed as window.shapeformDrawn for tests.
 "use strict";
 
 const COLOURS = { alive: "#1565c0", stale: "#ef6c00", dead: "#9e9e9e" };
@@ -8,12 +10,21 @@ const canvas = document.getElementById("canvas");
 const ctx = canvas.getContext("2d");
 const tip = document.getElementById("tip");
 let view = null;        // {cx, cy, half}: the world square shown, eased from frame to frame
-let last = null;        // the newest frame
-let frames = 0;
+let last = null;        // the newest state drawn (kept(): the frame as the drawing functions read it)
+let frames = 0;         // frames drawn
+let received = 0;       // frames received
+let bytes = 0;          // their characters
+let resyncs = 0;        // gaps seen (the stream started anew)
 const arrivals = [];    // arrival times of recent frames (ms), for the frame rate shown
+const draws = [];       // times of recent draws (ms)
+const TABLE_ROWS = 100; // the agent table shows the first rows by id ...
+const TABLE_EVERY_MS = 500;  // ... rebuilt at most twice a second
+let table_at = -Infinity;
+const LOG_MAX = 5000;   // entries of window.shapeformLog
+window.shapeformLog = [];
 
 window.shapeformDrawn = { agents: [], outline_points: 0, chart_points: 0, chart_model_time: null, model_time: null,
-  frames: 0, mode: null, replay: null, zones: 0, separation_points: 0, separation_run_points: 0,
+  frames: 0, received: 0, bytes: 0, resyncs: 0, mode: null, replay: null, zones: 0, separation_points: 0, separation_run_points: 0,
   separation_limit: null, safety_shown: false, blocked_mark: false, fence_points: 0 };
 
 // The safety line's counts: [key of the frame's "safety", label].
@@ -33,16 +44,15 @@ function zone_extent(z) {
 
 // The world square to show: alive agents, a closed outline, keep-out zones, the centre and its path.
 function target_view(f) {
-  const xs = [], ys = [];
-  const add = (x, y) => { xs.push(x); ys.push(y); };
+  let x0 = Infinity, x1 = -Infinity, y0 = Infinity, y1 = -Infinity;
+  const add = (x, y) => { x0 = Math.min(x0, x); x1 = Math.max(x1, x); y0 = Math.min(y0, y); y1 = Math.max(y1, y); };
   for (const a of f.agents) if (a.state !== "dead") add(a.x1, a.x2);
   if (f.outline && f.outline.closed) for (const p of f.outline.points) add(p[0], p[1]);
   for (const z of f.keep_out || []) for (const p of zone_extent(z)) add(p[0], p[1]);
   if (f.fence) for (const p of f.fence.polygon) add(p[0], p[1]);
   if (f.centre) add(f.centre[0], f.centre[1]);
   for (const p of f.centre_path) add(p[0], p[1]);
-  if (xs.length === 0) return { cx: 0, cy: 0, half: 10 };
-  const x0 = Math.min(...xs), x1 = Math.max(...xs), y0 = Math.min(...ys), y1 = Math.max(...ys);
+  if (x0 > x1) return { cx: 0, cy: 0, half: 10 };
   return { cx: (x0 + x1) / 2, cy: (y0 + y1) / 2, half: Math.max(1, 0.55 * Math.max(x1 - x0, y1 - y0) + 1) };
 }
 
@@ -133,12 +143,17 @@ function draw_scene(f) {
     ctx.setLineDash([]);
     outline_points = f.outline.points.length;
   }
-  ctx.lineWidth = 1;
-  for (const t of f.trails) {
-    if (t.points.length < 2) continue;
-    ctx.strokeStyle = "rgba(21, 101, 192, 0.25)";
-    polyline(t.points, false);
+  // Every trail in one path (one stroke for a thousand agents); a trail point is [t, x1, x2].
+  ctx.lineWidth = 1; ctx.strokeStyle = "rgba(21, 101, 192, 0.25)";
+  ctx.beginPath();
+  for (const pts of f.trails.values()) {
+    if (pts.length < 2) continue;
+    for (let i = 0; i < pts.length; ++i) {
+      const [u, v] = to_px(pts[i][1], pts[i][2]);
+      if (i === 0) ctx.moveTo(u, v); else ctx.lineTo(u, v);
+    }
   }
+  ctx.stroke();
   if (f.centre_path.length > 1) {
     ctx.strokeStyle = "rgba(198, 40, 40, 0.5)";
     polyline(f.centre_path, false);
@@ -154,32 +169,41 @@ function draw_scene(f) {
   if (d > 0) {
     ctx.strokeStyle = "rgba(21, 101, 192, 0.35)"; ctx.lineWidth = 1; ctx.setLineDash([2, 3]);
     const r = (0.5 * d * canvas.width) / (2 * view.half);
+    ctx.beginPath();
     for (const a of f.agents) {
       if (a.state === "dead" || r < 2) continue;
       const [u, v] = to_px(a.x1, a.x2);
-      ctx.beginPath(); ctx.arc(u, v, r, 0, 2 * Math.PI); ctx.stroke();
+      ctx.moveTo(u + r, v); ctx.arc(u, v, r, 0, 2 * Math.PI);
     }
+    ctx.stroke();
     ctx.setLineDash([]);
   }
+  // The agents, one path per state (and one for the dead marks, one per state for the headings).
+  const discs = { alive: new Path2D(), stale: new Path2D(), dead: new Path2D() };
+  const ticks = { alive: new Path2D(), stale: new Path2D(), dead: new Path2D() };
+  const crosses = new Path2D();
   for (const a of f.agents) {
     const [u, v] = to_px(a.x1, a.x2);
-    ctx.lineWidth = 2;
-    ctx.strokeStyle = COLOURS[a.state]; ctx.fillStyle = COLOURS[a.state];
-    ctx.beginPath(); ctx.arc(u, v, 6, 0, 2 * Math.PI);
-    if (a.state === "stale") ctx.stroke(); else ctx.fill();
-    if (a.state === "dead") {
-      ctx.strokeStyle = "#fff";
-      ctx.beginPath(); ctx.moveTo(u - 3, v - 3); ctx.lineTo(u + 3, v + 3); ctx.moveTo(u + 3, v - 3); ctx.lineTo(u - 3, v + 3); ctx.stroke();
+    const state = COLOURS[a.state] ? a.state : "dead";
+    discs[state].moveTo(u + 6, v); discs[state].arc(u, v, 6, 0, 2 * Math.PI);
+    if (state === "dead") {
+      crosses.moveTo(u - 3, v - 3); crosses.lineTo(u + 3, v + 3); crosses.moveTo(u + 3, v - 3); crosses.lineTo(u - 3, v + 3);
     }
     const heading = a.heading === undefined ? null : a.heading;
     if (heading !== null) {
       // The vehicle's heading: a tick from the agent's edge outward (screen y points down).
       const c = Math.cos(heading), s = -Math.sin(heading);
-      ctx.strokeStyle = COLOURS[a.state];
-      ctx.beginPath(); ctx.moveTo(u + 6 * c, v + 6 * s); ctx.lineTo(u + 16 * c, v + 16 * s); ctx.stroke();
+      ticks[state].moveTo(u + 6 * c, v + 6 * s); ticks[state].lineTo(u + 16 * c, v + 16 * s);
     }
     drawn.push({ id: a.id, x1: a.x1, x2: a.x2, state: a.state, model_time: a.model_time, heading: heading, u: u, v: v });
   }
+  ctx.lineWidth = 2;
+  for (const state of ["dead", "stale", "alive"]) {
+    ctx.strokeStyle = COLOURS[state]; ctx.fillStyle = COLOURS[state];
+    if (state === "stale") ctx.stroke(discs[state]); else ctx.fill(discs[state]);
+    ctx.stroke(ticks[state]);
+  }
+  ctx.strokeStyle = "#fff"; ctx.stroke(crosses);
   // Agents held by the safety filter: the frame counts them but does not say which, so the mark is the
   // scene's, not an agent's.
   const blocked = f.safety ? f.safety.agents_blocked || 0 : 0;
@@ -260,12 +284,20 @@ function fill_safety(f) {
   return true;
 }
 
+// The agent table: the first TABLE_ROWS agents by id, rebuilt at most every TABLE_EVERY_MS (a thousand
+// rows rebuilt fifteen times a second would cost more than drawing the scene).
 function fill_table(f) {
+  const now = performance.now();
+  if (now - table_at < TABLE_EVERY_MS) return;
+  table_at = now;
   const body = document.querySelector("#agents tbody");
-  const rows = f.agents.map((a) =>
+  const rows = f.agents.slice(0, TABLE_ROWS).map((a) =>
     `<tr class="${a.state}"><td>${a.id}</td><td>${a.state}</td><td>${fmt(a.x1, 3)}</td><td>${fmt(a.x2, 3)}</td>` +
     `<td>${a.heading === null || a.heading === undefined ? "–" : fmt((a.heading * 180) / Math.PI, 0)}</td>` +
     `<td>${a.heard === null ? "–" : a.heard}</td><td>${a.epoch}</td><td>${fmt(a.lateness_us, 0)}</td></tr>`);
+  if (f.agents.length > TABLE_ROWS) {
+    rows.push(`<tr class="more"><td colspan="8">the first ${TABLE_ROWS} of ${f.agents.length} agents</td></tr>`);
+  }
   body.innerHTML = rows.join("");
 }
 
@@ -279,9 +311,11 @@ function fill_header(f) {
   conv.textContent = f.converged ? "converged" : "";
   conv.className = f.converged ? "yes" : "";
   const now = performance.now();
-  arrivals.push(now);
+  draws.push(now);
+  while (draws.length > 0 && draws[0] < now - 2000) draws.shift();
   while (arrivals.length > 0 && arrivals[0] < now - 2000) arrivals.shift();
-  document.getElementById("fps").textContent = (arrivals.length / 2).toFixed(0) + " frames/s";
+  document.getElementById("fps").textContent = (draws.length / 2).toFixed(0) + " frames/s drawn, " +
+    (arrivals.length / 2).toFixed(0) + " received";
 }
 
 let seeking = false;
@@ -309,7 +343,79 @@ const seek = document.getElementById("seek");
 seek.addEventListener("input", () => { seeking = true; });
 seek.addEventListener("change", () => { control("seek", seek.value).finally(() => { seeking = false; }); });
 
-function on_frame(f) {
+// What the page keeps (view/scene.hpp: a full frame replaces it, a delta updates it).
+let kept = null;
+
+function apply(f) {
+  if (f.full) {
+    kept = { seq: 0, agents: new Map(), sorted: null, trails: new Map(), centre_path: [], chart_points: [],
+      outline: null, keep_out: [], fence: null, min_separation: 0 };
+  } else if (!kept || f.seq !== kept.seq + 1) {
+    // A frame missed (the server sends every one in order, so this is a bug or a lost connection):
+    // start the stream anew, which begins with a full frame.
+    resyncs += 1;
+    kept = null;
+    queue.length = 0;
+    connect();
+    return;
+  }
+  kept.seq = f.seq;
+  const col = {};
+  f.agent_columns.forEach((c, i) => { col[c] = i; });
+  for (const r of f.agents) {
+    const id = r[col.id];
+    if (!kept.agents.has(id)) kept.sorted = null;
+    kept.agents.set(id, { id: id, x1: r[col.x1], x2: r[col.x2], state: r[col.state], model_time: r[col.model_time],
+      epoch: r[col.epoch], heard: r[col.heard], lateness_us: r[col.lateness_us], heading: r[col.heading] });
+  }
+  const t = f.trails;
+  for (let k = 0; k < t.length; k += 4) {
+    let pts = kept.trails.get(t[k]);
+    if (!pts) { pts = []; kept.trails.set(t[k], pts); }
+    pts.push([t[k + 1], t[k + 2], t[k + 3]]);
+  }
+  // The server's rule (view/scene.cpp): a point older than now_s - trail_s goes.
+  const oldest = f.now_s - f.trail_s;
+  for (const pts of kept.trails.values()) {
+    let n = 0;
+    while (n < pts.length && pts[n][0] < oldest) n += 1;
+    if (n > 0) pts.splice(0, n);
+  }
+  if (f.centre_path.replace) kept.centre_path = [];
+  for (const p of f.centre_path.points) kept.centre_path.push(p);
+  if (f.chart.replace) kept.chart_points = [];
+  for (const p of f.chart.points) kept.chart_points.push(p);
+  kept.chart_columns = f.chart.columns;
+  for (const key of ["outline", "keep_out", "fence", "min_separation"]) if (key in f) kept[key] = f[key];
+  for (const key of ["now_s", "model_time", "epoch", "converged", "centre", "metrics", "safety", "mode"]) kept[key] = f[key];
+  kept.replay = f.replay || null;
+}
+
+// What the page keeps, as plain JSON (for the browser test, which compares it with a snapshot of GET
+// /frame): {seq, agents: [{id, ...}] by id, trails: {id: [[t, x1, x2], ...]}, centre_path, chart_points,
+// outline, keep_out, fence, min_separation}; null before the first frame.
+window.shapeformKept = () => {
+  if (!kept) return null;
+  const trails = {};
+  for (const [id, pts] of kept.trails) trails[id] = pts;
+  return { seq: kept.seq, agents: scene_of(kept).agents, trails: trails, centre_path: kept.centre_path,
+    chart_points: kept.chart_points, outline: kept.outline, keep_out: kept.keep_out, fence: kept.fence,
+    min_separation: kept.min_separation };
+};
+
+// The kept state as the drawing functions read it.
+function scene_of(k) {
+  if (!k.sorted) k.sorted = [...k.agents.keys()].sort((a, b) => a - b);
+  return { agents: k.sorted.map((id) => k.agents.get(id)), trails: k.trails, centre_path: k.centre_path,
+    chart: { columns: k.chart_columns, points: k.chart_points }, outline: k.outline, keep_out: k.keep_out,
+    fence: k.fence, min_separation: k.min_separation, centre: k.centre, now_s: k.now_s, model_time: k.model_time,
+    epoch: k.epoch, converged: k.converged, metrics: k.metrics, safety: k.safety, mode: k.mode, replay: k.replay };
+}
+
+let draw_ms = 0;       // how long the latest draw took
+function draw() {
+  const started = performance.now();
+  const f = scene_of(kept);
   last = f;
   frames += 1;
   const s = draw_scene(f);
@@ -332,6 +438,9 @@ function on_frame(f) {
     model_time: f.model_time,
     epoch: f.epoch,
     frames: frames,
+    received: received,
+    bytes: bytes,
+    resyncs: resyncs,
     mode: f.mode,
     replay: f.replay || null,
     zones: s.zones,
@@ -343,6 +452,40 @@ function on_frame(f) {
     fence_points: f.fence ? f.fence.polygon.length : 0,
   };
   window._shapeformPx = s.drawn;
+  // Every alive agent state drawn, [id, model_time, x1, x2], for a test that reads (and empties) it now
+  // and then: what was drawn between its reads, not only what it caught (bounded: the newest LOG_MAX).
+  const log = window.shapeformLog;
+  for (const a of s.drawn) if (a.state === "alive") log.push([a.id, a.model_time, a.x1, a.x2]);
+  if (log.length > LOG_MAX) log.splice(0, log.length - LOG_MAX);
+  draw_ms = performance.now() - started;
+  window.shapeformDrawn.draw_ms = draw_ms;
+}
+
+// Frames are drawn one per animation frame, in order: two that arrive within one display refresh are
+// shown on consecutive refreshes, not merged, and a page held up for a moment (a busy host) catches up
+// at the display's rate. A page more than MAX_QUEUED frames (0.4 s at 15 frames/s) behind applies the
+// older ones without drawing them: it never falls further behind the stream.
+const MAX_QUEUED = 6;
+const queue = [];
+let draw_pending = false;
+function on_frame(text) {
+  received += 1;
+  bytes += text.length;
+  arrivals.push(performance.now());
+  queue.push(JSON.parse(text));
+  schedule();
+}
+
+function schedule() {
+  if (draw_pending || queue.length === 0) return;
+  draw_pending = true;
+  requestAnimationFrame(() => {
+    draw_pending = false;
+    while (queue.length > MAX_QUEUED) apply(queue.shift());
+    if (queue.length > 0) apply(queue.shift());
+    if (kept) draw();
+    schedule();
+  });
 }
 
 canvas.addEventListener("mousemove", (e) => {
@@ -363,6 +506,11 @@ canvas.addEventListener("mousemove", (e) => {
 });
 canvas.addEventListener("mouseleave", () => { tip.hidden = true; });
 
-const events = new EventSource("/events");
-events.onmessage = (e) => on_frame(JSON.parse(e.data));
-events.onerror = () => { document.getElementById("mode").textContent = "disconnected (retrying)"; };
+let events = null;
+function connect() {
+  if (events) events.close();
+  events = new EventSource("/events");
+  events.onmessage = (e) => on_frame(e.data);
+  events.onerror = () => { document.getElementById("mode").textContent = "disconnected (retrying)"; kept = null; queue.length = 0; };
+}
+connect();

@@ -117,7 +117,7 @@ TEST_CASE("ReplayFeeder: the scene shows what was recorded up to the position; b
   feeder.advance(scene, 1.15);
   CHECK(scene.model_time() == 5.0);
   CHECK(scene.agents().at(1).x == core::Vec2(1.25, -1.5));
-  auto f = scene.frame(1.15);
+  auto f = scene.snapshot(1.15);
   CHECK(f["epoch"] == 1);
   CHECK(f["outline"]["points"].size() == 240);
   CHECK(f["centre"] == nlohmann::json::array({0.5, 0.5}));
@@ -127,7 +127,7 @@ TEST_CASE("ReplayFeeder: the scene shows what was recorded up to the position; b
   feeder.advance(scene, 1.0);
   CHECK(scene.model_time() == 0.0);
   CHECK(scene.agents().at(1).x == core::Vec2(1.0, -1.5));
-  CHECK(scene.frame(1.0)["chart"]["points"].size() == 1);
+  CHECK(scene.snapshot(1.0)["chart"]["points"].size() == 1);
 }
 
 TEST_CASE("ReplayFeeder: a recording older than the safety figures plays, them null; its zones drawn") {
@@ -142,7 +142,7 @@ TEST_CASE("ReplayFeeder: a recording older than the safety figures plays, them n
   view::Scene scene;
   view::ReplayFeeder feeder(r, 5.0);
   feeder.advance(scene, 1.25);
-  const auto f = scene.frame(1.25);
+  const auto f = scene.snapshot(1.25);
   CHECK(f["min_separation"] == 0.2);
   REQUIRE(f["keep_out"].size() == 2);
   CHECK(f["keep_out"][0]["circle"] == nlohmann::json({4.0, 0.0, 1.0}));
