@@ -1,4 +1,6 @@
-// shapeform_mcap: what an MCAP recording holds (info) and a killed recording made whole (recover).
+// shapeform_mcap: what an MCAP recording holds (info), a killed recording made whole (recover), and a CSV
+// recording converted (convert).
+#include <chrono>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
@@ -8,6 +10,8 @@
 
 #include "app/app.hpp"
 #include "record/mcap.hpp"
+#include "record/recorder.hpp"
+#include "record/recording.hpp"
 
 namespace shapeform {
 namespace {
@@ -84,16 +88,49 @@ std::string info_text(const nlohmann::json& j) {
       << ')';
   o << "\nchannels:\n";
   o << "  " << std::left << std::setw(4) << "id" << std::setw(36) << "topic" << std::setw(10) << "encoding"
-    << std::setw(40) << "schema"
+    << std::setw(44) << "schema"
     << "messages\n";
   for (const auto& ch : j["channels"]) {
     std::string schema = ch["schema"].get<std::string>();
     if (!schema.empty()) schema += " (" + ch["schema_encoding"].get<std::string>() + ")";
     o << "  " << std::setw(4) << ch["id"].get<int>() << std::setw(36) << ch["topic"].get<std::string>()
-      << std::setw(10) << ch["message_encoding"].get<std::string>() << std::setw(40) << schema
+      << std::setw(10) << ch["message_encoding"].get<std::string>() << std::setw(44) << schema
       << ch["messages"] << '\n';
   }
   return o.str();
+}
+
+/// shapeform_mcap convert: the CSV recording in run_dir as an MCAP file.
+int convert_csv(const app::App& app, const std::string& run_dir, std::string out) {
+  std::optional<record::Recording> r;
+  try {
+    r.emplace(record::load_recording(record::recording_dir(run_dir)));
+  } catch (const record::RecordingError& e) {
+    return app.usage_error(std::string("convert: ") + e.what());
+  }
+  if (out.empty()) out = (r->dir / record::kMcapFile).string();
+  if (fs::exists(out))
+    return app.usage_error("convert: OUT " + out + " exists: give another file (a conversion never replaces one)");
+  if (const auto problem = app::writable_file_problem(out); !problem.empty())
+    return app.usage_error("convert: OUT " + out + ": " + problem);
+  return app.run([&] {
+    // The run's real time: the metrics file was last written at the end of the run (wall_s end_s).
+    std::error_code ec;
+    const auto modified = fs::last_write_time(r->dir / "metrics.csv", ec);
+    std::int64_t unix_ns = 0;
+    if (!ec) {
+      // C++17 has no file_clock::to_sys: the file's age, taken from the system clock's now.
+      const auto age = fs::file_time_type::clock::now() - modified;
+      const auto sys = std::chrono::system_clock::now() - std::chrono::duration_cast<std::chrono::system_clock::duration>(age);
+      unix_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(sys.time_since_epoch()).count() -
+                static_cast<std::int64_t>(r->end_s * 1e9);
+    }
+    const std::uint64_t n = record::write_mcap(*r, out, unix_ns);
+    std::cerr << "shapeform_mcap: converted " << r->dir.string() << " (" << r->metrics.size() << " metrics rows, "
+              << r->positions.size() << " positions, " << r->commands.size() << " commands) into " << out << ": "
+              << n << " messages\n";
+    return 0;
+  });
 }
 
 int run(int argc, char** argv) {
@@ -103,7 +140,10 @@ int run(int argc, char** argv) {
       "  shapeform_mcap info FILE [--json]   channels (schema, encoding, message count), time range,\n"
       "                                      chunks and compression, complete or recovered\n"
       "  shapeform_mcap recover IN OUT        rewrites a recording cut short (a hard kill) as a\n"
-      "                                      complete, indexed file: every complete chunk kept");
+      "                                      complete, indexed file: every complete chunk kept\n"
+      "  shapeform_mcap convert RUN [OUT]     a CSV recording (a record folder or a launcher run folder,\n"
+      "                                      docs/RECORDING.md) as MCAP: its tables and the swarm drawn\n"
+      "                                      for Foxglove (default OUT: run.mcap beside the CSV files)");
   auto& cli = app.cli();
   cli.require_subcommand(1);
   std::string info_file, in_file, out_file, compression = "zstd";
@@ -117,7 +157,16 @@ int run(int argc, char** argv) {
   recover->add_option("OUT", out_file, "the file to write (must not be IN)")->required();
   recover->add_option("--compression", compression, "chunk compression of OUT: zstd (default), lz4 or none")
       ->check(CLI::IsMember({"zstd", "lz4", "none"}));
+  std::string run_dir, convert_out;
+  auto* convert = cli.add_subcommand("convert", "a CSV recording RUN written as the MCAP file OUT");
+  convert->add_option("RUN", run_dir, "a recording folder (metrics.csv, ...) or a launcher run folder")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  convert->add_option("OUT", convert_out, "the MCAP file to write (default: run.mcap in the recording folder); "
+                                          "never replaces an existing file");
   if (const auto rc = app.parse(argc, argv)) return *rc;
+
+  if (*convert) return convert_csv(app, run_dir, convert_out);
 
   if (*info) {
     std::optional<McapReader> r;

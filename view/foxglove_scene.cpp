@@ -19,8 +19,7 @@ viz::SceneSnapshot foxglove_snapshot(const Scene& scene, double now_s) {
     s.agents.push_back(d);
   }
   if (const auto& cmd = scene.command()) {
-    s.outline = outline(*cmd, scene.model_time(), scene.params().outline_points);
-    s.outline_closed = cmd->curve().closed();
+    s.outline = core::outline(*cmd, scene.model_time(), s.outline_closed, scene.params().outline_points);
     s.keep_out = cmd->keep_out;
     s.fence = cmd->fence;
     s.fence_margin = cmd->fence_margin;

@@ -7,7 +7,7 @@
 namespace shapeform::view {
 
 /// The snapshot of scene at now_s: every agent with its look (Scene::state) and its heading when a
-/// pose was heard within dead_s; the command's outline at the scene's model time (view::outline, the
+/// pose was heard within dead_s; the command's outline at the scene's model time (core::outline, the
 /// page's points), its keep-out zones and fence (with its margin); the tracked centre.
 viz::SceneSnapshot foxglove_snapshot(const Scene& scene, double now_s);
 

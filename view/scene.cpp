@@ -47,23 +47,6 @@ nlohmann::json zones_json(const std::vector<core::KeepOutZone>& zones) {
 
 }  // namespace
 
-std::vector<core::Vec2> outline(const core::CompiledCommand& cmd, double t, int n, double line_half_length) {
-  const core::ShapeSpec spec = core::shape_at(cmd, t);
-  const core::Curve& curve = cmd.curve();
-  const double length = curve.length();
-  std::vector<core::Vec2> out;
-  if (n < 2) return out;
-  out.reserve(static_cast<std::size_t>(n) + 1);
-  const bool closed = curve.closed() && std::isfinite(length);
-  const double from = std::isfinite(length) ? 0.0 : -line_half_length;
-  const double span = std::isfinite(length) ? length : 2.0 * line_half_length;
-  const int count = closed ? n : n + 1;
-  for (int k = 0; k < count; ++k) {
-    const double s = from + span * static_cast<double>(k) / static_cast<double>(n);
-    out.push_back(core::to_world(spec, curve.at(s)));
-  }
-  return out;
-}
 
 Series::Series(std::size_t capacity, std::size_t width) : capacity_(std::max<std::size_t>(capacity, 4)), width_(width) {
   points_.reserve(capacity_);
@@ -242,7 +225,8 @@ nlohmann::json Scene::build(double now_s, bool full, bool record) {
   json outline_json = nullptr;
   if (command_) {
     json pts = json::array();
-    for (const auto& x : outline(*command_, t, p_.outline_points)) pts.push_back(point(x));
+    bool closed = false;
+    for (const auto& x : core::outline(*command_, t, closed, p_.outline_points)) pts.push_back(point(x));
     outline_json = {{"points", std::move(pts)}, {"closed", command_->curve().closed()}};
   }
   // The safety filter's constraints (docs/SAFETY.md), drawn under the agents: the zones, and the fence

@@ -19,12 +19,6 @@
 
 namespace shapeform::view {
 
-/// Points of the commanded shape at model time t (tracked shapes about C(t)), in world coordinates:
-/// `n` points spread evenly by arc length on a closed curve, n + 1 from end to end on an open one,
-/// and for the (infinite) line n + 1 points over +-line_half_length (shape units, before scale) about
-/// the foot of the shape's origin.
-std::vector<core::Vec2> outline(const core::CompiledCommand& cmd, double t, int n = 240,
-                                double line_half_length = 100.0);
 
 /// A bounded series of points, thinned as it grows: when full, every other point is dropped, so it
 /// always spans the whole history at a coarser spacing (charts of a long run stay a fixed size).

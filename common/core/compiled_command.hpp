@@ -34,7 +34,6 @@ CompiledCommand compile(const Command& cmd);
 /// `n` points spread evenly by arc length on a closed curve (`closed` set true: the last joins the
 /// first), n + 1 from end to end on an open one, and for the (infinite) line n + 1 points over
 /// +-line_half_length (shape units, before scale) about the foot of the shape's origin. Empty when n < 2.
-/// (view::outline samples the same way: it should become a call to this one.)
 std::vector<Vec2> outline(const CompiledCommand& cmd, double t, bool& closed, int n = 240,
                           double line_half_length = 100.0);
 

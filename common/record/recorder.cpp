@@ -236,6 +236,17 @@ void Recorder::open(const std::filesystem::path& dir, std::int64_t unix_ns) {
   // run.mcap after the previous recording is closed (one writer); a failure leaves no recording open.
   mcap_.open(dir / kMcapFile);
   files_ = std::move(files);
+  start(dir, unix_ns, true);
+}
+
+void Recorder::open_mcap(const std::filesystem::path& file, std::int64_t unix_ns) {
+  close();
+  mcap_.open(file);
+  start(file.parent_path(), unix_ns, false);
+}
+
+void Recorder::start(const std::filesystem::path& dir, std::int64_t unix_ns, bool csv) {
+  csv_ = csv;
   unix_ns_ = unix_ns;
   command_.reset();
   command_epoch_ = 0;
@@ -248,8 +259,9 @@ void Recorder::open(const std::filesystem::path& dir, std::int64_t unix_ns) {
 }
 
 void Recorder::add_row(File f, const std::string& line) {
-  files_[f] << line;
   ++rows_[f];
+  if (!csv_) return;
+  files_[f] << line;
   check_streams();
 }
 
@@ -353,7 +365,8 @@ void Recorder::flush_if_due(Clock::time_point now) {
 
 void Recorder::flush() {
   if (!open_) return;
-  for (auto& f : files_) f.flush();
+  if (csv_)
+    for (auto& f : files_) f.flush();
   mcap_.flush();  // the chunk so far, complete on disk
   check_streams();
   last_flush_ = Clock::now();
@@ -363,6 +376,7 @@ void Recorder::close() {
   if (!open_) return;
   flush();
   for (auto& f : files_) {
+    if (!csv_) break;
     f.close();
     if (!f) ++write_errors_;
     f.clear();
@@ -373,6 +387,7 @@ void Recorder::close() {
 
 void Recorder::check_streams() {
   // A failed write leaves the stream in a failed state; count it and keep trying later rows.
+  if (!csv_) return;
   for (auto& f : files_) {
     if (!f) {
       ++write_errors_;

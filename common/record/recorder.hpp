@@ -103,6 +103,9 @@ class Recorder {
   /// Throws std::runtime_error naming the path on failure; a recording in progress then goes on.
   void open(const std::filesystem::path& dir, std::int64_t unix_ns = 0);
 
+  /// Only an MCAP file (no CSV files): `file`, with the same channels (shapeform_mcap convert).
+  void open_mcap(const std::filesystem::path& file, std::int64_t unix_ns = 0);
+
   /// A channel of run.mcap the caller writes (write_message); kept for later recordings. Returns its id.
   std::uint16_t add_channel(const ChannelSpec& spec);
   /// Appends one message of a channel of add_channel (its bytes as they are). Ignored when not open.
@@ -156,6 +159,8 @@ class Recorder {
   std::uint64_t log_ns(double wall_s) const;
   void write_json(std::uint16_t channel, double wall_s, const std::string& json);
   void write_scene(double wall_s, double model_time, const std::vector<AgentRow>& agents);
+  /// What open() and open_mcap() share once the files are made.
+  void start(const std::filesystem::path& dir, std::int64_t unix_ns, bool csv);
 
   Clock::duration flush_period_;
   std::filesystem::path dir_;
@@ -166,6 +171,7 @@ class Recorder {
   std::uint64_t write_errors_ = 0;
 
   McapWriter mcap_;
+  bool csv_ = true;  ///< false: open_mcap (the CSV streams stay closed)
   std::int64_t unix_ns_ = 0;
   std::uint16_t metrics_ch_ = 0, positions_ch_ = 0, commands_ch_ = 0, centre_ch_ = 0, events_ch_ = 0;
   std::uint16_t scene_ch_ = 0, poses_ch_ = 0;

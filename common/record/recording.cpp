@@ -307,6 +307,44 @@ Recording load_mcap(const fs::path& file) {
 
 }  // namespace
 
+std::uint64_t write_mcap(const Recording& r, const fs::path& file, std::int64_t unix_ns) {
+  Recorder rec;
+  rec.open_mcap(file, unix_ns);
+  std::size_t c = 0, e = 0, m = 0, p = 0;
+  std::vector<AgentRow> sample;
+  const double inf = std::numeric_limits<double>::infinity();
+  const auto at = [&](const auto& rows, std::size_t i) { return i < rows.size() ? rows[i].wall_s : inf; };
+  while (c < r.commands.size() || e < r.centre.size() || m < r.metrics.size() || p < r.positions.size()) {
+    const double w = std::min({at(r.commands, c), at(r.centre, e), at(r.metrics, m), at(r.positions, p)});
+    for (; c < r.commands.size() && r.commands[c].wall_s <= w; ++c) {
+      const auto& x = r.commands[c];
+      rec.write_command(x.wall_s, x.model_time, x.epoch, x.issuer, x.issuer_name, x.command);
+    }
+    for (; e < r.centre.size() && r.centre[e].wall_s <= w; ++e) {
+      const auto& x = r.centre[e];
+      rec.write_centre(x.wall_s, x.model_time, x.epoch, x.c.x(), x.c.y());
+    }
+    for (; m < r.metrics.size() && r.metrics[m].wall_s <= w; ++m) {
+      const auto& x = r.metrics[m];
+      rec.write_metrics({x.wall_s, x.model_time, x.epoch, x.agents_alive, x.metrics, x.converged});
+    }
+    // One sample: the rows of one wall_s and model time.
+    while (p < r.positions.size() && r.positions[p].wall_s <= w) {
+      const auto& first = r.positions[p];
+      sample.clear();
+      for (; p < r.positions.size() && r.positions[p].wall_s == first.wall_s &&
+             r.positions[p].model_time == first.model_time;
+           ++p)
+        sample.push_back({r.positions[p].agent, r.positions[p].epoch, r.positions[p].x.x(), r.positions[p].x.y(), {}});
+      rec.write_positions(first.wall_s, first.model_time, first.step, sample);
+    }
+  }
+  const std::uint64_t n = rec.mcap_messages();
+  rec.close();
+  if (rec.write_errors() != 0) throw std::runtime_error("cannot write " + file.string());
+  return n;
+}
+
 Recording load_recording(const fs::path& path) {
   if (fs::is_regular_file(path)) return load_mcap(path);
   return load_csv(path);

@@ -70,4 +70,11 @@ core::CompiledCommand command_from_json(const std::string& json_object);
 /// the line (or channel) and the column of the first problem.
 Recording load_recording(const std::filesystem::path& path);
 
+/// Writes r as an MCAP file with the channels a recording's run.mcap has of its tables (the four
+/// shapeform/record/* channels and the swarm drawn for Foxglove; not the DDS samples, which a CSV
+/// recording does not hold), rows replayed in wall_s order (at one wall_s: the command, the centre,
+/// the metrics, then the positions sample). unix_ns: the Unix time (ns) of wall_s 0. Returns the
+/// number of messages written; throws std::runtime_error naming the file when it cannot be written.
+std::uint64_t write_mcap(const Recording& r, const std::filesystem::path& file, std::int64_t unix_ns);
+
 }  // namespace shapeform::record

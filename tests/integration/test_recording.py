@@ -171,5 +171,115 @@ class RecordingTest(harness.SwarmTestCase):
         self.assertIn("nowhere", r.stderr)
 
 
+    # -- run.mcap
+
+    def mcap_check(self, path, decode=True):
+        """tests/npm/mcap_check.mjs (readers by Foxglove and MCAP) on path: its JSON lines, or its summary
+        object without decode. Fails (never skips) when node or the validators are missing."""
+        npm = os.path.join(os.path.dirname(harness.CONFIG["bin"]), "npm", "node_modules")
+        self.assertTrue(os.path.isdir(os.path.join(npm, "@mcap", "core")),
+                        "the npm validators are missing in %s: run scripts/install_deps.sh" % npm)
+        node = shutil.which("node")
+        self.assertIsNotNone(node, "node is not installed: run scripts/install_deps.sh")
+        script = os.path.join(harness.CONFIG["source"], "tests", "npm", "mcap_check.mjs")
+        r = subprocess.run([node, script, path] + (["--decode"] if decode else []), capture_output=True, text=True,
+                           timeout=120, env=dict(os.environ, SHAPEFORM_NPM=npm), stdin=subprocess.DEVNULL)
+        self.assertEqual(r.returncode, 0, "mcap_check %s: %s" % (path, r.stderr[-2000:]))
+        lines = [json.loads(l) for l in r.stdout.splitlines() if l.strip()]
+        return lines if decode else lines[0]
+
+    def mcap_tool(self, *args, check=True):
+        return harness.procs.run([harness.bin_path("shapeform_mcap")] + list(args), timeout=60, check=check)
+
+    def assert_positions_match(self, messages, record):
+        """The shapeform/record/positions messages hold exactly the rows of positions.csv."""
+        from_mcap = sorted((m["message"]["wall_s"], a["id"], a["epoch"], a["x1"], a["x2"])
+                           for m in messages if m["topic"] == "shapeform/record/positions"
+                           for a in m["message"]["agents"])
+        from_csv = sorted((r["wall_s"], int(r["agent"]), int(r["epoch"]), r["x1"], r["x2"])
+                          for r in harness.read_csv(os.path.join(record, "positions.csv"), numeric=True))
+        self.assertGreater(len(from_csv), 50)
+        self.assertEqual(from_mcap, from_csv)
+
+    def test_run_mcap(self):
+        config = harness.scenario("arc_circle")
+        first, second = os.path.join(self.run_dir, "first"), os.path.join(self.run_dir, "second")
+        sup, agents = self.start_commanded_swarm(AGENTS, config, SETS + ["--set", "agent.status_rate_hz=10"],
+                                                 record=first)
+        self.assertTrue(sup.wait_until("time", "wait time 60 timeout=60", 60))
+        # A second recording closes the first (complete), then the supervisor is killed hard in it.
+        self.assertTrue(sup.ask("record start " + second, "record")["open"])
+        harness.poll(lambda: os.path.getsize(os.path.join(second, "run.mcap")) > 20000, 30,
+                     "the second run.mcap to hold flushed chunks", 0.2)
+        sup.kill_group()
+        sup.wait(10)
+
+        # The complete recording: every schema parses and every message decodes with the others' readers.
+        summary = self.mcap_check(os.path.join(first, "run.mcap"), decode=False)
+        self.assertEqual(summary["mode"], "indexed")
+        for topic in ("shapeform/record/metrics", "shapeform/record/positions", "shapeform/record/commands",
+                      "shapeform/record/centre", "shapeform/scene", "shapeform/agent_poses", "shapeform/state",
+                      "shapeform/command", "shapeform/status", "shapeform/metrics", "shapeform/target",
+                      "shapeform/events"):
+            self.assertGreater(summary["per_topic"].get(topic, 0), 0, topic)
+        messages = self.mcap_check(os.path.join(first, "run.mcap"))
+        self.assert_positions_match(messages, first)
+        # The agents' states as they came off the wire (CDR), decoded by Foxglove's omgidl reader, are the
+        # states each agent reported itself at the same step.
+        own = {}
+        for a in agents:
+            for e in a.events("status"):
+                own[(e["id"], e["epoch"], e["model_time"])] = (e["x"], e["y"])
+        matched = 0
+        for m in messages:
+            if m["topic"] != "shapeform/state":
+                continue
+            s = m["message"]
+            key = (s["id"], int(s["epoch"]), s["model_time"])
+            if key in own:
+                self.assertEqual((s["x"], s["y"]), own[key], key)
+                matched += 1
+        self.assertGreater(matched, 10, "recorded states at the model times the agents reported")
+        # The command in force and the tracked centre, as CDR and as the recorder's table.
+        commands = [m["message"] for m in messages if m["topic"] == "shapeform/record/commands"]
+        self.assertEqual([c["epoch"] for c in commands], [1])
+        self.assertEqual(commands[0]["command"]["shape.kind"], "circle")
+        for m in messages:
+            if m["topic"] == "shapeform/record/centre":
+                c = m["message"]
+                self.assertAlmostEqual(c["c1"], VELOCITY * c["model_time"], delta=1e-9)
+        scenes = [m["message"] for m in messages if m["topic"] == "shapeform/scene"]
+        agents_drawn = [e for e in scenes[-1]["entities"] if e["id"] == "agents"][0]
+        self.assertEqual(len(agents_drawn["spheres"]), AGENTS)
+        self.assertEqual(agents_drawn["frame_id"], "shapeform")
+
+        # The killed recording: no summary; the others' stream reader and ours keep every complete chunk.
+        killed = os.path.join(second, "run.mcap")
+        summary = self.mcap_check(killed, decode=False)
+        self.assertEqual(summary["mode"], "stream")
+        self.assertGreater(summary["per_topic"].get("shapeform/state", 0), 0)
+        info = json.loads(self.mcap_tool("info", killed, "--json").stdout)
+        self.assertFalse(info["complete"])
+        recovered = os.path.join(self.run_dir, "recovered.mcap")
+        self.mcap_tool("recover", killed, recovered)
+        self.assertEqual(self.mcap_check(recovered, decode=False)["mode"], "indexed")
+        self.assertEqual(self.mcap_check(recovered, decode=False)["messages"], summary["messages"])
+        # Replay reads it as it is.
+        view = self.start("view", [harness.bin_path("shapeform_view"), "--replay", killed, "--port", "0", "--json"])
+        start = view.wait_event("start", 20)
+        self.assertEqual(start["mode"], "replay")
+        view.stop()
+
+        # An old CSV recording converted: the same tables and the drawing; never over an existing file.
+        converted = os.path.join(self.run_dir, "converted.mcap")
+        self.mcap_tool("convert", first, converted)
+        got = self.mcap_check(converted)
+        self.assert_positions_match(got, first)
+        self.assertEqual([m["message"]["epoch"] for m in got if m["topic"] == "shapeform/record/commands"], [1])
+        self.assertGreater(len([m for m in got if m["topic"] == "shapeform/scene"]), 10)
+        again = self.mcap_tool("convert", first, converted, check=False)
+        self.assertEqual(again.returncode, 2)
+        self.assertIn("exists", again.stderr)
+
 if __name__ == "__main__":
     harness.main()

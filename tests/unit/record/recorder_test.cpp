@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -15,6 +16,8 @@
 #include <nlohmann/json.hpp>
 
 #include "config/config.hpp"
+#include "record/mcap.hpp"
+#include "record/recording.hpp"
 
 using namespace shapeform;
 using namespace shapeform::record;
@@ -368,4 +371,148 @@ TEST_CASE("centre rows", "[record]") {
   CHECK(rec.centre_rows() == 1);
   rec.close();
   CHECK(read_lines(tmp.path() / "centre.csv") == std::vector<std::string>{"wall_s,model_time,epoch,c1,c2", "1.5,20,3,-0.5,2.25"});
+}
+
+// ---------------------------------------------------------------------------------------------
+// run.mcap: the same tables, read back from it as from the CSV files
+
+namespace {
+
+/// A short recording with every table: a tracked command, its centre, metrics and positions samples.
+void write_sample_run(Recorder& rec) {
+  core::Command cmd = config::Config{}.command;
+  cmd.tracking.enabled = true;
+  rec.write_command(0.1, 0.0, 1, "01.02", "shapeform_supervisor on test", cmd);
+  for (int k = 0; k < 30; ++k) {
+    const double w = 0.2 + 0.1 * k, t = 0.5 * k;
+    rec.write_centre(w, t, 1, 0.01 * t, 0.0);
+    core::Metrics m;
+    m.shape_error_mean = 1.0 / (1.0 + k);
+    rec.write_metrics({w, t, 1, 3, m, k > 20});
+    rec.write_positions(w, t, k, {{0, 1, 1.0 + 0.1 * k, -2.0, 0.5}, {4, 1, 0.3, 1.0 / 3.0, {}}, {7, 0, -1e-300, 2.5, {}}});
+  }
+}
+
+void require_same(const Recording& a, const Recording& b) {
+  REQUIRE(a.metrics.size() == b.metrics.size());
+  for (std::size_t i = 0; i < a.metrics.size(); ++i) {
+    CHECK(a.metrics[i].wall_s == b.metrics[i].wall_s);
+    CHECK(a.metrics[i].model_time == b.metrics[i].model_time);
+    CHECK(a.metrics[i].converged == b.metrics[i].converged);
+    CHECK(a.metrics[i].metrics.shape_error_mean == b.metrics[i].metrics.shape_error_mean);
+  }
+  REQUIRE(a.positions.size() == b.positions.size());
+  for (std::size_t i = 0; i < a.positions.size(); ++i) {
+    CHECK(a.positions[i].agent == b.positions[i].agent);
+    CHECK(a.positions[i].epoch == b.positions[i].epoch);
+    CHECK(a.positions[i].step == b.positions[i].step);
+    CHECK(a.positions[i].x == b.positions[i].x);  // bit for bit: both write the shortest round-trip form
+  }
+  REQUIRE(a.commands.size() == b.commands.size());
+  for (std::size_t i = 0; i < a.commands.size(); ++i) {
+    CHECK(a.commands[i].issuer == b.commands[i].issuer);
+    CHECK(a.commands[i].issuer_name == b.commands[i].issuer_name);
+    CHECK(command_json(a.commands[i].command) == command_json(b.commands[i].command));
+  }
+  REQUIRE(a.centre.size() == b.centre.size());
+  for (std::size_t i = 0; i < a.centre.size(); ++i) CHECK(a.centre[i].c == b.centre[i].c);
+  CHECK(a.start_s == b.start_s);
+  CHECK(a.end_s == b.end_s);
+}
+
+std::map<std::string, std::size_t> messages_per_topic(const McapReader& r) {
+  std::map<std::uint16_t, std::string> topic;
+  for (const auto& c : r.channels()) topic[c.id] = c.topic;
+  std::map<std::string, std::size_t> n;
+  for (const auto& m : r.messages()) ++n[topic.at(m.channel)];
+  return n;
+}
+
+}  // namespace
+
+TEST_CASE("run.mcap: the four tables, the drawing and the caller's channels, read back as the CSV files") {
+  TempDir tmp;
+  Recorder rec;
+  const std::uint16_t raw = rec.add_channel({"shapeform/state", "shapeform::msg::AgentState", "omgidl", "struct X {};", "cdr"});
+  rec.open(tmp.path(), 1'700'000'000'000'000'000);
+  write_sample_run(rec);
+  const std::vector<std::uint8_t> bytes = {0, 1, 0, 0, 42};
+  rec.write_message(raw, 0.25, bytes);
+  rec.write_event(0.3, R"({"event":"agent","id":4,"change":"joined"})");
+  rec.close();
+  REQUIRE(rec.write_errors() == 0);
+
+  const McapReader r(tmp.path() / kMcapFile);
+  CHECK(r.complete());
+  const auto n = messages_per_topic(r);
+  CHECK(n.at(kMetricsTopic) == 30);
+  CHECK(n.at(kPositionsTopic) == 30);
+  CHECK(n.at(kCommandsTopic) == 1);
+  CHECK(n.at(kCentreTopic) == 30);
+  CHECK(n.at(kEventsTopic) == 1);
+  CHECK(n.at("shapeform/scene") == 30);
+  CHECK(n.at("shapeform/agent_poses") == 30);
+  CHECK(n.at("shapeform/state") == 1);
+  // Log times are Unix times: the open's unix_ns plus wall_s.
+  for (const auto& m : r.messages()) CHECK(m.log_time >= 1'700'000'000'100'000'000ULL);
+  // The drawing shows the command's outline and the centre of the sample.
+  std::map<std::uint16_t, std::string> topic;
+  for (const auto& c : r.channels()) topic[c.id] = c.topic;
+  const McapMessage* last_scene = nullptr;
+  for (const auto& m : r.messages())
+    if (topic.at(m.channel) == "shapeform/scene") last_scene = &m;
+  REQUIRE(last_scene);
+  const auto scene = nlohmann::json::parse(last_scene->data.begin(), last_scene->data.end());
+  std::map<std::string, nlohmann::json> entity;
+  for (const auto& e : scene["entities"]) entity[e["id"].get<std::string>()] = e;
+  CHECK(entity.at("agents")["spheres"].size() == 3);
+  CHECK(entity.at("headings")["arrows"].size() == 1);  // only agent 0's heading is known
+  CHECK(entity.at("outline")["lines"].size() == 1);
+  CHECK(entity.at("centre")["spheres"].size() == 1);
+  CHECK(entity.at("centre")["spheres"][0]["pose"]["position"]["x"].get<double>() == 0.01 * 0.5 * 29);
+
+  require_same(load_recording(tmp.path() / kMcapFile), load_recording(tmp.path()));
+}
+
+TEST_CASE("run.mcap: a recording killed hard reads back every flushed sample") {
+  TempDir tmp;
+  {
+    Recorder rec;
+    rec.open(tmp.path());
+    write_sample_run(rec);
+    rec.flush();  // as the loop's flush_if_due does every flush_s
+    rec.write_positions(9.0, 99.0, 99, {{0, 1, 5.0, 5.0, {}}});
+    // Killed here: the file as it is on disk, without the last chunk and the summary.
+    fs::copy_file(tmp.path() / kMcapFile, tmp.path() / "killed.mcap");
+  }
+  const Recording got = load_recording(tmp.path() / "killed.mcap");
+  CHECK(got.metrics.size() == 30);
+  CHECK(got.positions.size() == 90);  // the last sample was not flushed
+  CHECK(got.commands.size() == 1);
+}
+
+TEST_CASE("write_mcap: a CSV recording converted reads back the same, with no CSV file written beside it") {
+  TempDir tmp;
+  {
+    Recorder rec;
+    rec.open(tmp.path() / "csv");
+    write_sample_run(rec);
+  }
+  const Recording csv = load_recording(tmp.path() / "csv");
+  fs::create_directories(tmp.path() / "out");
+  CHECK(write_mcap(csv, tmp.path() / "out" / "converted.mcap", 0) > 0);
+  CHECK(!fs::exists(tmp.path() / "out" / "metrics.csv"));
+  require_same(load_recording(tmp.path() / "out" / "converted.mcap"), csv);
+}
+
+TEST_CASE("load_recording: an MCAP file that is not a recording's is named") {
+  TempDir tmp;
+  fs::create_directories(tmp.path());
+  {
+    McapWriter w;
+    w.open(tmp.path() / "other.mcap");
+  }
+  CHECK_THROWS_WITH(load_recording(tmp.path() / "other.mcap"), Catch::Contains("no rows"));
+  std::ofstream(tmp.path() / "junk.mcap") << "not mcap";
+  CHECK_THROWS_AS(load_recording(tmp.path() / "junk.mcap"), RecordingError);
 }

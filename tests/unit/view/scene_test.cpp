@@ -29,10 +29,16 @@ nlohmann::json agent(const nlohmann::json& f, std::size_t k) {
   return out;
 }
 
+/// core::outline's points (the page's and Foxglove's outline).
+std::vector<core::Vec2> outline_of(const core::CompiledCommand& cmd, double t, int n, double half = 100.0) {
+  bool closed = false;
+  return core::outline(cmd, t, closed, n, half);
+}
+
 }  // namespace
 
 TEST_CASE("outline: a circle's points lie on it, evenly spread, closed without repeating the start") {
-  const auto pts = view::outline(circle(3.0, {1.0, -2.0}), 0.0, 60);
+  const auto pts = outline_of(circle(3.0, {1.0, -2.0}), 0.0, 60);
   REQUIRE(pts.size() == 60);
   for (const auto& p : pts) CHECK_THAT((p - core::Vec2(1.0, -2.0)).norm(), WithinAbs(3.0, 1e-9));
   const double gap = (pts[1] - pts[0]).norm();
@@ -45,7 +51,7 @@ TEST_CASE("outline: the line is drawn over its half length both ways, on x2 = m 
   c.shape.kind = core::ShapeKind::Line;
   c.shape.m = 0.5;
   c.shape.c = 2.0;
-  const auto pts = view::outline(shapes::compile(c), 0.0, 10, 50.0);
+  const auto pts = outline_of(shapes::compile(c), 0.0, 10, 50.0);
   REQUIRE(pts.size() == 11);
   for (const auto& p : pts) CHECK_THAT(p.y(), WithinAbs(0.5 * p.x() + 2.0, 1e-9));
   CHECK_THAT((pts.back() - pts.front()).norm(), WithinAbs(100.0, 1e-9));
@@ -57,7 +63,7 @@ TEST_CASE("outline: a tracked shape is drawn about the centre of the model time 
   c.tracking.path.kind = core::CentrePath::Kind::Line;
   c.tracking.path.point = {0.0, 0.0};
   c.tracking.path.velocity = {0.1, 0.0};
-  const auto pts = view::outline(shapes::compile(c), 50.0, 40);
+  const auto pts = outline_of(shapes::compile(c), 50.0, 40);
   for (const auto& p : pts) CHECK_THAT((p - core::Vec2(5.0, 0.0)).norm(), WithinAbs(2.0, 1e-9));
 }
 
