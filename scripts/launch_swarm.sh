@@ -17,7 +17,7 @@
 #   --domain D      DDS domain id 0..232 (default: 10..100, derived from the PID, skipping domains
 #                   in use on this host)
 #   --rate HZ       agent loop rate (agent.rate_hz and supervisor.target_rate_hz)
-#   --record DIR    record the run into DIR (default: RUN/record; its files: docs/RECORDING.md)
+#   --record DIR    record the run into DIR (default: RUN/record; its CSV files and run.mcap: docs/RECORDING.md)
 #   --init CSV      agent i starts at row i (x1,x2; optional header); N must equal the row count
 #   --seed S        seeded starts: agent i starts where shapeform_sim --seed S puts agent i
 #                   (default: the scenario's swarm.seed)

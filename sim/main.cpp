@@ -48,7 +48,7 @@ void add_options(app::App& app, Args& a) {
   cli.add_option("--init", a.init_path, "CSV of starting positions, one x1,x2 row per agent");
   cli.add_option("--record", a.record_dir,
                  "record every step into this folder, in the supervisor's layout (metrics, positions, command, "
-                 "tracked centre: docs/RECORDING.md)")
+                 "tracked centre as CSV files, and run.mcap: docs/RECORDING.md)")
       ->check(app::writable_dir());
   cli.add_option("--epoch", a.epoch, "the command's epoch in the --record files (default 1)")
       ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 53));

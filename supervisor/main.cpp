@@ -11,7 +11,7 @@ int main(int argc, char** argv) {
   app.add_config_options("YAML config; its command is what `start` publishes");
   app.cli().add_option("--script", opt.script, "run the console commands of this file first");
   app.cli()
-      .add_option("--record", opt.record_dir, "record the run into this folder (metrics, positions, commands, tracked centre: docs/RECORDING.md)")
+      .add_option("--record", opt.record_dir, "record the run into this folder (metrics, positions, commands, tracked centre as CSV files, and run.mcap with those, every DDS sample read or written and the swarm drawn for Foxglove: docs/RECORDING.md)")
       ->check(app::writable_dir());
   app.cli().add_flag("--json", opt.json,
                      "machine output: stdout carries only JSON lines, one event each (epoch, wait, status, metrics, "

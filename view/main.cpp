@@ -93,7 +93,7 @@ int run(int argc, char** argv) {
   auto* port_opt = app.cli().add_option("--port", port, "TCP port of the page (default 8080; 0: a free port, printed); with --foxglove-port the page is served only when --port is given")->check(CLI::Range(0, 65535));
   app.cli().add_option("--foxglove-port", foxglove_port, "also serve a Foxglove WebSocket server on this TCP port (0: a free port, printed as \"foxglove_port\" and \"foxglove_url\")")->check(CLI::Range(0, 65535));
   app.cli().add_option("--fps", fps, "frames per second streamed to the page (default 15)")->check(CLI::Range(1.0, 60.0));
-  app.cli().add_option("--replay", replay_dir, "play the recording of RUN_DIR (a launcher run folder or a record folder) instead of the live swarm");
+  app.cli().add_option("--replay", replay_dir, "play a recording instead of the live swarm: RUN_DIR (a launcher run folder or a record folder of CSV files) or a run.mcap file");
   app.cli().add_flag("--json", json, "machine output on stdout: JSON event lines (start with \"url\" and/or \"foxglove_url\", stop with the Foxglove server's counts)");
   if (const auto rc = app.parse(argc, argv)) return *rc;
   if (!util::is_ipv4(bind)) return app.usage_error("--bind: expected an IPv4 address such as 127.0.0.1, got '" + bind.substr(0, 60) + "'");
