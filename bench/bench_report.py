@@ -601,6 +601,11 @@ def foxglove_section() -> str:
     return "## Foxglove WebSocket\n\n" + NOTES["foxglove"]["section"] + "\n\n"
 
 
+def recording_section() -> str:
+    """The supervisor's recording cost, measured by scripts/bench_recording.py (notes.toml [recording])."""
+    return "## Recording: the supervisor's cost\n\n" + NOTES["recording"]["section"] + "\n\n"
+
+
 def mcap_section() -> str:
     """The MCAP recording's compression, measured by hand (notes.toml [mcap])."""
     return "## MCAP recording: compression\n\n" + NOTES["mcap"]["section"] + "\n\n"
@@ -633,7 +638,7 @@ def render(store: dict, path: Path, plan: dict) -> None:
     rows = store.get("rows", {})
     page = json.loads(PAGE_JSON.read_text()) if PAGE_JSON.exists() else {}
     o = (_header(store, plan) + _targets(store, plan) + _main_table(rows, plan) + _levers(rows, plan)
-         + [foxglove_section(), page_section(page), sim_section(store.get("sim") or {}), mcap_section()] + _rerun_and_method(store, plan))
+         + [foxglove_section(), page_section(page), sim_section(store.get("sim") or {}), recording_section(), mcap_section()] + _rerun_and_method(store, plan))
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text("".join(o))
 
