@@ -174,7 +174,7 @@ class VehiclesLaunchTest(harness.LauncherTestCase):
         self.assertEqual(len(merged), len(times))
         self.assertEqual([r["t_s"] for r in merged], sorted(times))
         self.assertEqual(sorted(os.listdir(os.path.join(run, "record"))),
-                         ["centre.csv", "commands.csv", "metrics.csv", "positions.csv", "vehicles.csv"])
+                         ["centre.csv", "commands.csv", "metrics.csv", "positions.csv", "run.mcap", "vehicles.csv"])
         # The paper's law still moves the agents at the end: each final position lies on its robot's path.
         self.assert_final_positions(summary, by_id, 0.1, 3.0)
         self.assertIn("lab %s down" % LAB, p.log())
