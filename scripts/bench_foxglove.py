@@ -28,11 +28,6 @@ sys.path.insert(0, os.path.join(HERE, "lib"))
 import shapeform_procs as procs  # noqa: E402
 
 
-def cpu_s(pid):
-    """utime + stime of pid, seconds."""
-    with open("/proc/%d/stat" % pid) as f:
-        fields = f.read().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
 def measure(args, n, work, stalled=0):
@@ -60,9 +55,9 @@ def measure(args, n, work, stalled=0):
             r = subprocess.run(client + ["--count", "1"], capture_output=True, text=True, timeout=180)
             return any(json.loads(l).get("spheres") == n for l in r.stdout.splitlines() if l.strip())
         procs.poll(all_drawn, 180, "every one of %d agents drawn" % n, interval=1.0)
-        cpu0, t0 = cpu_s(view.popen.pid), time.monotonic()
+        cpu0, t0 = procs.cpu_s(view.popen.pid), time.monotonic()
         r = subprocess.run(client + ["--count", str(frames_needed), "--stalled", str(stalled)], capture_output=True, text=True, timeout=args.seconds + 180)
-        cpu1, t1 = cpu_s(view.popen.pid), time.monotonic()
+        cpu1, t1 = procs.cpu_s(view.popen.pid), time.monotonic()
         if r.returncode != 0:
             sys.exit("bench_foxglove: the client failed: " + r.stderr[-1000:])
         msgs = [json.loads(l) for l in r.stdout.splitlines() if l.strip()]

@@ -30,6 +30,8 @@ import time
 sys.dont_write_bytecode = True  # no __pycache__ in scripts/
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CHROMEDRIVER = "/usr/bin/chromedriver"
+sys.path.insert(0, os.path.join(ROOT, "scripts", "lib"))
+import shapeform_procs as procs  # noqa: E402
 
 # Counts every EventSource message and its characters, whatever the page's own code does (so an older
 # page is measured the same way).
@@ -67,10 +69,6 @@ def retime(src, period):
             csv.writer(f, lineterminator="\n").writerows(rows)
 
 
-def cpu_s(pid):
-    with open("/proc/%d/stat" % pid) as f:
-        fields = f.read().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
 def browser(work):
@@ -113,10 +111,10 @@ def measure(args, b, n, work):
             " d ? d.frames : 0, d && d.agents ? d.agents.length : 0]")
         poll(lambda: state()[3] == n, 60, "the page to draw %d agents" % n)
         r0, c0, d0, _ = state()
-        u0, t0 = cpu_s(view.pid), time.monotonic()
+        u0, t0 = procs.cpu_s(view.pid), time.monotonic()
         time.sleep(args.seconds)  # the measurement window
         r1, c1, d1, _ = state()
-        u1, t1 = cpu_s(view.pid), time.monotonic()
+        u1, t1 = procs.cpu_s(view.pid), time.monotonic()
     finally:
         view.terminate()
         view.wait(10)

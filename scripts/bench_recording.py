@@ -24,11 +24,6 @@ sys.path.insert(0, os.path.join(HERE, "lib"))
 import shapeform_procs as procs  # noqa: E402
 
 
-def cpu_s(pid):
-    """utime + stime of pid, seconds."""
-    with open("/proc/%d/stat" % pid) as f:
-        fields = f.read().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
 def measure(args, n, work):
@@ -49,12 +44,12 @@ def measure(args, n, work):
     try:
         # The command's epoch, then the two windows between the events that bound them.
         sup.wait_event("epoch", 240)
-        c0, t0 = cpu_s(sup.pid), time.monotonic()
+        c0, t0 = procs.cpu_s(sup.pid), time.monotonic()
         sup.wait_event("record", args.seconds + 60)
-        c1, t1 = cpu_s(sup.pid), time.monotonic()
+        c1, t1 = procs.cpu_s(sup.pid), time.monotonic()
         mark = sup.mark()
         sup.wait_event("record", args.seconds + 60, since=mark)
-        c2, t2 = cpu_s(sup.pid), time.monotonic()
+        c2, t2 = procs.cpu_s(sup.pid), time.monotonic()
         sup.wait(30)
     finally:
         procs.stop_all([sup] + groups)

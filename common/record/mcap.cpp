@@ -491,26 +491,18 @@ struct Cursor {
     need(1);
     return *p++;
   }
-  std::uint16_t u16() {
-    need(2);
-    const std::uint16_t v = std::uint16_t(p[0] | p[1] << 8);
-    p += 2;
+  /// An unsigned little-endian integer of T's size.
+  template <class T>
+  T le() {
+    need(sizeof(T));
+    T v = 0;
+    for (int i = static_cast<int>(sizeof(T)) - 1; i >= 0; --i) v = static_cast<T>(v << 8 | p[i]);
+    p += sizeof(T);
     return v;
   }
-  std::uint32_t u32() {
-    need(4);
-    std::uint32_t v = 0;
-    for (int i = 3; i >= 0; --i) v = v << 8 | p[i];
-    p += 4;
-    return v;
-  }
-  std::uint64_t u64() {
-    need(8);
-    std::uint64_t v = 0;
-    for (int i = 7; i >= 0; --i) v = v << 8 | p[i];
-    p += 8;
-    return v;
-  }
+  std::uint16_t u16() { return le<std::uint16_t>(); }
+  std::uint32_t u32() { return le<std::uint32_t>(); }
+  std::uint64_t u64() { return le<std::uint64_t>(); }
   std::string str() {
     const std::uint32_t n = u32();
     need(n);

@@ -277,6 +277,13 @@ def read_csv(path, numeric=False):
 # ----------------------------------------------------------------------------------------------
 # Leftovers
 
+def cpu_s(pid):
+    """CPU time (user + system) a process has used so far, seconds (/proc/PID/stat)."""
+    with open("/proc/%d/stat" % pid) as f:
+        fields = f.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
 def _proc_stat(pid):
     """(state, pgrp) of a process, None when it is gone."""
     try:

@@ -18,6 +18,7 @@
 #include "config/config.hpp"
 #include "record/mcap.hpp"
 #include "record/recording.hpp"
+#include "temp_dir.hpp"
 
 using namespace shapeform;
 using namespace shapeform::record;
@@ -25,24 +26,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-/// A fresh directory under the system temp dir, removed at scope end.
-class TempDir {
- public:
-  TempDir() {
-    static int counter = 0;
-    path_ = fs::temp_directory_path() / ("shapeform_recorder_test_" + std::to_string(::getpid()) +
-                                         "_" + std::to_string(counter++));
-    fs::remove_all(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
+using shapeform::test::TempDir;
 
 std::vector<std::string> read_lines(const fs::path& p) {
   std::ifstream in(p);
@@ -246,7 +230,6 @@ TEST_CASE("reopening starts new files; the old recording is closed", "[record]")
 
 TEST_CASE("open failures throw naming the path", "[record]") {
   TempDir tmp;
-  fs::create_directories(tmp.path());
   Recorder rec;
 
   // A regular file where a directory is needed.
@@ -507,7 +490,6 @@ TEST_CASE("write_mcap: a CSV recording converted reads back the same, with no CS
 
 TEST_CASE("load_recording: an MCAP file that is not a recording's is named") {
   TempDir tmp;
-  fs::create_directories(tmp.path());
   {
     McapWriter w;
     w.open(tmp.path() / "other.mcap");
