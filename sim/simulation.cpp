@@ -29,14 +29,20 @@ std::string metric_csv_values(const core::Metrics& m) {
 namespace {
 /// One step of the recording: metrics, the tracked centre and positions.
 void record_step(record::Recorder& rec, double wall, long k, std::uint64_t epoch, const core::CompiledCommand& cmd,
-                 double t, const std::vector<core::Vec2>& x, const core::Metrics& m, bool converged) {
+                 double t, const core::Swarm& swarm, const core::Metrics& m, bool converged) {
+  const std::vector<core::Vec2>& x = swarm.positions();
+  // A robot's heading is drawn (an arrow) when it has one of its own: the unicycle's.
+  const bool headings = swarm.vehicle().model == core::VehicleModel::Unicycle && swarm.vehicles().size() == x.size();
   rec.write_metrics({wall, t, epoch, static_cast<int>(x.size()), m, converged});
   if (cmd.tracking.enabled) {  // before the positions: the sample's drawing shows this centre
     const core::Vec2 c = core::centre_at(cmd.tracking.path, t);
     rec.write_centre(wall, t, epoch, c.x(), c.y());
   }
   std::vector<record::AgentRow> agents(x.size());
-  for (std::size_t i = 0; i < x.size(); ++i) agents[i] = {static_cast<std::int32_t>(i), epoch, x[i].x(), x[i].y(), {}};
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    agents[i] = {static_cast<std::int32_t>(i), epoch, x[i].x(), x[i].y(), {}};
+    if (headings) agents[i].heading = swarm.vehicles()[i].heading;
+  }
   rec.write_positions(wall, t, k, agents);
 }
 }  // namespace
@@ -121,7 +127,7 @@ SimResult run_simulation(const core::CompiledCommand& cmd, std::vector<core::Vec
     else
       verdict.add(swarm.time(), m.shape_error_mean, gap.back(), core::spread(x));
     if (verdict.converged() && !r.converged_step) r.converged_step = k;
-    if (opt.recorder) record_step(*opt.recorder, wall_s(), k, opt.epoch, cmd, swarm.time(), x, m, verdict.converged());
+    if (opt.recorder) record_step(*opt.recorder, wall_s(), k, opt.epoch, cmd, swarm.time(), swarm, m, verdict.converged());
     if (opt.metrics_csv) *opt.metrics_csv << k << ',' << util::format_g10(swarm.time()) << ',' << metric_csv_values(m) << '\n';
     if (opt.positions_csv)
       for (std::size_t i = 0; i < x.size(); ++i)
