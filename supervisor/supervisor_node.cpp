@@ -336,7 +336,7 @@ void SupervisorNode::drain_states(std::int64_t now) {
       continue;
     }
     monitor_.on_state(s.id, s.x, s.prev_x, s.command, s.model_time, now, r.source);
-    if (cfg_.ros2.mirror) velocities_[s.id] = s.v;
+    velocities_[s.id] = s.v;  // the mirror's poses and the recording's headings
   }
 }
 
@@ -451,7 +451,13 @@ void SupervisorNode::record_metrics(const SwarmMonitor::Sample& s, std::int64_t 
     const auto step = static_cast<std::int64_t>(std::llround(t / authority_.current().dt));
     positions_.clear();
     for (const auto& [id, x] : monitor_.alive_positions(now, t))
-      positions_.push_back({id, monitor_.agents().at(id).command.epoch, x.x(), x.y(), {}});
+    {
+      // Drawn with the direction it moves in (its state's velocity), as the ROS 2 mirror orients it.
+      std::optional<double> heading;
+      if (const auto v = velocities_.find(id); v != velocities_.end() && v->second.norm() > 1e-12)
+        heading = std::atan2(v->second.y(), v->second.x());
+      positions_.push_back({id, monitor_.agents().at(id).command.epoch, x.x(), x.y(), heading});
+    }
     recorder_.write_positions(wall, t, step, positions_);
     recorder_.flush_if_due(record::Recorder::Clock::now());
   } catch (const std::exception& e) {
