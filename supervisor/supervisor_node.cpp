@@ -155,7 +155,9 @@ SupervisorNode::SupervisorNode(const config::Config& cfg, const SupervisorOption
   status_ch_ = wire_channel(dds::TopicId::Status);
   metrics_ch_ = wire_channel(dds::TopicId::Metrics);
   target_ch_ = wire_channel(dds::TopicId::Target);
-  out_.set_event_sink([this](const nlohmann::json& e) { recorder_.write_event(wall_s(util::steady_ns()), e.dump()); });
+  out_.set_event_sink([this](const nlohmann::json& e) {
+    if (recorder_.is_open()) recorder_.write_event(wall_s(util::steady_ns()), e.dump());
+  });
 }
 
 std::uint16_t SupervisorNode::wire_channel(dds::TopicId id) {
