@@ -93,7 +93,9 @@ class SupervisorNode {
   /// msg as it travels, into run.mcap's channel (when recording).
   template <class Msg>
   void record_wire(std::uint16_t channel, std::int64_t now, const Msg& msg) {
-    if (recorder_.is_open()) recorder_.write_message(channel, wall_s(now), dds::to_cdr(msg));
+    if (!recorder_.is_open()) return;
+    dds::to_cdr(msg, wire_buffer_);
+    recorder_.write_message(channel, wall_s(now), wire_buffer_);
   }
   /// Seconds since the supervisor started: a recording's wall_s.
   double wall_s(std::int64_t now) const { return static_cast<double>(now - start_ns_) * 1e-9; }
@@ -104,6 +106,7 @@ class SupervisorNode {
   Output out_;
   SwarmMonitor monitor_;
   record::Recorder recorder_;
+  std::vector<std::uint8_t> wire_buffer_;  ///< record_wire's, reused
   ProgressFilter progress_;
   CommandAuthority authority_;
   InputDriver input_;

@@ -1,5 +1,7 @@
 #include "dds/wire.hpp"
 
+#include <fastcdr/Cdr.h>
+#include <fastcdr/FastBuffer.h>
 #include <fastdds/rtps/common/SerializedPayload.h>
 
 #include <array>
@@ -30,17 +32,25 @@ const TopicSchema& topic_schema(TopicId id) {
   return schemas.at(static_cast<std::size_t>(id));
 }
 
-// One definition of each per row of the topic table, with the type's generated PubSubType (whose
-// serialize writes the encapsulation header and the XCDR1 body, as the DataWriter does).
+// One definition of each per row of the topic table: the encapsulation header and the XCDR1 body, as the
+// type's generated PubSubType writes them for the DataWriter (from_cdr reads with the PubSubType).
 #define SHAPEFORM_WIRE(Id, name, Type, ...)                                                               \
   template <>                                                                                             \
+  void to_cdr<Type>(const Type& msg, std::vector<std::uint8_t>& out) {                                    \
+    /* as Type##PubSubType::serialize writes it, without its payload and key buffers */                   \
+    out.assign(4 + Type::getCdrSerializedSize(msg), 0); /* padding bytes zero, as in a fresh payload */   \
+    eprosima::fastcdr::FastBuffer buffer(reinterpret_cast<char*>(out.data()), out.size());                \
+    using eprosima::fastcdr::Cdr;                                                                         \
+    Cdr cdr(buffer, Cdr::DEFAULT_ENDIAN, Cdr::DDS_CDR);                                                   \
+    cdr.serialize_encapsulation();                                                                        \
+    msg.serialize(cdr);                                                                                   \
+    out.resize(cdr.getSerializedDataLength());                                                            \
+  }                                                                                                       \
+  template <>                                                                                             \
   std::vector<std::uint8_t> to_cdr<Type>(const Type& msg) {                                               \
-    Type##PubSubType type;                                                                                \
-    eprosima::fastrtps::rtps::SerializedPayload_t payload(                                                \
-        type.getSerializedSizeProvider(const_cast<Type*>(&msg))());                                       \
-    if (!type.serialize(const_cast<Type*>(&msg), &payload))                                               \
-      throw std::logic_error(std::string("dds: serializing a ") + #Type + " failed");                     \
-    return std::vector<std::uint8_t>(payload.data, payload.data + payload.length);                        \
+    std::vector<std::uint8_t> out;                                                                        \
+    to_cdr(msg, out);                                                                                     \
+    return out;                                                                                           \
   }                                                                                                       \
   template <>                                                                                             \
   Type from_cdr<Type>(const std::vector<std::uint8_t>& bytes) {                                           \

@@ -36,6 +36,10 @@ struct CdrError : std::runtime_error {
 /// Declared for every topic's type (MsgTraits); defined in wire.cpp for each row of the topic table.
 template <class Msg>
 std::vector<std::uint8_t> to_cdr(const Msg& msg);
+/// The same into out (resized to the payload; no allocation once out has held a payload as large):
+/// for a loop that serializes every sample it records.
+template <class Msg>
+void to_cdr(const Msg& msg, std::vector<std::uint8_t>& out);
 
 /// The message of bytes as to_cdr gives them (either endianness, as Fast DDS reads them). Throws
 /// CdrError naming the type when the bytes are not one.

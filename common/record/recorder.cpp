@@ -249,6 +249,7 @@ void Recorder::start(const std::filesystem::path& dir, std::int64_t unix_ns, boo
   csv_ = csv;
   unix_ns_ = unix_ns;
   command_.reset();
+  fixed_outline_.clear();
   command_epoch_ = 0;
   centre_.reset();
   dir_ = dir;
@@ -317,7 +318,13 @@ void Recorder::write_scene(double wall_s, double model_time, const std::vector<A
   s.agents.reserve(agents.size());
   for (const AgentRow& a : agents) s.agents.push_back({a.id, core::Vec2(a.x1, a.x2), viz::AgentLook::Alive, a.heading});
   if (command_) {
-    s.outline = core::outline(*command_, model_time, s.outline_closed);
+    if (command_->tracking.enabled) {
+      s.outline = core::outline(*command_, model_time, s.outline_closed);
+    } else {  // a fixed shape: drawn the same at every sample
+      if (fixed_outline_.empty()) fixed_outline_ = core::outline(*command_, model_time, fixed_outline_closed_);
+      s.outline = fixed_outline_;
+      s.outline_closed = fixed_outline_closed_;
+    }
     s.keep_out = command_->keep_out;
     s.fence = command_->fence;
     s.fence_margin = command_->fence_margin;
@@ -339,6 +346,7 @@ void Recorder::write_command(double wall_s, double model_time, std::uint64_t epo
                  .dump(-1, ' ', false, json::error_handler_t::replace));
   // The scene draws the command in force; a command that does not compile here (it did where it came
   // in force) is drawn without its outline.
+  fixed_outline_.clear();
   try {
     command_ = core::compile(command);
   } catch (const std::exception&) {

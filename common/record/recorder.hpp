@@ -176,6 +176,9 @@ class Recorder {
   std::uint16_t metrics_ch_ = 0, positions_ch_ = 0, commands_ch_ = 0, centre_ch_ = 0, events_ch_ = 0;
   std::uint16_t scene_ch_ = 0, poses_ch_ = 0;
   std::optional<core::CompiledCommand> command_;  ///< the command in force (its outline, zones, fence)
+  /// command_'s outline while it does not track (it does not move then; empty: not computed yet).
+  std::vector<core::Vec2> fixed_outline_;
+  bool fixed_outline_closed_ = false;
   std::uint64_t command_epoch_ = 0;
   std::optional<core::Vec2> centre_;  ///< the last tracked centre of the command in force
 };

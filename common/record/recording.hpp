@@ -11,6 +11,7 @@
 
 #include "core/compiled_command.hpp"
 #include "core/metrics.hpp"
+#include "record/recorder.hpp"
 
 namespace shapeform::record {
 
@@ -22,13 +23,7 @@ class RecordingError : public std::runtime_error {
 
 /// The recording's rows, each table in file order (wall_s ascending).
 struct Recording {
-  struct MetricsRow {
-    double wall_s = 0, model_time = 0;
-    std::uint64_t epoch = 0;
-    int agents_alive = 0;
-    core::Metrics metrics;
-    bool converged = false;
-  };
+  using MetricsRow = record::MetricsRow;  ///< the recorder's row, read back
   struct PositionRow {
     double wall_s = 0, model_time = 0;
     std::optional<std::int64_t> step;  ///< nullopt: not known

@@ -96,6 +96,24 @@ TEST_CASE("a batch with states and a command with strings and sequences round-tr
   CHECK(dds::from_cdr<msg::ShapeCommand>(dds::to_cdr(c)) == c);
 }
 
+TEST_CASE("to_cdr into a reused buffer gives the bytes of a fresh one, shorter payloads after longer ones",
+          "[dds][wire]") {
+  msg::AgentStateBatch big;
+  big.first_id(7);
+  for (int i = 0; i < 5; ++i) big.states().push_back(a_state());
+  msg::ShapeCommand c;
+  c.shape_kind("polygon");
+  c.vertices({0.0, 0.0, 1.0, 0.0, 0.0, 1.0});
+  std::vector<std::uint8_t> buffer;
+  dds::to_cdr(big, buffer);
+  CHECK(buffer == dds::to_cdr(big));
+  dds::to_cdr(a_state(), buffer);  // shorter: nothing of the batch is left behind
+  CHECK(buffer.size() == 4 + 128);
+  CHECK(buffer == dds::to_cdr(a_state()));
+  dds::to_cdr(c, buffer);
+  CHECK(dds::from_cdr<msg::ShapeCommand>(buffer) == c);
+}
+
 TEST_CASE("from_cdr refuses bytes that are not the message, naming the type", "[dds][wire]") {
   auto bytes = dds::to_cdr(a_state());
   bytes.resize(40);

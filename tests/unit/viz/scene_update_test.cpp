@@ -3,7 +3,6 @@
 #include "viz/scene_update.hpp"
 
 #include <catch2/catch.hpp>
-#include <chrono>
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -173,22 +172,20 @@ TEST_CASE("PosesInFrame: one pose per agent, the heading's orientation or identi
   CHECK(p["timestamp"]["nsec"] == 500'000'000);
 }
 
-TEST_CASE("a SceneUpdate of 1000 agents is made in well under 5 ms", "[viz]") {
+// Its cost is measured by scripts/bench_foxglove.py (docs/BENCHMARKS.md), not asserted here.
+TEST_CASE("a SceneUpdate of 1000 agents draws each of them once, with its heading where known", "[viz]") {
   viz::SceneSnapshot s = a_snapshot();
   s.agents.clear();
   for (int i = 0; i < 1000; ++i) {
     s.agents.push_back({i, core::Vec2(std::cos(i * 0.01) * 7.123456789, std::sin(i * 0.01) * 3.3),
                         viz::AgentLook::Alive, i % 2 ? std::optional<double>(i * 0.001) : std::nullopt});
   }
-  std::string out;
-  const auto t0 = std::chrono::steady_clock::now();
-  constexpr int kRuns = 20;
-  for (int r = 0; r < kRuns; ++r) out = viz::scene_update_json(s, static_cast<std::uint64_t>(r));
-  const double ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() / kRuns;
-  WARN("SceneUpdate of 1000 agents: " << ms << " ms, " << out.size() << " bytes");
-  CHECK(ms < 2.5);
-  CHECK(json::parse(out)["entities"][0]["spheres"].size() == 1000);
+  const json out = json::parse(viz::scene_update_json(s, 7));
+  const json& spheres = out["entities"][0]["spheres"];
+  REQUIRE(spheres.size() == 1000);
+  CHECK(spheres[999]["pose"]["position"]["x"].get<double>() == s.agents[999].x.x());
+  CHECK(spheres[999]["pose"]["position"]["y"].get<double>() == s.agents[999].x.y());
+  CHECK(entity(out, "headings")["arrows"].size() == 500);  // the odd ids
 }
 
 }  // namespace
