@@ -22,7 +22,8 @@
 #   --seed S        seeded starts: agent i starts where shapeform_sim --seed S puts agent i
 #                   (default: the scenario's swarm.seed)
 #   --steps K       run exactly K iterations of model time (`wait time K*dt`) instead of waiting
-#                   for convergence
+#                   for convergence; the exit status is still the verdict, taken after the K
+#                   iterations (`wait converged timeout=0`): 0 converged, 3 not converged
 #   --timeout S     seconds to wait for convergence (default 60), or for the K iterations
 #   --set key=value config override passed to every process (repeatable)
 #   --json          machine output on stdout (progress stays on stderr): first the line
@@ -56,8 +57,9 @@
 # --fleet also fleet.yaml, the file, and fleet.txt, the plan followed; an ssh host's streams come back
 # through ssh into these files). Progress goes to stderr. On exit, error or Ctrl-C only this
 # launcher's own children are stopped (SIGTERM, then SIGKILL after 5 s; on an ssh host the process
-# group it started there), and test hosts it made are removed. Exit status: the supervisor's (0 ok,
-# 1 runtime failure, 2 bad input, 3 a wait timed out); 2 for bad launcher arguments or fleet file;
+# group it started there), and test hosts it made are removed. Exit status: the supervisor's (0
+# converged, 1 runtime failure, 2 bad input, 3 not converged: a wait timed out, or with --steps the
+# swarm was not converged after its K iterations); 2 for bad launcher arguments or fleet file;
 # 130/143 when interrupted.
 set -uo pipefail
 
@@ -374,6 +376,8 @@ agents_timeout=$((30 + n / 2))
     model_t=$(awk -v k="$steps" -v dt="$dt" 'BEGIN{printf "%.10g", k * dt}')
     wt=${timeout:-$(awk -v k="$steps" -v r="$rate_eff" 'BEGIN{printf "%d", 2 * k / r + 30}')}
     echo "wait time $model_t timeout=$wt"
+    # The verdict after the K iterations, as it stands: the exit status is 3 unless converged.
+    echo "wait converged timeout=0"
   else
     echo "wait converged timeout=${timeout:-60}"
   fi

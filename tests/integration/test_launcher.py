@@ -79,8 +79,11 @@ class LauncherTest(harness.SwarmTestCase):
 
     def check_scenario_run(self, name, expected, p, domain):
         status = p.wait(120)
-        self.assertEqual(status, 0, "%s: launcher exit status" % name)
         lines = p.out().splitlines()
+        self.assertTrue(lines, "%s: no output (exit status %s)" % (name, status))
+        # After its 60 iterations a run exits with its verdict: 0 converged, 3 not (most, this early).
+        verdict = json.loads(lines[-1]).get("converged")
+        self.assertEqual(status, 0 if verdict else 3, "%s: launcher exit status, converged=%s" % (name, verdict))
         self.assertEqual([e.get("event") for e in map(json.loads, lines)], ["run", "summary"],
                          "%s: stdout is the run line and the JSON summary" % name)
         summary = json.loads(lines[-1])
@@ -90,7 +93,7 @@ class LauncherTest(harness.SwarmTestCase):
         self.assertEqual(summary["agents"], expected["agents"], name)
         self.assertEqual(summary["agents_seen"], expected["agents"], name)
         self.assertEqual(summary["epoch"], 1)
-        self.assertEqual(summary["exit_status"], 0)
+        self.assertEqual(summary["exit_status"], status)
         self.assertGreaterEqual(summary["steps"], 60)
         run = self.run_folder(p)
         self.assertEqual(json.loads(lines[0]), {"event": "run", "dir": run, "domain": domain,
@@ -140,7 +143,7 @@ class LauncherTest(harness.SwarmTestCase):
         record = os.path.join(self.run_dir, "my_record")
         p = self.launch(["-n", str(n), "--scenario", "circle", "--seed", str(seed), "--steps", "5", "--json",
                          "--rate", "40", "--set", "transport.lease_s=3", "--record", record], "launcher_seed")
-        self.assertEqual(p.wait(90), 0)
+        self.assertEqual(p.wait(90), 3, "5 iterations: done, not converged")
         run = self.run_folder(p)
         for i, (got, want) in enumerate(zip(self.agent_starts(run, n), sim["final_positions"])):
             self.assertAlmostEqual(got[0], want[0], delta=1e-4, msg="agent %d x1" % i)
@@ -159,7 +162,7 @@ class LauncherTest(harness.SwarmTestCase):
         rows = [(1.5, -2.0), (-3.25, 0.5), (0.0, 4.0), (2.75, 2.75)]
         csv_path = self.write("init.csv", "x1,x2\n" + "".join("%g,%g\n" % r for r in rows))
         p = self.launch(["--scenario", "square", "--init", csv_path, "--steps", "5", "--json"], "launcher_init")
-        self.assertEqual(p.wait(90), 0)
+        self.assertEqual(p.wait(90), 3, "5 iterations: done, not converged")
         self.assertEqual(harness.summary(p.out())["agents"], len(rows))
         for i, (got, want) in enumerate(zip(self.agent_starts(self.run_folder(p), len(rows)), rows)):
             self.assertAlmostEqual(got[0], want[0], delta=1e-9, msg="agent %d x1" % i)
@@ -178,6 +181,29 @@ class LauncherTest(harness.SwarmTestCase):
         self.assertIn("wait converged timeout=3", harness.read_text(os.path.join(self.run_folder(p), "script.txt")))
         self.assertIn("exit status 3", p.log())
         self.assert_nothing_left(p)
+
+    def test_steps_exit_is_the_verdict(self):
+        # --steps K: exactly K iterations, then the verdict as it stands (`wait converged timeout=0`), as the
+        # exit status: 3 when the swarm cannot converge in its K iterations (a hold longer than the run),
+        # 0 when it has converged by then (the arc law's circle of 6, converged in a few seconds).
+        cases = (("not_converged", ["-n", "4", "--scenario", "square", "--steps", "30",
+                                    "--set", "supervisor.converge.hold=1000000"], 3, False),
+                 ("converged", ["-n", "6", "--scenario", "arc_circle", "--steps", "1500"], 0, True))
+        for name, args, status, converged in cases:
+            with self.subTest(name):
+                # 8 participant slots: this test's domain may be 232, where slots past 62 pass port 65535.
+                p = self.launch(args + ["--rate", "50", "--json", "--set", "transport.max_participants=8"],
+                                "launcher_steps_" + name)
+                self.assertEqual(p.wait(150), status, "launcher exit status")
+                summary = harness.summary(p.out())
+                self.assertEqual((summary["converged"], summary["exit_status"]), (converged, status))
+                self.assertGreaterEqual(summary["steps"], int(args[args.index("--steps") + 1]), "iterations done")
+                run = self.run_folder(p)
+                waits = harness.events(harness.read_text(os.path.join(run, "supervisor.out")), "wait")
+                self.assertEqual([(w["wait"], w["ok"]) for w in waits],
+                                 [("agents", True), ("time", True), ("converged", converged)])
+                self.assertIn("exit status %d" % status, p.log())
+                self.assert_nothing_left(p)
 
     def interrupt(self, to_group):
         """Starts a run to convergence (it would end by itself much later), interrupts it mid-run."""

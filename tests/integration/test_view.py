@@ -9,10 +9,12 @@ blocked_mark, frames (drawn), received, resyncs}, and every alive agent state of
 window.shapeformLog = [[id, model_time, x1, x2], ...]; the test compares that with the supervisor's
 recording, never with pixels.
 
-- live: the viewer and the page first, then an 8-agent lockstep swarm with the supervisor recording.
+- live: the viewer and the page first, then an 8-agent lockstep swarm with the supervisor recording a
+  row at every agent step (supervisor.metrics_rate_hz at the agents' 50 Hz).
   In lockstep the supervisor records every agent's position at the model time of the row (the
   agents' own step), and every drawn agent carries the model time of the state drawn: a drawn agent
-  is compared with the recorded row of the same agent at that model time: most lie within 0.05 of it
+  is compared with the recorded row of the same agent at that model time (at least 80 % of the drawn
+  states have one; at 10 Hz only one in five did): most lie within 0.05 of it
   (the same state twice), every one within 0.5 (the supervisor's label can be a step off when it heard
   an agent late: see the comment there).
   While the swarm forms: 8 agents drawn alive, the commanded outline drawn, the charts advancing,
@@ -105,9 +107,11 @@ class ViewTest(harness.SwarmTestCase):
             out.setdefault(int(r["agent"]), {})[r["model_time"]] = (r["x1"], r["x2"])
         return out
 
-    def assert_drawn_match(self, seen, recorded, what, need, share=1.0, bound=TOLERANCE, tolerance=TOLERANCE):
+    def assert_drawn_match(self, seen, recorded, what, need, share=1.0, bound=TOLERANCE, tolerance=TOLERANCE,
+                           with_row=0.0):
         """Of the drawn (id, model_time, x1, x2) with a recorded row of that agent at that model time (at
-        least `need` of them), at least `share` lie within `tolerance` of it and every one within `bound`."""
+        least `need` of them, and at least `with_row` of all drawn), at least `share` lie within `tolerance` of
+        it and every one within `bound`."""
         matched, close = 0, 0
         for (i, t, x1, x2) in seen:
             i = int(i)
@@ -120,6 +124,8 @@ class ViewTest(harness.SwarmTestCase):
             self.assertLessEqual(off, bound, "%s: agent %d at model time %g drawn at (%g, %g), recorded at (%g, %g)"
                                  % (what, i, t, x1, x2, row[0], row[1]))
         self.assertGreaterEqual(matched, need, "%s: drawn states with a recorded row at their model time" % what)
+        self.assertGreaterEqual(matched, with_row * len(seen), "%s: share of the %d drawn states with a recorded row "
+                                "at their model time" % (what, len(seen)))
         sys.stderr.write("%s: %d of %d drawn states with a recorded row, %d of them within %g of it\n"
                          % (what, matched, len(seen), close, tolerance))
         self.assertGreaterEqual(close, share * matched, "%s: drawn states within %g of the recorded row" % (what, tolerance))
@@ -163,7 +169,10 @@ class ViewTest(harness.SwarmTestCase):
         launching = self.launch_browser()  # meanwhile: the bad arguments, the viewer and the swarm
         self.check_bad_arguments()
         config = harness.scenario("circle")
-        extra = self.swarm_config(["safety.min_separation=%g" % MIN_SEPARATION, "safety.keep_out=" + KEEP_OUT])
+        # The supervisor records a row at every agent step (metrics at the agents' 50 Hz, not 10 Hz): every
+        # drawn state can then be compared with its row, however few frames a loaded host lets the page draw.
+        extra = self.swarm_config(["safety.min_separation=%g" % MIN_SEPARATION, "safety.keep_out=" + KEEP_OUT,
+                                   "supervisor.metrics_rate_hz=50"])
         record = os.path.join(self.run_dir, "record")
         view, url = self.start_view(["--config", config, "--domain", str(self.domain)] + extra)
         recording_from = time.monotonic()
@@ -180,11 +189,11 @@ class ViewTest(harness.SwarmTestCase):
         self.assertEqual(d["separation_limit"], MIN_SEPARATION, "the separation's dashed line")
         self.assertTrue(d["safety_shown"], "the safety line is shown while the command filters")
         # What the page drew over 3 s: every alive agent state of every draw (window.shapeformLog), and, for
-        # comparison, the states seen at this test's polls. The supervisor records a row at each metrics
-        # tick (10 Hz) while the agents step at 50 Hz: a drawn state has a row only when it is at a recorded
-        # step, about one in five. Polls alone caught few frames on a loaded host (a slow execute_script),
-        # and then, now and then, none at a recorded step ("0 of 8 drawn states matched"); every draw
-        # gives some 45 frames in 3 s.
+        # comparison, the states seen at this test's polls. Issue 29's "0 of 8 drawn states matched": the
+        # supervisor recorded a row at each metrics tick (10 Hz) while the agents step at 50 Hz, so a drawn
+        # state had a row only when it was at a recorded step (measured: 127 of 390, a third); the few
+        # frames a loaded host's polls caught could hold none. Now a row at every step: all drawn states
+        # but those the supervisor labels a step off have one (at least 80 %, asserted below).
         self.browser.execute_script("window.shapeformLog = []")
         at_reset = self.drawn()["frames"]
         first = poll(lambda: (lambda d: d if d["frames"] > at_reset else None)(self.drawn()), 5,
@@ -223,7 +232,7 @@ class ViewTest(harness.SwarmTestCase):
         # sample still in flight) is then recorded a step off, and one step of the paper's law moves an
         # agent by up to about 0.1. So most drawn states, not all, equal their row; every one lies within
         # 0.5 of it (a wrong agent, axis or scale would be off by a neighbour's distance, about 2).
-        self.assert_drawn_match(seen, recorded, "live", need=AGENTS, share=0.7, bound=0.5)
+        self.assert_drawn_match(seen, recorded, "live", need=AGENTS, share=0.7, bound=0.5, with_row=0.8)
         polled_matched = sum(recorded.get(i, {}).get(t) is not None for (i, t, _, _) in polled)
         sys.stderr.write("live, as polled: %d of %d states with a recorded row\n" % (polled_matched, len(polled)))
         view.stop()
