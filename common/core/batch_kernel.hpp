@@ -269,8 +269,9 @@ struct PairKernel {
   }
 
   /// Rows in groups of kRows: j's loads and stores shared by the group, and kRows independent
-  /// dependency chains per vector. Two measured fastest (AVX-512, N = 1000: 1.03, 0.94, 0.99 and
-  /// 1.01 ns per pair for 1 to 4 rows): more rows spill registers.
+  /// dependency chains per vector. Two measured fastest, before the pipelining (AVX-512, N = 1000: 1.03,
+  /// 0.94, 0.99 and 1.01 ns per pair for 1 to 4 rows) and with it (one and three rows slower on a busy
+  /// host): more rows spill registers. bench/sim_loop_count.py finds the loop by its two rows.
   static constexpr int kRows = 2;
 
   static void run(const PairPass& p, std::int64_t row_begin, std::int64_t row_end) {
