@@ -13,12 +13,14 @@ struct Isa : Lanes<8, Isa> {
   static V fma(V a, V b, V c) { return _mm512_fmadd_pd(a, b, c); }    // a b + c, rounded once
   static V fnma(V a, V b, V c) { return _mm512_fnmadd_pd(a, b, c); }  // c - a b, rounded once
   static V sqrt(V v) { return _mm512_sqrt_pd(v); }
+  static V splat(double s) { return _mm512_set1_pd(s); }  // a broadcast, of memory where it can
 
   /// Constants of pow_neg for one exponent: 16-entry tables (two registers each, read with one
   /// permute) and polynomials near-minimax on the reduced ranges (Chebyshev fits).
   struct Pow {
-    V mbeta, q[7], p[6], inv[2], mlog[2], exp[2];
-    explicit Pow(double mb) : mbeta(splat(mb)) {
+    double mbeta, q[7], p[6];  // scalars, broadcast where used: no register held for them
+    V inv[2], mlog[2], exp[2];
+    explicit Pow(double mb) : mbeta(mb) {
       // log2(1 + r) / r for |r| <= 0.0304, degree 6 (relative error 5e-14 on a term below 0.045).
       constexpr double qc[7] = {1.4426950408889634,   -0.7213475204597833, 0.4808983469765897,
                                 -0.36067362695320027, 0.28853888971320746, -0.24073929544571335,
@@ -53,8 +55,8 @@ struct Isa : Lanes<8, Isa> {
                                     1.7562521603732995,
                                     1.8340080864093424,
                                     1.9152065613971474};
-      for (int k = 0; k < 7; ++k) q[k] = splat(qc[k] * mb);
-      for (int k = 0; k < 6; ++k) p[k] = splat(pc[k]);
+      for (int k = 0; k < 7; ++k) q[k] = qc[k] * mb;
+      for (int k = 0; k < 6; ++k) p[k] = pc[k];
       for (int h = 0; h < 2; ++h)
         inv[h] = load(inv_c + 8 * h), mlog[h] = load(log_c + 8 * h) * mb, exp[h] = load(exp_c + 8 * h);
     }
@@ -64,26 +66,31 @@ struct Isa : Lanes<8, Isa> {
   /// each (getmant, getexp, a two-register permute, roundscale, scalef): about a third fewer operations
   /// and no division on the dependency chain. Relative error below 1e-14 (t = mbeta log2 u is rounded
   /// about twice); below 2^-1022 gradual underflow to 0, as std::pow.
-  static V pow_neg(V u, const Pow& c) {
+  static V pow_neg(V u, const Pow& c) { return pow_exp(pow_log(u, c), c); }
+  /// pow_neg's first half: t = mbeta log2 u.
+  static V pow_log(V u, const Pow& c) {
     // u = m 2^e, m in [1, 2); m = (1 + r) / inv_j for the 16th j of [1, 2) that holds m, |r| <= 0.0304.
     const V m = _mm512_getmant_pd(u, _MM_MANT_NORM_1_2, _MM_MANT_SIGN_src);
     const V e = _mm512_getexp_pd(u);
     const __m512i j = _mm512_srli_epi64(_mm512_castpd_si512(m), 48);  // the permute reads bits 3:0
     const V r = fma(m, _mm512_permutex2var_pd(c.inv[0], j, c.inv[1]), splat(-1.0));
     const V r2 = r * r;
-    const V q03 = fma(fma(c.q[3], r, c.q[2]), r2, fma(c.q[1], r, c.q[0]));
-    const V q46 = fma(c.q[6], r2, fma(c.q[5], r, c.q[4]));
+    const V q03 = fma(fma(splat(c.q[3]), r, splat(c.q[2])), r2, fma(splat(c.q[1]), r, splat(c.q[0])));
+    const V q46 = fma(splat(c.q[6]), r2, fma(splat(c.q[5]), r, splat(c.q[4])));
     // t = mbeta (e + log2 m) = mbeta e - mbeta log2 inv_j + r mbeta q(r)
-    const V t =
-        fma(r, fma(q46, r2 * r2, q03), fma(c.mbeta, e, _mm512_permutex2var_pd(c.mlog[0], j, c.mlog[1])));
+    return fma(r, fma(q46, r2 * r2, q03),
+               fma(splat(c.mbeta), e, _mm512_permutex2var_pd(c.mlog[0], j, c.mlog[1])));
+  }
+  /// pow_neg's second half: 2^t.
+  static V pow_exp(V t, const Pow& c) {
     // 2^t = 2^floor(n) 2^(k/16) 2^f: n = t to the nearest 16th, k = 16 n mod 16, f = t - n, |f| <= 1/32.
     const V n = _mm512_roundscale_pd(t, (4 << 4) | _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC);
     const V f = t - n;                                    // exact
     const __m512i k = _mm512_castpd_si512(n + 0x1.8p48);  // 16 n in the low bits
     const V f2 = f * f;
-    const V p03 = fma(fma(c.p[3], f, c.p[2]), f2, fma(c.p[1], f, c.p[0]));
+    const V p03 = fma(fma(splat(c.p[3]), f, splat(c.p[2])), f2, fma(splat(c.p[1]), f, splat(c.p[0])));
     return _mm512_scalef_pd(
-        fma(fma(c.p[5], f, c.p[4]), f2 * f2, p03) * _mm512_permutex2var_pd(c.exp[0], k, c.exp[1]), n);
+        fma(fma(splat(c.p[5]), f, splat(c.p[4])), f2 * f2, p03) * _mm512_permutex2var_pd(c.exp[0], k, c.exp[1]), n);
   }
 };
 }  // namespace

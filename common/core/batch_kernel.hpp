@@ -53,7 +53,9 @@ struct Lanes {
   /// sigma^-2beta), as 2^t with t = mbeta log2 u. Relative error a few 1e-16 (t is rounded about
   /// once, ulp(t) <= 1e-14 for any u the workspace allows); results below 2^-1022 are flushed to 0.
   /// Polynomials in Estrin's scheme: a short dependency chain.
-  static V pow_neg(V u, const Pow& c) {
+  static V pow_neg(V u, const Pow& c) { return pow_exp(pow_log(u, c), c); }
+  /// pow_neg's first half: t = mbeta log2 u.
+  static V pow_log(V u, const Pow& c) {
     // u = m 2^e with m in [0.75, 1.5), from the bits.
     const U b = (U)u;
     V e = (V)((b >> 52) | 0x4330000000000000ull) - 4503599627371519.0;  // unbiased exponent: - (2^52 + 1023)
@@ -65,7 +67,10 @@ struct Lanes {
     const V z = s * s, z2 = z * z;
     const V q03 = Isa::fma(Isa::fma(c.q[3], z, c.q[2]), z2, Isa::fma(c.q[1], z, c.q[0]));
     const V q47 = Isa::fma(Isa::fma(c.q[7], z, c.q[6]), z2, Isa::fma(c.q[5], z, c.q[4]));
-    V t = Isa::fma(s, Isa::fma(q47, z2 * z2, q03), c.mbeta * e);
+    return Isa::fma(s, Isa::fma(q47, z2 * z2, q03), c.mbeta * e);
+  }
+  /// pow_neg's second half: 2^t.
+  static V pow_exp(V t, const Pow&) {
     // 2^t = 2^n 2^r with n = round(t) (the 1.5 2^52 shift rounds to nearest and leaves n in the low
     // bits), |r| <= 1/2.
     const M under = t < -1022.0;
@@ -90,16 +95,20 @@ struct PairKernel {
   using M = typename Isa::M;
   static constexpr int kW = Isa::kWidth;
 
-  /// The pair weight u^-beta, u = sigma^2 + d^2: Isa::pow_neg for any beta.
+  /// The pair weight u^-beta, u = sigma^2 + d^2, in two halves: head(u) and tail(head(u)), so that the
+  /// pipelined pass can start one block's weights before it finishes the previous block's.
+  /// Isa::pow_neg for any beta: its logarithm, then its exponential.
   struct AnyBeta {
     typename Isa::Pow c;
-    V operator()(V u) const { return Isa::pow_neg(u, c); }
+    V head(V u) const { return Isa::pow_log(u, c); }
+    V tail(V t) const { return Isa::pow_exp(t, c); }
   };
   /// ... and for beta = k/2, k = 1..4, from a square root, a product and a division, each correctly
   /// rounded: within 2 ulp of std::pow and a quarter of the time (beta = 1: 1/u).
   template <int k>
   struct HalfBeta {
-    V operator()(V u) const {
+    V tail(V w) const { return w; }
+    V head(V u) const {
       if constexpr (k == 1) return 1.0 / Isa::sqrt(u);
       if constexpr (k == 2) return 1.0 / u;
       if constexpr (k == 3) return 1.0 / (u * Isa::sqrt(u));
@@ -126,7 +135,7 @@ struct PairKernel {
     for (int r = 0; r < R; ++r) {
       const V dx = xj - rs.x[r], dy = yj - rs.y[r];
       V d2 = dx * dx + dy * dy;  // as the per-agent law rounds it (no FMA): the same nearest neighbours
-      V w = weight(p.s2 + d2);
+      V w = weight.tail(weight.head(p.s2 + d2));
       if (tail) {
         const M valid = jv < end;
         w = valid ? w : V{};
@@ -156,12 +165,73 @@ struct PairKernel {
     return Isa::load(iota);
   }
 
-  /// Rows i .. i + R - 1 against every j from `from` (> i + R - 1) to n.
+  /// What a whole block's first half hands to its second half, per row: the differences and the
+  /// weight's head.
+  template <int R>
+  struct Started {
+    V dx[R], dy[R], h[R];
+  };
+
+  /// The first half of block<R, false>: the squared distances, the nearest-neighbour bookkeeping (j's
+  /// read and written here) and the weights' heads.
+  template <int R, class Weight>
+  static void block_head(const PairPass& p, const Weight& weight, std::int64_t j, V jv, Rows<R>& rs,
+                         Started<R>& st) {
+    const V xj = Isa::load(p.x + j), yj = Isa::load(p.y + j);
+    V jd = Isa::load(p.nd2 + j), jid = Isa::load(p.nid + j);
+#pragma GCC unroll 4
+    for (int r = 0; r < R; ++r) {
+      const V dx = xj - rs.x[r], dy = yj - rs.y[r];
+      const V d2 = dx * dx + dy * dy;  // as the per-agent law rounds it (no FMA): the same nearest neighbours
+      st.dx[r] = dx, st.dy[r] = dy, st.h[r] = weight.head(p.s2 + d2);
+      const M nearer = d2 < jd;  // as in block
+      jd = nearer ? d2 : jd;
+      jid = nearer ? rs.self[r] : jid;
+      const M mine = d2 < rs.best[r];
+      rs.best[r] = mine ? d2 : rs.best[r];
+      rs.best_j[r] = mine ? jv : rs.best_j[r];
+    }
+    Isa::store(p.nd2 + j, jd);
+    Isa::store(p.nid + j, jid);
+  }
+
+  /// The second half: the weights' tails and the sums, in block's order (the same results).
+  template <int R, class Weight>
+  static void block_tail(const PairPass& p, const Weight& weight, std::int64_t j, Rows<R>& rs,
+                         const Started<R>& st) {
+    V sx = Isa::load(p.sx + j), sy = Isa::load(p.sy + j);
+#pragma GCC unroll 4
+    for (int r = 0; r < R; ++r) {
+      const V w = weight.tail(st.h[r]);
+      rs.ax[r] = Isa::fma(w, st.dx[r], rs.ax[r]);
+      rs.ay[r] = Isa::fma(w, st.dy[r], rs.ay[r]);
+      sx = Isa::fnma(w, st.dx[r], sx);
+      sy = Isa::fnma(w, st.dy[r], sy);
+    }
+    Isa::store(p.sx + j, sx);
+    Isa::store(p.sy + j, sy);
+  }
+
+  /// Rows i .. i + R - 1 against every j from `from` (> i + R - 1) to n. Whole blocks are software
+  /// pipelined: the next block's first half (the long dependency chain of the weight's logarithm) is
+  /// issued before this block's second half, so the core's out-of-order window holds work that is
+  /// ready rather than a chain that waits (the sums and their order are those of block).
   template <int R, class Weight>
   static void rows(const PairPass& p, const Weight& weight, Rows<R>& rs, std::int64_t from) {
     std::int64_t j = from;
     V jv = lane() + static_cast<double>(from);
-    for (; j + kW <= p.n; j += kW, jv += static_cast<double>(kW)) block<R, false>(p, weight, j, jv, 0.0, rs);
+    if (j + kW <= p.n) {
+      Started<R> now;
+      block_head(p, weight, j, jv, rs, now);
+      for (; j + 2 * kW <= p.n; j += kW, jv += static_cast<double>(kW)) {
+        Started<R> next;
+        block_head(p, weight, j + kW, jv + static_cast<double>(kW), rs, next);
+        block_tail(p, weight, j, rs, now);
+        now = next;
+      }
+      block_tail(p, weight, j, rs, now);
+      j += kW, jv += static_cast<double>(kW);
+    }
     if (j < p.n) block<R, true>(p, weight, j, jv, static_cast<double>(p.n), rs);
   }
 
@@ -199,8 +269,9 @@ struct PairKernel {
   }
 
   /// Rows in groups of kRows: j's loads and stores shared by the group, and kRows independent
-  /// dependency chains per vector. Two measured fastest (AVX-512, N = 1000: 1.03, 0.94, 0.99 and
-  /// 1.01 ns per pair for 1 to 4 rows): more rows spill registers.
+  /// dependency chains per vector. Two measured fastest, before the pipelining (AVX-512, N = 1000: 1.03,
+  /// 0.94, 0.99 and 1.01 ns per pair for 1 to 4 rows) and with it (one and three rows slower on a busy
+  /// host): more rows spill registers. bench/sim_loop_count.py finds the loop by its two rows.
   static constexpr int kRows = 2;
 
   static void run(const PairPass& p, std::int64_t row_begin, std::int64_t row_end) {

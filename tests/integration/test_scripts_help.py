@@ -2,8 +2,8 @@
 """Every script answers --help with its usage and does nothing else.
 
 The scripts: every file of scripts/ (each must be executable), every file with a #! line in a folder of
-scripts/ (scripts/paper/run.py, ...; the others there are modules), bench/bench.py and
-bench/bench_report.py. Each is run as `SCRIPT --help`; it must exit 0, print a usage line naming
+scripts/ (scripts/paper/run.py, ...; the others there are modules), bench/bench.py,
+bench/bench_report.py and bench/sim_loop_count.py. Each is run as `SCRIPT --help`; it must exit 0, print a usage line naming
 itself on stdout, and change nothing in the source tree (no build started, no file written).
 
     python3 tests/integration/test_scripts_help.py --source . [unittest args]
@@ -29,7 +29,7 @@ def scripts():
                 shebang = fh.read(2) == b"#!"
             if root == top or shebang:
                 found.append(os.path.relpath(path, SOURCE))
-    return found + ["bench/bench.py", "bench/bench_report.py"]
+    return found + ["bench/bench.py", "bench/bench_report.py", "bench/sim_loop_count.py"]
 
 
 def tree_state():
