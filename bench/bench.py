@@ -42,7 +42,7 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap.add_argument("--window", type=float, help="measurement window, s (default: max(30, 1100 ticks); 12 with --quick)")
     ap.add_argument("--only", action="append", default=[],
                     help="row id or prefix to run (repeatable); `sim`: the simulator rows; `leverK`: lever K's rows; "
-                         "`scale`: the scale ladder (2000, 5000, 10000 agents and their baselines)")
+                         "`scale`: the scale ladder (2000, 4000, 5000, 10000 agents and their baselines)")
     ap.add_argument("--row", action="append", default=[],
                     help="ad-hoc row KIND:N:RATE[:PRESET[:STAGGER_S[:GROUP[:FLAG]...]]], FLAG view (the browser view "
                          "beside), internal or ros2 (the agents drive robots: bench_plan.vehicle_sets) (stored, shown "

@@ -4,7 +4,7 @@
 # committed docs/BENCHMARKS.md and docs/figures/bench_*):
 #  - agents (one process each, or grouped) against a bare Fast DDS pub/sub baseline with the same payload,
 #    transport and rate, N = 10, 25, 50, 100 (20 Hz; 50 Hz for N <= 25);
-#  - how far one host goes: 2000, 5000 and 10000 agents in 10 shapeform_agent_group processes, each beside
+#  - how far one host goes: 2000, 4000, 5000 and 10000 agents in 10 shapeform_agent_group processes, each beside
 #    its bare grouped baseline (run alone: --only scale; skip with --no-scale); a large row waits longer
 #    for discovery and convergence (bench_plan.timeouts_of);
 #  - the transport levers, measured one at a time (--levers);

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """The benchmark's scale ladder (bench/bench_plan.py, bench/bench_report.py), without running anything:
-`--only scale` selects the 2000, 5000 and 10000 agent rows and their baselines, each in 10 processes;
+`--only scale` selects the 2000, 4000, 5000 and 10000 agent rows and their baselines, each in 10 processes;
 large rows get longer timeouts; a row's verdict follows the acceptance (delivery >= 99 %, data age p99
 <= 100 ms, converged in every run) and the section names the largest swarm that met it.
 """
@@ -34,7 +34,7 @@ class ScaleLadderTest(unittest.TestCase):
         rows, sim = bench_plan.select_rows(args(only=["scale"]), {})
         self.assertFalse(sim)
         self.assertEqual([(r.kind, r.n, -(-r.n // r.group)) for r in rows],
-                         [(k, n, 10) for n in (2000, 5000, 10000) for k in ("baseline", "group")])
+                         [(k, n, 10) for n in (2000, 4000, 5000, 10000) for k in ("baseline", "group")])
         self.assertTrue(all(r.section == "scale" and r.rate == 20.0 for r in rows))
         # --no-scale leaves them out of a default invocation; the main rows stay.
         default, _ = bench_plan.select_rows(args(), {})
