@@ -309,9 +309,13 @@ int AgentNode::run() {
     if (l->external()) l->stop_vehicle();
   command_robots();
   if (batch_) {
-    msg::AgentStateBatch gone;  // its one instance: every id it carried
-    gone.first_id(ids_.front());
-    batch_writer_.dispose(gone);
+    // Its instances, one per part of agent.batch_max_states (each disposes every id it carried).
+    for (const auto& [begin, end] : dds::batch_ranges(ids_.size(), static_cast<std::size_t>(cfg_.agent.batch_max_states))) {
+      (void)end;
+      msg::AgentStateBatch gone;
+      gone.first_id(ids_[begin]);
+      batch_writer_.dispose(gone);
+    }
   } else {
     for (const auto id : ids_) {
       msg::AgentState gone;
@@ -560,7 +564,11 @@ void AgentNode::publish() {
     if (batch_) batch_states_.push_back(s);
     else state_writer_.write(dds::to_msg(s));
   }
-  if (batch_ && !batch_states_.empty()) batch_writer_.write(dds::to_msg(batch_states_));
+  // One sample per part of at most agent.batch_max_states states (one datagram each by default).
+  if (batch_)
+    for (const auto& [begin, end] :
+         dds::batch_ranges(batch_states_.size(), static_cast<std::size_t>(cfg_.agent.batch_max_states)))
+      batch_writer_.write(dds::to_msg(batch_states_, begin, end));
 }
 
 void AgentNode::drain_poses() {

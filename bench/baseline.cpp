@@ -5,7 +5,8 @@
 //
 // Two shapes, as the agents have: `--id i`, one AgentState per tick on shapeform/state (as
 // shapeform_agent); `--ids 0-99`, one AgentStateBatch per tick carrying every listed id on
-// shapeform/state_batch (as shapeform_agent_group), each element booked as one agent's sample.
+// shapeform/state_batch (as shapeform_agent_group), each element booked as one agent's sample; more
+// ids than agent.batch_max_states go in several samples per tick, cut as the group cuts them.
 //
 // It publishes AgentStatus exactly as shapeform_agent does (same fields, same meaning, same rate), so
 // the benchmark reads both kinds of process with one probe and one set of formulas.
@@ -206,23 +207,29 @@ int run(const std::vector<std::int32_t>& ids, bool batch, const config::Config& 
     ages.reserve(kAgeCapacity);
     msg::AgentState one;
     one.id(first);
-    msg::AgentStateBatch many;
-    many.first_id(first);
-    for (const auto id : ids) {
-      msg::AgentState e;
-      e.id(id);
-      many.states().push_back(e);
+    // As shapeform_agent_group cuts them: one sample (instance) per part of agent.batch_max_states.
+    std::vector<msg::AgentStateBatch> parts;
+    for (const auto& [begin, end] : sdds::batch_ranges(ids.size(), static_cast<std::size_t>(cfg.agent.batch_max_states))) {
+      msg::AgentStateBatch& many = parts.emplace_back();
+      many.first_id(ids[begin]);
+      for (std::size_t k = begin; k < end; ++k) {
+        msg::AgentState e;
+        e.id(ids[k]);
+        many.states().push_back(e);
+      }
     }
     std::uint64_t seq = 0, ticks = 0;
     while (loop.wait_next(util::stop_flag())) {
       ++seq;
       const std::int64_t stamp = util::steady_ns();
       if (batch) {
-        for (auto& e : many.states()) {
-          e.seq(seq);
-          e.stamp_ns(stamp);
+        for (auto& many : parts) {
+          for (auto& e : many.states()) {
+            e.seq(seq);
+            e.stamp_ns(stamp);
+          }
+          state_writer->write(&many);
         }
-        state_writer->write(&many);
       } else {
         one.seq(seq);
         one.stamp_ns(stamp);
@@ -244,7 +251,8 @@ int run(const std::vector<std::int32_t>& ids, bool batch, const config::Config& 
         }
       }
     }
-    if (batch) state_writer->dispose(&many, fdds::HANDLE_NIL);
+    if (batch)
+      for (auto& many : parts) state_writer->dispose(&many, fdds::HANDLE_NIL);
     else state_writer->dispose(&one, fdds::HANDLE_NIL);
     state_reader->set_listener(nullptr);
     util::log_info("stopping after " + std::to_string(ticks) + " ticks");

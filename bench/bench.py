@@ -26,7 +26,7 @@ sys.dont_write_bytecode = True  # no __pycache__ beside the sources
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 # The driver's parts, each importing only those before it: what to run, measuring, running, the report.
 from bench_plan import (ROOT, SCENARIO_SETS, PlanError, lever_rows, main_rows, rerun_command, runs_of,  # noqa: E402
-                        select_rows, window_of)
+                        scale_rows, select_rows, timeouts_of, window_of)
 from bench_measure import aggregate, git_commit, log, machine_info  # noqa: E402
 from bench_run import Ctx, run_rows, sim_rows, wait_quiet  # noqa: E402
 from bench_report import render, report_plan  # noqa: E402
@@ -41,7 +41,8 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap.add_argument("--runs", type=int, help="runs per row (default 3; 1 with --quick)")
     ap.add_argument("--window", type=float, help="measurement window, s (default: max(30, 1100 ticks); 12 with --quick)")
     ap.add_argument("--only", action="append", default=[],
-                    help="row id or prefix to run (repeatable); `sim`: the simulator rows; `leverK`: lever K's rows")
+                    help="row id or prefix to run (repeatable); `sim`: the simulator rows; `leverK`: lever K's rows; "
+                         "`scale`: the scale ladder (2000, 4000, 5000, 10000 agents and their baselines)")
     ap.add_argument("--row", action="append", default=[],
                     help="ad-hoc row KIND:N:RATE[:PRESET[:STAGGER_S[:GROUP[:FLAG]...]]], FLAG view (the browser view "
                          "beside), internal or ros2 (the agents drive robots: bench_plan.vehicle_sets) (stored, shown "
@@ -49,6 +50,7 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap.add_argument("--levers", action="store_true", help="also run the lever rows")
     ap.add_argument("--lever-runs", type=int, default=1, help="runs per lever row that is not a main row (default 1)")
     ap.add_argument("--no-main", action="store_true", help="skip the main rows")
+    ap.add_argument("--no-scale", action="store_true", help="skip the scale ladder (2000 to 10000 agents)")
     ap.add_argument("--no-sim", action="store_true", help="skip the simulator rows")
     ap.add_argument("--build", default=str(ROOT / "build"), help="build directory (default build/)")
     ap.add_argument("--out", help="output folder (default runs/<UTC time>-bench)")
@@ -82,6 +84,8 @@ def parse_args(argv=None) -> argparse.Namespace:
 def list_rows() -> int:
     for r in main_rows():
         print("main  ", r.id)
+    for r in scale_rows():
+        print("scale ", r.id)
     for r in lever_rows():
         print("lever ", r.id)
     print("sim    sim (every simulator row)")
@@ -158,6 +162,7 @@ def main(argv=None) -> int:
     for row in selected:
         n_runs = runs_of(row, args, runs)
         ctx.window_s = window_of(row, args)
+        ctx.disc_timeout_s, ctx.conv_timeout_s = timeouts_of(row, args.quick)
         run_rows(ctx, [row], n_runs, store["rows"])
         store["rows"][row.id]["row"]["section"] = row.section
         store["rows"][row.id]["command"] = rerun_command(row, args, n_runs)

@@ -50,6 +50,9 @@ add_preset("bufann", [BUF] + ANN)
 add_preset("mcann", [MC] + ANN)
 add_preset("mcbuf1ann", [MC, BUF1] + ANN)
 add_preset("mcbufann", [MC, BUF] + ANN)
+# One AgentStateBatch sample per process and tick however many agents it hosts (up to 1000: 128 KB, which
+# Fast DDS fragments), instead of the default parts of at most 500 states (one datagram each).
+add_preset("mcbufannfrag", [MC, BUF] + ANN + ["agent.batch_max_states=1000"])
 add_preset("mcbufannsec", [MC, BUF] + ANN, secure=True)  # one keystore for the benchmark (make_keystore.sh)
 add_preset("large", large_swarm_sets())
 add_preset("mcbufannsedp", [MC, BUF, SEDP] + ANN)
@@ -121,6 +124,42 @@ def main_rows() -> list[Row]:
         rows.append(Row("baseline", n, 20.0, preset, 0.0, k))
         rows.append(Row("group", n, 20.0, preset, 0.0, k))
     return rows
+
+
+# How far one host goes (issue 30, item 3): the scale ladder, each grouped row beside its bare baseline of
+# the same shape, all at 20 Hz with mcbufann. 10 processes each, the fewest the issue allows: every process
+# receives, unpacks and tables every state every tick, so the host's receive work grows as N x processes
+# (the 1000-agent rows: 22 % busy in 10 processes, 40 % in 20) and the fewest processes carry the largest N.
+# 10000 in 10 is also the most agents a process hosts (1000: --ids, kMaxBatchStates). 4000, beside the
+# issue's three, is where this host's wall was found by hand (a quick run of 2026-12-03 met the acceptance
+# with the host 100 % busy).
+SCALE_SHAPES = ((2000, 200), (4000, 400), (5000, 500), (10000, 1000))
+SCALE_PRESET = MAIN_PRESET
+
+
+def scale_rows() -> list[Row]:
+    """The scale ladder (--only scale): for each (N, agents per process) of SCALE_SHAPES, the bare grouped
+    baseline and the agents."""
+    rows = []
+    for n, k in SCALE_SHAPES:
+        rows.append(Row("baseline", n, 20.0, SCALE_PRESET, 0.0, k, "scale"))
+        rows.append(Row("group", n, 20.0, SCALE_PRESET, 0.0, k, "scale"))
+    return rows
+
+
+# The acceptance of a scale row (issue 30, item 3): (label, key of the row's figures, "min" | "max" | ""
+# (converged), limit).
+SCALE_VERDICT = (("delivery >= 99 %", "delivery", "min", 0.99), ("data age p99 <= 100 ms", "age_p99_ms", "max", 100.0),
+                 ("arc-law circle converged", "converged", "", 0))
+
+
+def timeouts_of(row: Row, quick: bool) -> tuple[float, float]:
+    """(discovery, convergence) timeouts of a row, s: 60 each (40 with --quick) up to 1000 agents, and 10 s
+    more per 1000 agents beyond, for the start-up of a process hosting 1000 agents and a supervisor taking
+    every state (the 10000-agent rows: 130 s each, 110 s with --quick)."""
+    base = 40.0 if quick else 60.0
+    extra = 10.0 * max(0, row.n - 1000) / 1000
+    return base + extra, base + extra
 
 
 VEHICLES = ("internal", "ros2")
@@ -203,6 +242,9 @@ LEVER_ROWS: dict[int, dict] = {
          "extra": True},
     16: {"pairs": [(_lv(A, n, MAIN_PRESET, vehicle="internal"), _lv(A, n, MAIN_PRESET, vehicle="ros2"))
                    for n in (12, 50)], "vehicle": True},
+    # 1000 agents per process (128 KB of states per tick) in shapes this host runs at 20 Hz.
+    17: {"pairs": [(_lv(B, 5000, MAIN_PRESET, 0.0, 1000), _lv(B, 5000, "mcbufannfrag", 0.0, 1000)),
+                   (_lv(G, 2000, MAIN_PRESET, 0.0, 1000), _lv(G, 2000, "mcbufannfrag", 0.0, 1000))], "extra": True},
 }
 
 
@@ -263,10 +305,12 @@ def lever_of(name: str) -> dict | None:
 def select_rows(args, stored: dict) -> tuple[list[Row], bool]:
     """The rows this invocation runs, in order and each once, and whether it runs the simulator rows.
     `stored`: the stored results by row id."""
-    all_rows, levers = main_rows(), lever_rows()
+    all_rows, levers, scale = main_rows(), lever_rows(), scale_rows()
     selected: list[Row] = []
     if not args.no_main:
         selected += all_rows
+    if not getattr(args, "no_scale", False):
+        selected += scale
     if args.levers:
         # With --no-main, a lever row that is also a main row keeps its stored main result (median of its runs).
         selected += [r for r in levers if not (args.no_main and r.id in {m.id for m in all_rows} and r.id in stored)]
@@ -278,10 +322,11 @@ def select_rows(args, stored: dict) -> tuple[list[Row], bool]:
     run_sim = not args.no_sim and ((not args.only and not args.row) or "sim" in args.only)
     only_rows = [o for o in args.only if o != "sim"]
     if args.only:
-        pool = all_rows + levers + selected
+        pool = all_rows + scale + levers + selected
         ids = {r.id for r in pool}
-        # `leverK`: the rows of lever K.
+        # `leverK`: the rows of lever K; `scale`: the scale ladder.
         named = [r.id for o in only_rows if lever_of(o) for r in lever_of(o)["rows"]]
+        named += [r.id for o in only_rows if o == "scale" for r in scale]
         bad = [o for o in only_rows if o.startswith("lever") and o[5:].isdigit() and not lever_of(o)]
         if bad:
             raise PlanError(f"--only {bad[0]}: no such lever (1..{len(LEVERS)})")
@@ -292,16 +337,18 @@ def select_rows(args, stored: dict) -> tuple[list[Row], bool]:
             raise PlanError("--only matched no row (see --list)")
     seen = set()
     selected = [r for r in selected if not (r.id in seen or seen.add(r.id))]
-    main_ids = {r.id for r in all_rows}
+    main_ids, scale_ids = {r.id for r in all_rows}, {r.id for r in scale}
     for row in selected:
         if row.id in main_ids:
             row.section = "main"
+        elif row.id in scale_ids:
+            row.section = "scale"
     return selected, run_sim
 
 
 def runs_of(row: Row, args, runs: int) -> int:
-    """Runs of a row: --runs, else a main row's own count or `runs`, a lever row's --lever-runs."""
-    return args.runs or (row.runs or runs if row.section == "main" else args.lever_runs)
+    """Runs of a row: --runs, else a main or scale row's own count or `runs`, a lever row's --lever-runs."""
+    return args.runs or (row.runs or runs if row.section in ("main", "scale") else args.lever_runs)
 
 
 def window_of(row: Row, args) -> float:

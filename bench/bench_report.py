@@ -21,7 +21,8 @@ from pathlib import Path
 
 sys.dont_write_bytecode = True  # no __pycache__ beside the sources
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_plan import LARGE_MIN, LEVERS, MAIN_PRESET, NOTES, PRESETS, ROOT, main_rows  # noqa: E402
+from bench_plan import (LARGE_MIN, LEVERS, MAIN_PRESET, NOTES, PRESETS, ROOT, SCALE_VERDICT, main_rows,  # noqa: E402
+                        scale_rows)
 
 # --------------------------------------------------------------------------------------------
 # The simulator's rows (bench_run.sim_rows measures them).
@@ -511,6 +512,81 @@ def _main_table(rows: dict, plan: dict) -> list[str]:
     return o
 
 
+def scale_checks(e: dict) -> list[tuple[str, str, bool | None]]:
+    """The acceptance of a scale row (bench_plan.SCALE_VERDICT): (label, measured, met) per check; met is
+    None when not measured. Converged: in every run."""
+    a, out = e["agg"], []
+    for label, key, kind, limit in SCALE_VERDICT:
+        if key == "converged":
+            c, runs = a.get("converge_s"), a.get("runs", 1)
+            n_conv = a.get("converged_runs", 0 if c is None or math.isinf(c) else runs)
+            out.append((label, f"{n_conv} of {runs} runs, median {f_s(c)}", n_conv == runs))
+            continue
+        v = a.get(key)
+        txt = "not measured" if v is None else (f_pct(v) if key == "delivery" else f_ms(v))
+        ok = None if v is None else (v >= limit if kind == "min" else v <= limit)
+        out.append((label, txt, ok))
+    return out
+
+
+def scale_met(e: dict | None, baseline: bool = False) -> bool:
+    """Whether a scale row met every check (a baseline row: delivery and data age; it has no law)."""
+    if e is None:
+        return False
+    checks = scale_checks(e)
+    if baseline:
+        checks = [c for c in checks if c[0] != SCALE_VERDICT[2][0]]
+    return all(ok for _, _, ok in checks)
+
+
+SCALE_HEAD = ("| row | delivery | age p99 | converged | verdict | x host busy | x CPU/agent | x age p99 |\n"
+              "|---|---|---|---|---|---|---|---|\n")
+
+
+def scale_section(store: dict) -> str:
+    """'How far one host goes': the scale ladder's rows, each row's verdict and ratios to its baseline, the
+    largest swarm that met every check and its baseline's, and where the wall is (notes.toml [scale])."""
+    rows, notes = store.get("rows", {}), NOTES["scale"]
+    ids = [r.id for r in scale_rows()]
+    o = ["## How far one host goes\n\n", notes["intro"] + "\n\n", TABLE_HEAD]
+    o += [table_line(rid, rows[rid]) for rid in ids if rid in rows]
+    o.append("\n" + SCALE_HEAD)
+    largest = None
+    for rid in ids:
+        e = rows.get(rid)
+        if e is None:
+            o.append(f"| `{rid}` | not run | | | | | | |\n")
+            continue
+        base = baseline_for(rows, e) if e["row"]["kind"] == "group" else None
+        b = base["agg"] if base else {}
+        checks = scale_checks(e)
+        if e["row"]["kind"] == "baseline":
+            checks[2] = (checks[2][0], "n/a", True)
+        met = all(ok for _, _, ok in checks)
+        missed = [f"{label} ({txt})" for label, txt, ok in checks if ok is False]
+        verdict = "met" if met else ("**missed**: " + "; ".join(missed) if missed else "not measured")
+        a = e["agg"]
+        o.append(f"| `{rid}` | {checks[0][1]} | {checks[1][1]} | {checks[2][1]} | {verdict} "
+                 f"| {ratio(a.get('host_busy_pct'), b.get('host_busy_pct')) if base else '-'} "
+                 f"| {ratio(a.get('cpu_pct'), b.get('cpu_pct')) if base else '-'} "
+                 f"| {ratio(a.get('age_p99_ms'), b.get('age_p99_ms')) if base else '-'} |\n")
+        if e["row"]["kind"] == "group" and met and (largest is None or e["row"]["n"] > largest[1]["row"]["n"]):
+            largest = (rid, e, base)
+    o.append("\n")
+    if largest is None:
+        o.append(notes["none_met"] + " ")
+    else:
+        rid, e, base = largest
+        a = e["agg"]
+        o.append(notes["largest"].format(n=e["row"]["n"], processes=processes(e["row"]), row=rid,
+                                         summary=_summary(store, rid), busy=a.get("host_busy_pct") or 0.0) + " ")
+        if base is not None:
+            o.append(notes["largest_baseline"].format(row=base["row"]["id"], summary=_summary(store, base["row"]["id"]),
+                                                      met="met" if scale_met(base, True) else "did not meet") + " ")
+    o.append(notes["wall"] + "\n\n")
+    return "".join(o)
+
+
 def _lever(rows: dict, lv: dict) -> list[str]:
     """One lever: its question, its rows' tables, the measured effect of each pair and the reading."""
     o = [f"### {lv['name']}\n\n{lv['question']}\n\n"]
@@ -642,7 +718,8 @@ def render(store: dict, path: Path, plan: dict) -> None:
     """Writes the report of `store` (a results file's contents) to `path`; plan: report_plan(store)."""
     rows = store.get("rows", {})
     page = json.loads(PAGE_JSON.read_text()) if PAGE_JSON.exists() else {}
-    o = (_header(store, plan) + _targets(store, plan) + _main_table(rows, plan) + _levers(rows, plan)
+    o = (_header(store, plan) + _targets(store, plan) + _main_table(rows, plan) + [scale_section(store)]
+         + _levers(rows, plan)
          + [foxglove_section(), page_section(page), sim_section(store.get("sim") or {}), recording_section(), mcap_section()] + _rerun_and_method(store, plan))
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text("".join(o))

@@ -67,7 +67,7 @@ int run(const config::Config& cfg, const std::filesystem::path& dir) {
         dds::StatusSample s;
         std::string why;
         if (!r.valid_data || !dds::from_msg(r.msg, s, why)) continue;
-        std::fprintf(status_csv, "%lld,%d,%lld,%llu,%llu,%.1f,%.1f,%d,%llu,%llu,%llu,%llu,%.1f,%.1f,%.2f,%.2f,%llu,%.1f,%.1f\n",
+        std::fprintf(status_csv, "%lld,%d,%lld,%llu,%llu,%.1f,%.1f,%d,%llu,%llu,%llu,%llu,%.1f,%.1f,%.4f,%.4f,%llu,%.1f,%.1f\n",
                      static_cast<long long>(r.receive_stamp_ns), s.id, static_cast<long long>(s.stamp_ns),
                      static_cast<unsigned long long>(s.ticks), static_cast<unsigned long long>(s.overruns),
                      s.lateness_max_us, s.lateness_p99_us, s.neighbours_heard,

@@ -4,6 +4,9 @@
 # committed docs/BENCHMARKS.md and docs/figures/bench_*):
 #  - agents (one process each, or grouped) against a bare Fast DDS pub/sub baseline with the same payload,
 #    transport and rate, N = 10, 25, 50, 100 (20 Hz; 50 Hz for N <= 25);
+#  - how far one host goes: 2000, 4000, 5000 and 10000 agents in 10 shapeform_agent_group processes, each beside
+#    its bare grouped baseline (run alone: --only scale; skip with --no-scale); a large row waits longer
+#    for discovery and convergence (bench_plan.timeouts_of);
 #  - the transport levers, measured one at a time (--levers);
 #  - agents driving robots over ROS 2 (one shapeform_vehicle for the N robots) beside agents integrating
 #    the same robot themselves, N = 12 and 50: control latency p50/p99 and CPU per agent (--only lever16);
@@ -19,7 +22,8 @@
 #   --levers      also run the lever rows (socket buffers, multicast, announcement period, stagger, grouping,
 #                 robots over ROS 2, ...)
 #   --only ROW    run only this row (or id prefix; `sim`: the simulator rows; `leverK`: lever K's rows, e.g.
-#                 lever16: agents driving robots over ROS 2 beside the internal model), keep the stored
+#                 lever16: agents driving robots over ROS 2 beside the internal model; `scale`: the scale
+#                 ladder), keep the stored
 #                 others, re-render the report
 #   --list        list the row ids
 #   --out DIR     the output folder

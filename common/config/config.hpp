@@ -13,6 +13,7 @@
 #include "core/metrics.hpp"
 #include "core/params.hpp"
 #include "core/vehicle.hpp"
+#include "protocol/samples.hpp"
 #include "protocol/transport.hpp"
 
 namespace shapeform::config {
@@ -55,6 +56,9 @@ struct AgentConfig {
   /// A process hosting several agents publishes their states as one AgentStateBatch per tick
   /// (shapeform/state_batch) instead of one AgentState per agent (shapeform/state).
   bool batch_state = true;
+  /// Most states per AgentStateBatch sample: a process hosting more publishes several per tick, each
+  /// its own instance keyed by its first id (dds::batch_ranges cuts them).
+  long long batch_max_states = static_cast<long long>(dds::kBatchStatesPerDatagram);
   /// On a clean stop, leave without the participant's goodbye (dds::Node::exit_without_goodbye): peers
   /// drop it after transport.lease_s instead of racing Fast DDS 2.9's lease timer.
   bool leave_by_lease = false;

@@ -6,6 +6,7 @@
 
 #include "core/command_table.hpp"
 #include "core/enum_names.hpp"
+#include "protocol/samples.hpp"
 
 namespace shapeform::config {
 namespace {
@@ -180,7 +181,8 @@ std::vector<P> build() {
       Type::Text, "name", "", {}, "scenario name, free text", [](auto& c) -> auto& { return c.name; },
       "any string"));
   t.push_back(param<long long>(
-      Type::Integer, "swarm.agents", "agents", params::integers(1, 1000), "swarm size",
+      Type::Integer, "swarm.agents", "agents", params::integers(1, dds::kMaxAgentId + 1),
+      "swarm size (at most one agent per id 0..9999)",
       [](auto& c) -> auto& { return c.swarm.agents; }));
   t.push_back(param<std::uint64_t>(
       Type::UInt64, "swarm.seed", "", {}, "seed of the uniform random start",
@@ -244,10 +246,18 @@ std::vector<P> build() {
       "a process hosting several agents (`shapeform_agent_group`) publishes their states as one sample per "
       "tick on `shapeform/state_batch` (one AgentStateBatch carrying every hosted agent) instead of one "
       "AgentState per agent on `shapeform/state`: P processes put P samples per tick on the wire instead of N. "
-      "A batch of 100 agents is about 13 KB; one over a 64 KB datagram (over about 500 agents) is fragmented, "
-      "and best effort then loses the whole batch with any fragment. One-agent processes always publish "
+      "A batch of 100 agents is about 13 KB; more than `agent.batch_max_states` agents go in several samples. "
+      "One-agent processes always publish "
       "`shapeform/state`; every reader reads both",
       [](auto& c) -> auto& { return c.agent.batch_state; }));
+  t.push_back(param<long long>(
+      Type::Integer, "agent.batch_max_states", "states",
+      params::integers(1, static_cast<long long>(dds::kMaxBatchStates)),
+      "most agent states in one AgentStateBatch sample: a process hosting more publishes several per tick, "
+      "each its own instance (keyed by its first id), cut into parts of nearly equal size. The default, "
+      "500 states of about 128 bytes, keeps each sample in one UDP datagram; more is fragmented by Fast DDS, "
+      "and best effort then loses the whole sample with any fragment (docs/BENCHMARKS.md, lever 17)",
+      [](auto& c) -> auto& { return c.agent.batch_max_states; }));
   t.push_back(real(
       "agent.idle_rate_hz", "Hz", params::above_up_to(0, kMaxRateHz),
       "state publication rate before the agent's first command, at most `agent.rate_hz` (the default: the "

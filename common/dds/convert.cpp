@@ -137,12 +137,30 @@ bool from_msg(const msg::AgentState& m, StateSample& out, std::string& why) {
   return true;
 }
 
-msg::AgentStateBatch to_msg(const std::vector<StateSample>& states) {
+msg::AgentStateBatch to_msg(const std::vector<StateSample>& states) { return to_msg(states, 0, states.size()); }
+
+msg::AgentStateBatch to_msg(const std::vector<StateSample>& states, std::size_t begin, std::size_t end) {
+  end = std::min(end, states.size());
+  begin = std::min(begin, end);
   msg::AgentStateBatch m;
-  m.first_id(states.empty() ? 0 : states.front().id);
-  m.states().reserve(states.size());
-  for (const StateSample& s : states) m.states().push_back(to_msg(s));
+  m.first_id(begin < end ? states[begin].id : 0);
+  m.states().reserve(end - begin);
+  for (std::size_t k = begin; k < end; ++k) m.states().push_back(to_msg(states[k]));
   return m;
+}
+
+std::vector<std::pair<std::size_t, std::size_t>> batch_ranges(std::size_t count, std::size_t max_states) {
+  std::vector<std::pair<std::size_t, std::size_t>> out;
+  if (count == 0) return out;
+  const std::size_t parts = (count + std::max<std::size_t>(max_states, 1) - 1) / std::max<std::size_t>(max_states, 1);
+  const std::size_t base = count / parts, longer = count % parts;  // the first `longer` parts get one more
+  std::size_t begin = 0;
+  for (std::size_t k = 0; k < parts; ++k) {
+    const std::size_t end = begin + base + (k < longer ? 1 : 0);
+    out.emplace_back(begin, end);
+    begin = end;
+  }
+  return out;
 }
 
 bool from_msg(const msg::AgentStateBatch& m, std::vector<StateSample>& out, std::string& why) {

@@ -3,8 +3,10 @@
 /// to_msg / from_msg pair per message, and validation of received samples.
 /// Received data is never trusted: non-finite numbers, unknown names and absurd values are rejected
 /// with a message naming the field.
+#include <cstddef>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/compiled_command.hpp"
@@ -58,12 +60,19 @@ msg::AgentState to_msg(const StateSample& s);
 /// otherwise false, `out` untouched and `why` naming every bad field.
 bool from_msg(const msg::AgentState& m, StateSample& out, std::string& why);
 
-/// Most states one AgentStateBatch may carry (shapeform_agent_group hosts at most this many agents).
-inline constexpr std::size_t kMaxBatchStates = 1000;
-
 /// The states of the agents one process hosts -> one AgentStateBatch (first_id: states[0].id; each
 /// element as to_msg(StateSample)). states holds 1 to kMaxBatchStates samples with distinct ids.
 msg::AgentStateBatch to_msg(const std::vector<StateSample>& states);
+
+/// states[begin, end) -> one AgentStateBatch (first_id: states[begin].id), as to_msg(states) of that part.
+msg::AgentStateBatch to_msg(const std::vector<StateSample>& states, std::size_t begin, std::size_t end);
+
+/// How a process cuts the `count` states it publishes per tick into AgentStateBatch samples of at most
+/// `max_states` (agent.batch_max_states) each, every sample its own instance (keyed by its first_id):
+/// ceil(count / max_states) consecutive [begin, end) ranges covering 0..count in order, of lengths that
+/// differ by at most 1 (1000 states, at most 500: 500 + 500; at most 400: 334 + 333 + 333), so each
+/// datagram of a tick is about the same size. Empty for count 0; max_states 0 is taken as 1.
+std::vector<std::pair<std::size_t, std::size_t>> batch_ranges(std::size_t count, std::size_t max_states);
 
 /// AgentStateBatch -> one StateSample per element, in order, when the batch holds 1 to
 /// kMaxBatchStates states, first_id is the id of states[0], every element passes valid_state and no

@@ -3,6 +3,7 @@
 /// dds::to_msg / dds::from_msg (dds/convert.hpp) convert each both ways. No Fast DDS here.
 /// ShapeCommand <-> core::Command and SwarmMetrics <-> core::Metrics need no struct of their own.
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -82,6 +83,15 @@ inline constexpr double kStateLimit = 1e6;
 /// Largest agent id: ids are 0..kMaxAgentId, unique in the swarm. A received sample with another id
 /// is refused (and counted) like any absurd value, so a rogue publisher cannot add agents that way.
 inline constexpr std::int32_t kMaxAgentId = 9999;
+
+/// Most states one AgentStateBatch may carry (shapeform_agent_group hosts at most this many agents;
+/// agent.batch_max_states cuts them into samples of fewer).
+inline constexpr std::size_t kMaxBatchStates = 1000;
+
+/// States per AgentStateBatch sample that keep it in one UDP datagram: about 128 bytes of CDR each,
+/// 500 x 128 = 64,000 bytes plus the RTPS headers, under Fast DDS's 65,500-byte message (the
+/// default of agent.batch_max_states; more is fragmented).
+inline constexpr std::size_t kBatchStatesPerDatagram = 500;
 
 /// Largest model time accepted in a received AgentState (model time is >= 0: it starts at 0 when a
 /// command is adopted). 1e9 lasts 28 hours at the extreme integration.dt 10 and 1 kHz, and years at

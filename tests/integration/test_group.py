@@ -9,6 +9,8 @@
   the hosted agents.
 - SIGTERM to the group process disposes every hosted agent: the supervisor sees the 6 leave at once and
   the two single agents go on, hearing only each other.
+- With agent.batch_max_states below the hosted count, the states go in several samples per tick, each
+  its own instance keyed by its first id; the swarm is the same, and SIGTERM disposes every part.
 - A bad --ids list exits with status 2 and a message naming --ids.
 """
 import os
@@ -60,6 +62,37 @@ class GroupTest(harness.SwarmTestCase):
         for a in singles:
             harness.poll(lambda a=a: a.hears(SINGLE - 1, before[a.name]), 30,
                          "%s to hear only the other single agent" % a.name)
+        self.assert_all_alive(singles)
+
+    def test_group_in_parts_of_batch_max_states(self):
+        # agent.batch_max_states 4: the 6 hosted agents go in 2 samples per tick (0..2 and 3..5, cut
+        # evenly), each its own instance keyed by its first id, and the swarm is the same one swarm.
+        config = harness.scenario("circle")
+        sets = ["--set", "swarm.agents=%d" % N]
+        sup = self.start_supervisor(config, extra=sets)
+        group = self.start_group("0-%d" % (HOSTED - 1), config, sets + ["--set", "agent.batch_max_states=4"])
+        singles = self.start_agents(SINGLE, config, seed=1, extra=sets, first=HOSTED)
+        self.assertTrue(sup.wait_agents(N, 60), "the supervisor hears all %d agents" % N)
+        harness.poll(lambda: len(group.heard()) == HOSTED and min(group.heard().values()) >= N - 1, 60,
+                     "every hosted agent to hear the %d others" % (N - 1))
+        for a in singles:
+            harness.poll(lambda a=a: a.hears(N - 1), 60, "%s to hear the %d others" % (a.name, N - 1))
+        self.assertEqual(sup.command("start"), 1)
+        self.assertTrue(sup.wait_converged(60), "the circle converges")
+        batches = self.echo("shapeform/state_batch", 6)
+        parts = {}
+        for b in batches:
+            self.assertEqual(b["event"], "sample", b)
+            parts.setdefault(b["data"]["first_id"], []).append([s["id"] for s in b["data"]["states"]])
+        self.assertEqual(set(parts), {0, 3}, "two instances, keyed 0 and 3")
+        self.assertTrue(all(ids == [0, 1, 2] for ids in parts[0]), parts)
+        self.assertTrue(all(ids == [3, 4, 5] for ids in parts[3]), parts)
+
+        group.signal(signal.SIGTERM)
+        self.assertEqual(group.wait(30), 0, "the group process stops cleanly")
+        harness.poll(lambda: sup.metrics()["agents"] == SINGLE, 30, "the supervisor to drop the hosted agents")
+        # Both instances disposed, not timed out: the supervisor says each of the 6 left.
+        self.assertEqual(sup.left(), set(range(HOSTED)))
         self.assert_all_alive(singles)
 
     def echo(self, topic, count):

@@ -653,10 +653,12 @@ TEST_CASE("out-of-range values are reported with the range") {
   CHECK(one("dynamics", "r", "-1") == "dynamics.r: must be >= 0, got -1 (line 3)");
   CHECK(one("dynamics", "k1", "-1") == "dynamics.k1: must be >= 0, got -1 (line 3)");
   CHECK(one("dynamics", "max_speed", "-2") == "dynamics.max_speed: must be >= 0, got -2 (line 3)");
-  CHECK(one("swarm", "agents", "0") == "swarm.agents: must be in 1..1000, got 0 (line 3)");
-  CHECK(one("swarm", "agents", "1001") == "swarm.agents: must be in 1..1000, got 1001 (line 3)");
+  CHECK(one("swarm", "agents", "0") == "swarm.agents: must be in 1..10000, got 0 (line 3)");
+  // One agent per id 0..kMaxAgentId: 10000 agents fit (the benchmark's largest row), 10001 do not.
+  CHECK(load_string("schema_version: 1\nswarm:\n  agents: 10000\n").swarm.agents == 10000);
+  CHECK(one("swarm", "agents", "10001") == "swarm.agents: must be in 1..10000, got 10001 (line 3)");
   CHECK(one("swarm", "agents", "99999999999999999999") ==
-        "swarm.agents: must be in 1..1000, got 99999999999999999999 (line 3)");
+        "swarm.agents: must be in 1..10000, got 99999999999999999999 (line 3)");
   CHECK(one("swarm", "seed", "-1") == "swarm.seed: must be >= 0, got -1 (line 3)");
   CHECK(one("swarm", "init_half_width", "0") ==
         "swarm.init_half_width: must be > 0, got 0 (line 3)");
@@ -1013,7 +1015,7 @@ TEST_CASE("a bad override value is marked --set instead of a line") {
   CHECK(problem_of("schema_version: 1\n", {"shape.centre=[1]"}) ==
         "shape.centre: expected a list of 2 numbers [x1, x2], got a list of 1 (--set)");
   CHECK(problem_of("schema_version: 1\n", {"swarm={agents: 0}"}) ==
-        "swarm.agents: must be in 1..1000, got 0 (--set)");
+        "swarm.agents: must be in 1..10000, got 0 (--set)");
   const auto p = problems_of_load("", {"swarm.agents=many", "schema_version=2"});
   CHECK(p == std::vector<std::string>{"schema_version: must be 1, got 2 (--set)",
                                       "swarm.agents: expected an integer, got \"many\" (--set)"});

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -11,6 +12,7 @@
 #include <set>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
@@ -570,6 +572,52 @@ TEST_CASE("a state batch converts element by element and is refused whole, namin
   CHECK(refused(bad) == "state_batch.states: must hold 1 to 1000 states, got 0");
   bad.states().assign(dds::kMaxBatchStates + 1, m.states()[0]);
   CHECK(refused(bad) == "state_batch.states: must hold 1 to 1000 states, got 1001");
+}
+
+TEST_CASE("batch_ranges cuts a process's states into nearly equal parts of at most max_states", "[dds][convert]") {
+  using Ranges = std::vector<std::pair<std::size_t, std::size_t>>;
+  CHECK(dds::batch_ranges(1000, 500) == Ranges{{0, 500}, {500, 1000}});
+  CHECK(dds::batch_ranges(1000, 400) == Ranges{{0, 334}, {334, 667}, {667, 1000}});
+  CHECK(dds::batch_ranges(100, 500) == Ranges{{0, 100}});
+  CHECK(dds::batch_ranges(1, 1) == Ranges{{0, 1}});
+  CHECK(dds::batch_ranges(0, 500).empty());
+  CHECK(dds::batch_ranges(3, 0) == Ranges{{0, 1}, {1, 2}, {2, 3}});  // 0 taken as 1
+  // Properties over a grid: in order, covering 0..count, each part 1..max, lengths within 1, fewest parts.
+  for (std::size_t count = 1; count <= 1000; count += 37) {
+    for (std::size_t max : {1u, 7u, 100u, 333u, 500u, 1000u}) {
+      const auto r = dds::batch_ranges(count, max);
+      REQUIRE(r.size() == (count + max - 1) / max);
+      std::size_t at = 0, shortest = count, longest = 0;
+      for (const auto& [b, e] : r) {
+        CHECK(b == at);
+        CHECK(e > b);
+        CHECK(e - b <= max);
+        shortest = std::min(shortest, e - b);
+        longest = std::max(longest, e - b);
+        at = e;
+      }
+      CHECK(at == count);
+      CHECK(longest - shortest <= 1);
+    }
+  }
+}
+
+TEST_CASE("a part of a process's states converts as the batch of that part alone", "[dds][convert]") {
+  std::vector<dds::StateSample> in(5);
+  for (std::size_t k = 0; k < in.size(); ++k) {
+    in[k].id = static_cast<std::int32_t>(100 + k);
+    in[k].x = core::Vec2(static_cast<double>(k), 1.0);
+  }
+  const msg::AgentStateBatch part = dds::to_msg(in, 2, 5);
+  CHECK(part.first_id() == 102);
+  REQUIRE(part.states().size() == 3);
+  CHECK(part == dds::to_msg(std::vector<dds::StateSample>(in.begin() + 2, in.end())));
+  std::vector<dds::StateSample> out;
+  std::string why;
+  REQUIRE(dds::from_msg(part, out, why));
+  CHECK(out[0].id == 102);
+  CHECK(out[2].x == core::Vec2(4.0, 1.0));
+  CHECK(dds::to_msg(in) == dds::to_msg(in, 0, in.size()));
 }
 
 TEST_CASE("valid_state refuses ids outside 0..kMaxAgentId and absurd model times", "[dds][convert]") {

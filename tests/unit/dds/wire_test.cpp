@@ -1,5 +1,6 @@
 // Unit tests of common/dds/wire: every topic's CDR bytes (as Fast DDS sends them) and omgidl schema.
 #include "dds/wire.hpp"
+#include "protocol/samples.hpp"
 
 #include <catch2/catch.hpp>
 #include <cstring>
@@ -76,6 +77,19 @@ TEST_CASE("every topic's message round-trips through to_cdr and from_cdr", "[dds
       return 0;
     });
   }
+}
+
+TEST_CASE("a batch of kBatchStatesPerDatagram states fits one UDP datagram, one of kMaxBatchStates does not",
+          "[dds][wire]") {
+  // Fast DDS 2.9's UDP message is at most 65,500 bytes; the RTPS header (20), INFO_TS (12) and the DATA
+  // submessage's header with the key hash in its inline QoS (about 60) take a few hundred at most.
+  constexpr std::size_t kMessage = 65500, kRtpsOverhead = 300;
+  msg::AgentStateBatch batch;
+  batch.first_id(0);
+  batch.states().assign(dds::kBatchStatesPerDatagram, a_state());
+  CHECK(dds::to_cdr(batch).size() + kRtpsOverhead <= kMessage);
+  batch.states().assign(dds::kMaxBatchStates, a_state());
+  CHECK(dds::to_cdr(batch).size() > kMessage);  // fragmented unless agent.batch_max_states cuts it
 }
 
 TEST_CASE("a batch with states and a command with strings and sequences round-trip", "[dds][wire]") {
