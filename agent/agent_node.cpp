@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <condition_variable>
+#include <cstdio>
 #include <deque>
 #include <iostream>
 #include <memory>
@@ -25,6 +26,7 @@
 #include "dds/vehicle_io.hpp"
 #include "dds/participant.hpp"
 #include "util/log.hpp"
+#include "util/phase_clock.hpp"
 #include "util/proc_stats.hpp"
 #include "util/rate_loop.hpp"
 #include "util/signals.hpp"
@@ -121,18 +123,35 @@ class AgentNode {
   void tick() {
     recover_from_stall();
     const std::int64_t now = util::steady_ns();
+    phases_.start_at(now);
     drain_commands();
     drain_targets();
+    phases_.lap_at(kCommands, util::steady_ns());
+    state_input_.drain(states_);
+    phases_.lap_at(kUnpack, util::steady_ns());
     drain_states();
+    phases_.lap_at(kTable, util::steady_ns());
     if (identity_.yielding()) return farewell(now);
     if (!identity_.may_publish(now)) return;  // the grace period: listening whether an id is in use
     drain_poses();
     step(now);
     command_robots();
+    phases_.lap_at(kLaw, util::steady_ns());
     // Slow until commanded (agent.idle_rate_hz): a large swarm's discovery runs on a nearly idle host.
     if (logics_.front()->has_command() || ticks_ % idle_every_ == 0) publish();
+    phases_.lap_at(kPublish, util::steady_ns());
     report();
+    phases_.lap_at(kReport, util::steady_ns());
   }
+  /// The loop's phases, timed per tick (a few clock reads per tick, none per sample) and logged at exit
+  /// with the process's CPU split between this thread and the others (Fast DDS's receive and event
+  /// threads): scripts/profile_group.py reads that line.
+  enum Phase : std::size_t { kCommands, kUnpack, kTable, kLaw, kPublish, kReport, kPhases };
+  util::PhaseClock<kPhases> phases_{{"commands", "unpack", "table", "law", "publish", "report"}};
+  /// The loop thread's and the process's CPU time when the loop began, ns.
+  std::int64_t loop_cpu0_ns_ = 0, process_cpu0_ns_ = 0, wall0_ns_ = 0;
+  /// Logs the phases (tick times) and the CPU split since run() began.
+  void log_profile();
   /// After a stall longer than the peers' lease the participant is recreated (dds::Node); participants
   /// DDS Security refused are reported ("refused" events).
   void recover_from_stall();
@@ -298,7 +317,11 @@ AgentNode::AgentNode(const std::vector<std::int32_t>& ids, const std::vector<cor
 }
 
 int AgentNode::run() {
+  loop_cpu0_ns_ = util::thread_cpu_ns();
+  process_cpu0_ns_ = util::process_cpu_ns();
+  wall0_ns_ = util::steady_ns();
   while (!done_ && loop_.wait_next(util::stop_flag())) tick();
+  log_profile();
   if (identity_.yielding()) {
     if (opt_.json) emit({{"event", "stop"}, {"ticks", ticks_}, {"signal", util::stop_signal()}, {"refused", true}});
     return 2;  // a bad command line: the id is in use
@@ -323,6 +346,17 @@ int AgentNode::run() {
   if (opt_.json) emit({{"event", "stop"}, {"ticks", ticks_}, {"signal", util::stop_signal()}});
   if (cfg_.agent.leave_by_lease) node_.exit_without_goodbye(0);
   return 0;
+}
+
+void AgentNode::log_profile() {
+  const double wall_s = static_cast<double>(util::steady_ns() - wall0_ns_) * 1e-9;
+  if (wall_s <= 0.0 || phases_.ticks() == 0) return;
+  const double loop_pct = 1e-7 * static_cast<double>(util::thread_cpu_ns() - loop_cpu0_ns_) / wall_s;
+  const double all_pct = 1e-7 * static_cast<double>(util::process_cpu_ns() - process_cpu0_ns_) / wall_s;
+  char cpu[160];
+  std::snprintf(cpu, sizeof cpu, "; cpu %.2f %% of a core: loop thread %.2f %%, other threads %.2f %%", all_pct,
+                loop_pct, all_pct - loop_pct);
+  util::log_info("profile: " + phases_.line() + cpu);
 }
 
 void AgentNode::on_duplicate(std::int32_t id, const dds::SourceId& other, std::int64_t now) {
@@ -450,8 +484,7 @@ void AgentNode::drain_targets() {
   }
 }
 
-void AgentNode::drain_states() {
-  state_input_.drain(states_);
+void AgentNode::drain_states() {  // states_: drained by tick()
   const double dt = logics_.front()->command().dt;  // the hosted agents follow one command
   for (const auto& r : states_) {
     if (r.kind == dds::StateItem::Kind::Gone) {
