@@ -123,29 +123,30 @@ class AgentNode {
   void tick() {
     recover_from_stall();
     const std::int64_t now = util::steady_ns();
-    phases_.start_at(now);
+    phases_.start_at(util::thread_cpu_ns());
     drain_commands();
     drain_targets();
-    phases_.lap_at(kCommands, util::steady_ns());
+    phases_.lap_at(kCommands, util::thread_cpu_ns());
     state_input_.drain(states_);
-    phases_.lap_at(kUnpack, util::steady_ns());
+    phases_.lap_at(kUnpack, util::thread_cpu_ns());
     drain_states();
-    phases_.lap_at(kTable, util::steady_ns());
+    phases_.lap_at(kTable, util::thread_cpu_ns());
     if (identity_.yielding()) return farewell(now);
     if (!identity_.may_publish(now)) return;  // the grace period: listening whether an id is in use
     drain_poses();
     step(now);
     command_robots();
-    phases_.lap_at(kLaw, util::steady_ns());
+    phases_.lap_at(kLaw, util::thread_cpu_ns());
     // Slow until commanded (agent.idle_rate_hz): a large swarm's discovery runs on a nearly idle host.
     if (logics_.front()->has_command() || ticks_ % idle_every_ == 0) publish();
-    phases_.lap_at(kPublish, util::steady_ns());
+    phases_.lap_at(kPublish, util::thread_cpu_ns());
     report();
-    phases_.lap_at(kReport, util::steady_ns());
+    phases_.lap_at(kReport, util::thread_cpu_ns());
   }
-  /// The loop's phases, timed per tick (a few clock reads per tick, none per sample) and logged at exit
-  /// with the process's CPU split between this thread and the others (Fast DDS's receive and event
-  /// threads): scripts/profile_group.py reads that line.
+  /// The loop's phases, in this thread's CPU time per tick (a few clock reads per tick, none per
+  /// sample; CPU, not wall time, so that a busy host's preemptions are not booked to a phase), logged
+  /// at exit with the process's CPU split between this thread and the others (Fast DDS's receive and
+  /// event threads): scripts/profile_group.py reads that line.
   enum Phase : std::size_t { kCommands, kUnpack, kTable, kLaw, kPublish, kReport, kPhases };
   util::PhaseClock<kPhases> phases_{{"commands", "unpack", "table", "law", "publish", "report"}};
   /// The loop thread's and the process's CPU time when the loop began, ns.
