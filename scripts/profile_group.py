@@ -43,7 +43,7 @@ def parse_profile(log: str):
     m = PROFILE.search(log)
     if not m:
         return None
-    phases = {name: float(us) for name, us in PHASE.findall(m["phases"])}
+    phases = {name: float(us) for name, us in PHASE.findall(m["phases"]) if name != "total"}
     return {"phases": phases, "ticks": int(m["ticks"]), "cpu": float(m["cpu"]), "loop": float(m["loop"]),
             "other": float(m["other"])}
 
@@ -116,7 +116,7 @@ def main() -> int:
     print(f"{'phase (loop thread CPU)':24} {'us/tick':>9} {'share':>7}")
     for n in names:
         print(f"{n:24} {mean[n]:9.1f} {100 * mean[n] / total if total else 0:6.1f}%")
-    print(f"{'loop total':24} {total:9.1f}")
+    print(f"{'phases total':24} {total:9.1f}")
     avg = lambda k: sum(p[k] for p in profiles) / len(profiles)  # noqa: E731
     period_us = 1e6 / args.rate
     print(f"CPU per process, % of a core: {avg('cpu'):.2f} (loop thread {avg('loop'):.2f}, Fast DDS's threads "
