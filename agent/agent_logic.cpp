@@ -16,11 +16,19 @@ NeighbourTable::NeighbourTable(std::vector<std::int32_t> hosted, std::int64_t ti
     : hosted_(std::move(hosted)),
       timeout_ns_(timeout_ns),
       idle_timeout_ns_(idle_timeout_ns > 0 ? idle_timeout_ns : timeout_ns),
-      own_(hosted_.size()) {}
+      own_(hosted_.size()) {
+  for (std::size_t k = 0; k < hosted_.size(); ++k) {
+    const std::int32_t id = hosted_[k];
+    if (id < 0) continue;  // never received: a valid sample's id is >= 0
+    const auto slot = static_cast<std::size_t>(id);
+    if (slot >= index_of_.size()) index_of_.resize(slot + 1, -1);
+    if (index_of_[slot] < 0) index_of_[slot] = static_cast<int>(k);  // the first, as a search would find
+  }
+}
 
 int NeighbourTable::hosted_index(std::int32_t id) const {
-  const auto it = std::find(hosted_.begin(), hosted_.end(), id);
-  return it == hosted_.end() ? -1 : static_cast<int>(it - hosted_.begin());
+  const auto slot = static_cast<std::size_t>(id);
+  return id >= 0 && slot < index_of_.size() ? index_of_[slot] : -1;
 }
 
 void NeighbourTable::on_state(std::int32_t id, const core::Vec2& x, std::uint64_t seq, std::int64_t now_ns,
@@ -422,13 +430,50 @@ void AgentLogic::book_gap() {
       const double g = (e.cur.x - x_).norm();
       if (gap < 0.0 || g < gap) gap = g;
     }
+  book_gap(gap);
+}
+
+void AgentLogic::book_gap(double gap) {
   if (gap >= 0.0 && (safety_.min_gap < 0.0 || gap < safety_.min_gap)) {
     safety_.min_gap = gap;
     safety_.min_gap_time = t_;
   }
 }
 
-void AgentLogic::take_step(const core::StepResult& law) {
+void AgentLogic::book_gaps(const std::vector<AgentLogic*>& agents) {
+  // One pass over the table for all agents (their positions in a small array the inner loop runs
+  // over), on squared distances: the norm is the square root of the squared norm, and the square root
+  // is monotone, so the smallest norm is the root of the smallest squared norm, bit for bit.
+  thread_local std::vector<double> hx, hy, best;
+  thread_local std::vector<std::int32_t> ids;
+  const std::size_t n = agents.size();
+  hx.resize(n);
+  hy.resize(n);
+  ids.resize(n);
+  best.assign(n, std::numeric_limits<double>::infinity());
+  for (std::size_t k = 0; k < n; ++k) {
+    hx[k] = agents[k]->x_.x();
+    hy[k] = agents[k]->x_.y();
+    ids[k] = agents[k]->id_;
+  }
+  const auto& entries = agents.front()->table_->entries();
+  for (const auto& e : entries) {
+    const double ex = e.cur.x.x(), ey = e.cur.x.y();
+    for (std::size_t k = 0; k < n; ++k) {
+      const double dx = ex - hx[k], dy = ey - hy[k];
+      const double d = dx * dx + dy * dy;
+      if (e.id != ids[k] && d < best[k]) best[k] = d;
+    }
+  }
+  for (std::size_t k = 0; k < n; ++k) {
+    AgentLogic& a = *agents[k];
+    // Any entry but its own: a gap (infinite only if every distance overflows, as the norms would).
+    const bool any = a.table_->heard_by(a.id_) > 0;
+    a.book_gap(any ? std::sqrt(best[k]) : -1.0);
+  }
+}
+
+void AgentLogic::take_step(const core::StepResult& law, bool gap) {
   std::optional<core::SafetyOutcome> f;
   const core::StepResult safe = filtered(law, f);
   if (external_) {
@@ -456,7 +501,7 @@ void AgentLogic::take_step(const core::StepResult& law) {
   v_ = r.v;
   t_ += cmd_.dt;
   target_age_ += cmd_.dt;
-  book_gap();
+  if (gap) book_gap();
 }
 
 bool AgentLogic::shares_step_with(const AgentLogic& first) const {
@@ -496,7 +541,8 @@ void AgentLogic::step_shared(const std::vector<AgentLogic*>& agents) {
   core::agent_steps(local, hosted, others, t_local, steps);
   // A breach found now is dealt with from the next tick on (shares_step_with is false then).
   for (AgentLogic* a : agents) a->check_fence();
-  for (std::size_t k = 0; k < agents.size(); ++k) agents[k]->take_step(steps[k]);
+  for (std::size_t k = 0; k < agents.size(); ++k) agents[k]->take_step(steps[k], false);
+  book_gaps(agents);
 }
 
 core::Vec2 seeded_start(std::int32_t id, int n, std::uint64_t seed, double half_width) {

@@ -110,6 +110,9 @@ class NeighbourTable {
     std::uint64_t received = 0, lost = 0, stale = 0, departed = 0;
   };
   std::vector<std::int32_t> hosted_;
+  /// index_of_[id]: the index of hosted agent id, -1 for the others (sized to the largest hosted id):
+  /// hosted_index() is asked once per received sample.
+  std::vector<int> index_of_;
   std::int64_t timeout_ns_;
   std::int64_t idle_timeout_ns_;
   std::int64_t dropped_at_ns_ = -1;  ///< the last drop_stale's now_ns
@@ -292,12 +295,18 @@ class AgentLogic {
   core::Vec2 seen_now(const CentreFrame& f, const Snapshot& s, const dds::CommandId& followed) const;
   /// Drives the vehicle by the law's step r and books the result (position, velocity, model time,
   /// counters).
-  void take_step(const core::StepResult& r);
+  /// gap: book the smallest gap now (book_gap); step_shared books all its agents' at once instead.
+  void take_step(const core::StepResult& r, bool gap = true);
   /// The law's step r through the safety filter (the neighbours as last heard, each with its age), or r
   /// itself when the command does not filter; books the filter's figures. f is set when it filtered.
   core::StepResult filtered(const core::StepResult& r, std::optional<core::SafetyOutcome>& f);
   /// Books the smallest distance from the new position to a neighbour as last heard.
   void book_gap();
+  /// Books `gap` (the smallest distance to a neighbour as last heard; ignored when negative: none) as
+  /// book_gap would.
+  void book_gap(double gap);
+  /// book_gap() of every agent of one table, in one pass over it (the same figures, bit for bit).
+  static void book_gaps(const std::vector<AgentLogic*>& agents);
   /// Checks the position against the fence before a step: a new excursion is a breach (counted, and
   /// breach_action taken); back inside, the excursion ends.
   void check_fence();

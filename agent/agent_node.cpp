@@ -183,7 +183,8 @@ class AgentNode {
   /// A refused sample: counted by every hosted agent, logged (throttled per first refused field, e.g.
   /// "state.id" or "state_batch.states[3].x", unless `always`).
   void reject(const char* what, const std::string& log_line, const std::string& why, bool always = false);
-  bool hosted(std::int32_t id) const { return std::find(ids_.begin(), ids_.end(), id) != ids_.end(); }
+  /// Asked once per received sample: the table's index, not a search.
+  bool hosted(std::int32_t id) const { return table_->hosted_index(id) >= 0; }
 
   const std::vector<std::int32_t> ids_;
   const config::Config& cfg_;
@@ -211,6 +212,7 @@ class AgentNode {
   dds::Writer<msg::AgentState> state_writer_;         ///< unless batch_
   dds::Writer<msg::AgentStateBatch> batch_writer_;    ///< when batch_
   std::vector<dds::StateSample> batch_states_;        ///< reused by publish()
+  msg::AgentStateBatch batch_msg_;                     ///< reused by publish()
   dds::Writer<msg::AgentStatus> status_writer_;
   dds::StateInput state_input_;
   dds::Reader<msg::ShapeCommand> command_reader_;
@@ -497,14 +499,15 @@ void AgentNode::drain_states() {  // states_: drained by tick()
       continue;
     }
     const dds::StateSample& s = r.state;
-    if (hosted(s.id) && !identity_.ours(r.source)) {  // our id, from another participant
+    const bool ours = hosted(s.id);
+    if (ours && !identity_.ours(r.source)) {  // our id, from another participant
       on_duplicate(s.id, r.source, r.receive_stamp_ns);
       continue;
     }
     // Once into the shared table; each hosted agent leaves its own entry out.
     table_->on_state(s.id, s.x, s.seq, r.receive_stamp_ns, s.command, s.arc, s.model_time, s.prev_x, s.prev_arc, dt);
     // Data age of samples from agents hosted elsewhere (a process's own samples are not a delivery).
-    if (!hosted(s.id) && ages_us_.size() < ages_us_.capacity())
+    if (!ours && ages_us_.size() < ages_us_.capacity())
       ages_us_.push_back(static_cast<double>(r.receive_stamp_ns - s.stamp_ns) * 1e-3);
   }
 }
@@ -594,7 +597,10 @@ void AgentNode::publish() {
     if (batch_) batch_states_.push_back(s);
     else state_writer_.write(dds::to_msg(s));
   }
-  if (batch_ && !batch_states_.empty()) batch_writer_.write(dds::to_msg(batch_states_));
+  if (batch_ && !batch_states_.empty()) {
+    dds::to_msg(batch_states_, batch_msg_);
+    batch_writer_.write(batch_msg_);
+  }
 }
 
 void AgentNode::drain_poses() {

@@ -139,10 +139,14 @@ bool from_msg(const msg::AgentState& m, StateSample& out, std::string& why) {
 
 msg::AgentStateBatch to_msg(const std::vector<StateSample>& states) {
   msg::AgentStateBatch m;
-  m.first_id(states.empty() ? 0 : states.front().id);
-  m.states().reserve(states.size());
-  for (const StateSample& s : states) m.states().push_back(to_msg(s));
+  to_msg(states, m);
   return m;
+}
+
+void to_msg(const std::vector<StateSample>& states, msg::AgentStateBatch& out) {
+  out.first_id(states.empty() ? 0 : states.front().id);
+  out.states().resize(states.size());
+  for (std::size_t k = 0; k < states.size(); ++k) out.states()[k] = to_msg(states[k]);
 }
 
 bool from_msg(const msg::AgentStateBatch& m, std::vector<StateSample>& out, std::string& why) {
@@ -177,8 +181,8 @@ bool from_msg(const msg::AgentStateBatch& m, std::vector<StateSample>& out, std:
   }
   // Distinct ids: a batch naming one agent twice is malformed (checked on the valid ids only).
   if (all.empty()) {
-    std::vector<std::int32_t> ids;
-    ids.reserve(states.size());
+    thread_local std::vector<std::int32_t> ids;  // reused: one batch per publisher and tick comes here
+    ids.clear();
     for (const auto& s : states) ids.push_back(s.id());
     std::sort(ids.begin(), ids.end());
     const auto dup = std::adjacent_find(ids.begin(), ids.end());

@@ -64,6 +64,8 @@ inline constexpr std::size_t kMaxBatchStates = 1000;
 /// The states of the agents one process hosts -> one AgentStateBatch (first_id: states[0].id; each
 /// element as to_msg(StateSample)). states holds 1 to kMaxBatchStates samples with distinct ids.
 msg::AgentStateBatch to_msg(const std::vector<StateSample>& states);
+/// The same into `out`, whose buffers are reused (a process publishing one batch per tick keeps one).
+void to_msg(const std::vector<StateSample>& states, msg::AgentStateBatch& out);
 
 /// AgentStateBatch -> one StateSample per element, in order, when the batch holds 1 to
 /// kMaxBatchStates states, first_id is the id of states[0], every element passes valid_state and no

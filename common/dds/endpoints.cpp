@@ -18,7 +18,9 @@ namespace fdds = eprosima::fastdds::dds;
 namespace detail {
 
 /// The listener of one Reader: takes every sample into a mutex-protected mailbox. No maths here: it
-/// runs on Fast DDS's receive thread.
+/// runs on Fast DDS's receive thread. Nothing is allocated per sample in steady state: samples are
+/// taken into one reused message whose buffers are swapped with those of a slot the reader consumed
+/// earlier (drain() hands the consumer's last vector back as spare slots).
 template <class Msg>
 class Mailbox final : public fdds::DataReaderListener {
  public:
@@ -27,9 +29,8 @@ class Mailbox final : public fdds::DataReaderListener {
   }
 
   void on_data_available(fdds::DataReader* reader) override {
-    Msg sample;
     fdds::SampleInfo info;
-    while (is_ok(reader->take_next_sample(&sample, &info))) {
+    while (is_ok(reader->take_next_sample(&sample_, &info))) {
       const std::int64_t now = util::steady_ns();
       InstanceState state = InstanceState::Alive;
       if (info.instance_state == fdds::NOT_ALIVE_DISPOSED_INSTANCE_STATE) {
@@ -44,7 +45,7 @@ class Mailbox final : public fdds::DataReaderListener {
         // the writer last heard on each instance. (One map node per instance ever seen; nothing
         // allocated per sample.)
         if (info.valid_data) {
-          key = MsgTraits<Msg>::key(sample);
+          key = MsgTraits<Msg>::key(sample_);
           auto it = instances_.find(info.instance_handle);
           if (it == instances_.end()) it = instances_.emplace(info.instance_handle, Instance{key, {}}).first;
           it->second.writer = info.publication_handle;
@@ -53,13 +54,16 @@ class Mailbox final : public fdds::DataReaderListener {
           if (it != instances_.end()) key = it->second.key;
         }
       }
-      if (pending_.size() >= capacity_) {
-        ++overflowed_;
-        continue;
-      }
-      // An invalid sample carries no data (take leaves `sample` as it was): hand out a default Msg.
-      pending_.push_back(Received<Msg>{info.valid_data ? sample : Msg{}, now, info.valid_data, state, key,
-                                       source_of(info.publication_handle)});
+      Received<Msg>* slot = next_slot();
+      if (slot == nullptr) continue;
+      // An invalid sample carries no data (take leaves the message as it was): hand out a default Msg.
+      if (info.valid_data) std::swap(slot->msg, sample_);
+      else slot->msg = Msg{};
+      slot->receive_stamp_ns = now;
+      slot->valid_data = info.valid_data;
+      slot->instance = state;
+      slot->key_id = key;
+      slot->source = source_of(info.publication_handle);
     }
   }
 
@@ -73,22 +77,26 @@ class Mailbox final : public fdds::DataReaderListener {
       std::lock_guard<std::mutex> lock(mutex_);
       for (const auto& [handle, inst] : instances_) {
         if (inst.writer != status.last_publication_handle) continue;
-        if (pending_.size() >= capacity_) {
-          ++overflowed_;
-          continue;
-        }
-        pending_.push_back(
-            Received<Msg>{Msg{}, now, false, InstanceState::NoWriters, inst.key, source_of(inst.writer)});
+        Received<Msg>* slot = next_slot();
+        if (slot == nullptr) continue;
+        *slot = Received<Msg>{Msg{}, now, false, InstanceState::NoWriters, inst.key, source_of(inst.writer)};
       }
     }
   }
 
-  /// Swaps the pending samples into out (out is cleared first; capacities are recycled).
+  /// Swaps the pending samples into out; out's previous elements (consumed by the caller) become the
+  /// spare slots the listener fills next, so their buffers are reused.
   std::size_t drain(std::vector<Received<Msg>>& out) {
-    out.clear();
-    std::lock_guard<std::mutex> lock(mutex_);
-    out.swap(pending_);
-    return out.size();
+    std::size_t n = 0;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      out.swap(pending_);
+      n = count_;
+      count_ = 0;
+    }
+    // Spare slots not filled this time: dropped (rare: only when fewer samples came than before).
+    out.resize(n);
+    return n;
   }
 
   std::uint64_t overflowed() const {
@@ -97,9 +105,23 @@ class Mailbox final : public fdds::DataReaderListener {
   }
 
  private:
+  /// The next slot to fill (under mutex_): a spare one if there is, else a new one; nullptr (and the
+  /// sample counted as overflowed) when the mailbox is full.
+  Received<Msg>* next_slot() {
+    if (count_ >= capacity_) {
+      ++overflowed_;
+      return nullptr;
+    }
+    if (count_ == pending_.size()) pending_.emplace_back();
+    return &pending_[count_++];
+  }
+
   const std::size_t capacity_;
   mutable std::mutex mutex_;
+  /// pending_[0, count_): received, not drained yet; the rest: spare slots.
   std::vector<Received<Msg>> pending_;
+  std::size_t count_ = 0;
+  Msg sample_;  ///< the take buffer (receive thread only)
   std::uint64_t overflowed_ = 0;
   struct Instance {
     std::int32_t key;               ///< the id the instance carries

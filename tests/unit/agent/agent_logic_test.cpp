@@ -238,6 +238,8 @@ TEST_CASE("hosted agents stepped together take each one's own step (the arc law,
     // as a shared step sees them.
     for (auto& l : own)
       for (auto& m : own) l->on_state(m->id(), m->position(), seq, 0);
+    // The process hears its own agents too (the law leaves them out; the gap counts them as heard).
+    for (auto& m : shared) table->on_state(m->id(), m->position(), seq, 0, {}, std::nullopt, 0.0, std::nullopt, std::nullopt, 1.0);
     AgentLogic::step_shared(group);
     for (auto& l : own) l->step();
     for (std::size_t k = 0; k < 5; ++k) {
@@ -246,6 +248,10 @@ TEST_CASE("hosted agents stepped together take each one's own step (the arc law,
       CHECK(shared[k]->velocity() == own[k]->velocity());
       CHECK(shared[k]->model_time() == own[k]->model_time());
       CHECK(shared[k]->previous_arc() == own[k]->previous_arc());
+      // The gaps booked in one pass for the group are each agent's own, bit for bit.
+      REQUIRE(own[k]->safety().min_gap > 0.0);
+      CHECK(shared[k]->safety().min_gap == own[k]->safety().min_gap);
+      CHECK(shared[k]->safety().min_gap_time == own[k]->safety().min_gap_time);
     }
   }
   // The group does not share once its agents follow different model times.
@@ -896,4 +902,12 @@ TEST_CASE("fence: a command whose fence leaves the agent outside is a breach; th
     for (int k = 0; k < 100; ++k) a.step();
     CHECK(std::abs(a.position().norm() - 2.0) < 0.01);
   }
+}
+
+TEST_CASE("the neighbour table knows its hosted agents by id", "[agent]") {
+  const agent::NeighbourTable table({7, 3, 12}, 60 * kMs);
+  CHECK(table.hosted_index(7) == 0);
+  CHECK(table.hosted_index(3) == 1);
+  CHECK(table.hosted_index(12) == 2);
+  for (const std::int32_t other : {-1, 0, 4, 11, 13, 9999}) CHECK(table.hosted_index(other) == -1);
 }
