@@ -38,10 +38,17 @@ void NeighbourTable::on_state(std::int32_t id, const core::Vec2& x, std::uint64_
   // The sender's previous step comes with the sample: a lost sample never leaves a hole in lockstep.
   const std::optional<Snapshot> before =
       prev_x ? std::optional<Snapshot>(Snapshot{*prev_x, command, model_time - dt, prev_arc}) : std::nullopt;
-  auto it = std::lower_bound(entries_.begin(), entries_.end(), id, [](const Entry& e, std::int32_t i) { return e.id < i; });
+  if (id < 0) return;  // never a valid sample's (dds::valid_state): nothing to index it by
+  Entry* it = find(id);
   std::uint64_t lost = 0;
-  if (it == entries_.end() || it->id != id) {
-    it = entries_.insert(it, Entry{id, hosted_index(id), now_ns, seq, snap, before.value_or(snap)});
+  if (it == nullptr) {
+    const auto at = std::lower_bound(entries_.begin(), entries_.end(), id, [](const Entry& e, std::int32_t i) { return e.id < i; });
+    const auto k = static_cast<std::size_t>(at - entries_.begin());
+    entries_.insert(at, Entry{id, hosted_index(id), now_ns, seq, snap, before.value_or(snap)});
+    const auto slot = static_cast<std::size_t>(id);
+    if (slot >= pos_of_.size()) pos_of_.resize(slot + 1, -1);
+    reindex(k);
+    it = &entries_[k];
   } else {
     Entry& e = *it;
     if (seq <= e.seq) return;  // duplicate or reordered: keep the newest
@@ -60,25 +67,42 @@ void NeighbourTable::on_state(std::int32_t id, const core::Vec2& x, std::uint64_
   }
 }
 
+NeighbourTable::Entry* NeighbourTable::find(std::int32_t id) {
+  const auto slot = static_cast<std::size_t>(id);
+  if (id < 0 || slot >= pos_of_.size() || pos_of_[slot] < 0) return nullptr;
+  return &entries_[static_cast<std::size_t>(pos_of_[slot])];
+}
+
+void NeighbourTable::reindex(std::size_t from) {
+  for (std::size_t k = from; k < entries_.size(); ++k) pos_of_[static_cast<std::size_t>(entries_[k].id)] = static_cast<int>(k);
+}
+
 void NeighbourTable::on_gone(std::int32_t id) {
-  const auto it = std::lower_bound(entries_.begin(), entries_.end(), id, [](const Entry& e, std::int32_t i) { return e.id < i; });
-  if (it == entries_.end() || it->id != id) return;
+  const Entry* e = find(id);
+  if (e == nullptr) return;
   ++total_.departed;
-  if (it->hosted >= 0) ++own_[static_cast<std::size_t>(it->hosted)].departed;
-  entries_.erase(it);
+  if (e->hosted >= 0) ++own_[static_cast<std::size_t>(e->hosted)].departed;
+  const auto k = static_cast<std::size_t>(e - entries_.data());
+  entries_.erase(entries_.begin() + static_cast<std::ptrdiff_t>(k));
+  pos_of_[static_cast<std::size_t>(id)] = -1;
+  reindex(k);
 }
 
 void NeighbourTable::drop_stale(std::int64_t now_ns, bool commanded) {
   if (now_ns == dropped_at_ns_) return;
   dropped_at_ns_ = now_ns;
   const std::int64_t timeout = commanded ? timeout_ns_ : idle_timeout_ns_;
+  bool dropped = false;
   const auto stale = [&](const Entry& e) {
     if (now_ns - e.last_seen_ns <= timeout) return false;
     ++total_.stale;
     if (e.hosted >= 0) ++own_[static_cast<std::size_t>(e.hosted)].stale;
+    pos_of_[static_cast<std::size_t>(e.id)] = -1;
+    dropped = true;
     return true;
   };
   entries_.erase(std::remove_if(entries_.begin(), entries_.end(), stale), entries_.end());
+  if (dropped) reindex(0);
 }
 
 int NeighbourTable::heard_by(std::int32_t id) const {
@@ -459,10 +483,18 @@ void AgentLogic::book_gaps(const std::vector<AgentLogic*>& agents) {
   const auto& entries = agents.front()->table_->entries();
   for (const auto& e : entries) {
     const double ex = e.cur.x.x(), ey = e.cur.x.y();
-    for (std::size_t k = 0; k < n; ++k) {
+    if (e.hosted >= 0) {  // one of ours: not a neighbour of itself
+      for (std::size_t k = 0; k < n; ++k) {
+        const double dx = ex - hx[k], dy = ey - hy[k];
+        const double d = dx * dx + dy * dy;
+        if (e.id != ids[k] && d < best[k]) best[k] = d;
+      }
+      continue;
+    }
+    for (std::size_t k = 0; k < n; ++k) {  // branch-free: the compiler vectorises it
       const double dx = ex - hx[k], dy = ey - hy[k];
       const double d = dx * dx + dy * dy;
-      if (e.id != ids[k] && d < best[k]) best[k] = d;
+      best[k] = d < best[k] ? d : best[k];
     }
   }
   for (std::size_t k = 0; k < n; ++k) {

@@ -86,7 +86,8 @@ class NeighbourTable {
   NeighbourTable(std::vector<std::int32_t> hosted, std::int64_t timeout_ns, std::int64_t idle_timeout_ns = 0);
 
   /// A valid state received at now_ns (see AgentLogic::on_state); dt: the step of the command the
-  /// receivers follow (the sender's previous state is tagged model_time - dt).
+  /// receivers follow (the sender's previous state is tagged model_time - dt). A negative id (never
+  /// valid) is ignored.
   void on_state(std::int32_t id, const core::Vec2& x, std::uint64_t seq, std::int64_t now_ns, dds::CommandId command,
                 std::optional<double> arc, double model_time, std::optional<core::Vec2> prev_x,
                 std::optional<double> prev_arc, double dt);
@@ -117,6 +118,14 @@ class NeighbourTable {
   std::int64_t idle_timeout_ns_;
   std::int64_t dropped_at_ns_ = -1;  ///< the last drop_stale's now_ns
   std::vector<Entry> entries_;
+  /// pos_of_[id]: the index of agent id's entry, -1 if none (sized to the largest id heard): one
+  /// look-up per received sample instead of a search; rebuilt from the changed index on when an
+  /// entry comes or goes.
+  std::vector<int> pos_of_;
+  /// Agent id's entry, nullptr if none.
+  Entry* find(std::int32_t id);
+  /// pos_of_ of entries_[from...] (after an insertion or an erasure there).
+  void reindex(std::size_t from);
   Counts total_;            ///< the process's counts, every agent's samples
   std::vector<Counts> own_; ///< per hosted agent: the part that is its own samples
 };

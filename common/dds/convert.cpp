@@ -93,8 +93,6 @@ bool valid_state(const msg::AgentState& s, std::string& why) {
   return true;
 }
 
-namespace {
-/// A valid AgentState -> StateSample.
 StateSample to_sample(const msg::AgentState& m) {
   StateSample out;
   out.id = m.id();
@@ -109,7 +107,6 @@ StateSample to_sample(const msg::AgentState& m) {
   out.prev_arc = m.has_arc() ? std::optional<double>(m.prev_arc()) : std::nullopt;
   return out;
 }
-}  // namespace
 
 msg::AgentState to_msg(const StateSample& s) {
   msg::AgentState m;
@@ -150,6 +147,14 @@ void to_msg(const std::vector<StateSample>& states, msg::AgentStateBatch& out) {
 }
 
 bool from_msg(const msg::AgentStateBatch& m, std::vector<StateSample>& out, std::string& why) {
+  if (!valid_batch(m, why)) return false;
+  out.clear();
+  out.reserve(m.states().size());
+  for (const auto& s : m.states()) out.push_back(to_sample(s));
+  return true;
+}
+
+bool valid_batch(const msg::AgentStateBatch& m, std::string& why) {
   Problems p("state_batch");
   const auto& states = m.states();
   if (states.empty() || states.size() > kMaxBatchStates)
@@ -192,9 +197,6 @@ bool from_msg(const msg::AgentStateBatch& m, std::vector<StateSample>& out, std:
     why = all;
     return false;
   }
-  out.clear();
-  out.reserve(states.size());
-  for (const auto& s : states) out.push_back(to_sample(s));
   return true;
 }
 

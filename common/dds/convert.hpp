@@ -57,6 +57,9 @@ msg::AgentState to_msg(const StateSample& s);
 /// AgentState -> StateSample when valid_state(m) holds (arc and prev_arc are nullopt unless has_arc);
 /// otherwise false, `out` untouched and `why` naming every bad field.
 bool from_msg(const msg::AgentState& m, StateSample& out, std::string& why);
+/// A valid AgentState (valid_state, or an element of a batch valid_batch passed) -> StateSample, as
+/// from_msg converts it, without checking again.
+StateSample to_sample(const msg::AgentState& m);
 
 /// Most states one AgentStateBatch may carry (shapeform_agent_group hosts at most this many agents).
 inline constexpr std::size_t kMaxBatchStates = 1000;
@@ -72,6 +75,9 @@ void to_msg(const std::vector<StateSample>& states, msg::AgentStateBatch& out);
 /// id appears twice. Otherwise false (the whole batch refused: its publisher is broken), `out`
 /// untouched and `why` naming every bad field, e.g. "state_batch.states[3].x: must be finite, got nan".
 bool from_msg(const msg::AgentStateBatch& m, std::vector<StateSample>& out, std::string& why);
+/// The checks of from_msg(AgentStateBatch) alone: true when from_msg would convert m (its elements then
+/// each convert by to_sample), else false and `why` as from_msg says it.
+bool valid_batch(const msg::AgentStateBatch& m, std::string& why);
 
 /// TargetSample -> TrackingTarget (every field).
 msg::TrackingTarget to_msg(const TargetSample& t);

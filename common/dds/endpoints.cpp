@@ -18,9 +18,9 @@ namespace fdds = eprosima::fastdds::dds;
 namespace detail {
 
 /// The listener of one Reader: takes every sample into a mutex-protected mailbox. No maths here: it
-/// runs on Fast DDS's receive thread. Nothing is allocated per sample in steady state: samples are
-/// taken into one reused message whose buffers are swapped with those of a slot the reader consumed
-/// earlier (drain() hands the consumer's last vector back as spare slots).
+/// runs on Fast DDS's receive thread. Nothing is allocated per sample in steady state: each sample is
+/// taken into a slot the reader consumed earlier, reusing its buffers (drain() hands the consumer's
+/// last vector back as spare slots).
 template <class Msg>
 class Mailbox final : public fdds::DataReaderListener {
  public:
@@ -30,22 +30,24 @@ class Mailbox final : public fdds::DataReaderListener {
 
   void on_data_available(fdds::DataReader* reader) override {
     fdds::SampleInfo info;
-    while (is_ok(reader->take_next_sample(&sample_, &info))) {
-      const std::int64_t now = util::steady_ns();
-      InstanceState state = InstanceState::Alive;
-      if (info.instance_state == fdds::NOT_ALIVE_DISPOSED_INSTANCE_STATE) {
-        state = InstanceState::Disposed;
-      } else if (info.instance_state == fdds::NOT_ALIVE_NO_WRITERS_INSTANCE_STATE) {
-        state = InstanceState::NoWriters;
-      }
+    // Each sample is taken straight into its slot (under the mutex: drain() only swaps vectors), into
+    // the buffers a consumed sample left there; one that finds the mailbox full into a scratch one.
+    for (;;) {
       std::lock_guard<std::mutex> lock(mutex_);
+      Received<Msg>* slot = next_slot();
+      Msg& into = slot != nullptr ? slot->msg : overflow_;
+      if (!is_ok(reader->take_next_sample(&into, &info))) {
+        if (slot != nullptr) --count_;
+        return;
+      }
+      if (slot == nullptr) ++overflowed_;
       std::int32_t key = -1;
       if constexpr (MsgTraits<Msg>::keyed) {
         // get_key_value() is unsupported in 2.9: remember handle -> id to name invalid samples, and
         // the writer last heard on each instance. (One map node per instance ever seen; nothing
         // allocated per sample.)
         if (info.valid_data) {
-          key = MsgTraits<Msg>::key(sample_);
+          key = MsgTraits<Msg>::key(into);
           auto it = instances_.find(info.instance_handle);
           if (it == instances_.end()) it = instances_.emplace(info.instance_handle, Instance{key, {}}).first;
           it->second.writer = info.publication_handle;
@@ -54,14 +56,14 @@ class Mailbox final : public fdds::DataReaderListener {
           if (it != instances_.end()) key = it->second.key;
         }
       }
-      Received<Msg>* slot = next_slot();
       if (slot == nullptr) continue;
       // An invalid sample carries no data (take leaves the message as it was): hand out a default Msg.
-      if (info.valid_data) std::swap(slot->msg, sample_);
-      else slot->msg = Msg{};
-      slot->receive_stamp_ns = now;
+      if (!info.valid_data) slot->msg = Msg{};
+      slot->receive_stamp_ns = util::steady_ns();
       slot->valid_data = info.valid_data;
-      slot->instance = state;
+      slot->instance = info.instance_state == fdds::NOT_ALIVE_DISPOSED_INSTANCE_STATE     ? InstanceState::Disposed
+                       : info.instance_state == fdds::NOT_ALIVE_NO_WRITERS_INSTANCE_STATE ? InstanceState::NoWriters
+                                                                                          : InstanceState::Alive;
       slot->key_id = key;
       slot->source = source_of(info.publication_handle);
     }
@@ -78,7 +80,10 @@ class Mailbox final : public fdds::DataReaderListener {
       for (const auto& [handle, inst] : instances_) {
         if (inst.writer != status.last_publication_handle) continue;
         Received<Msg>* slot = next_slot();
-        if (slot == nullptr) continue;
+        if (slot == nullptr) {
+          ++overflowed_;
+          continue;
+        }
         *slot = Received<Msg>{Msg{}, now, false, InstanceState::NoWriters, inst.key, source_of(inst.writer)};
       }
     }
@@ -105,13 +110,10 @@ class Mailbox final : public fdds::DataReaderListener {
   }
 
  private:
-  /// The next slot to fill (under mutex_): a spare one if there is, else a new one; nullptr (and the
-  /// sample counted as overflowed) when the mailbox is full.
+  /// The next slot to fill (under mutex_): a spare one if there is, else a new one; nullptr when the
+  /// mailbox is full.
   Received<Msg>* next_slot() {
-    if (count_ >= capacity_) {
-      ++overflowed_;
-      return nullptr;
-    }
+    if (count_ >= capacity_) return nullptr;
     if (count_ == pending_.size()) pending_.emplace_back();
     return &pending_[count_++];
   }
@@ -121,7 +123,7 @@ class Mailbox final : public fdds::DataReaderListener {
   /// pending_[0, count_): received, not drained yet; the rest: spare slots.
   std::vector<Received<Msg>> pending_;
   std::size_t count_ = 0;
-  Msg sample_;  ///< the take buffer (receive thread only)
+  Msg overflow_;  ///< where a sample the full mailbox has no slot for is taken (and dropped)
   std::uint64_t overflowed_ = 0;
   struct Instance {
     std::int32_t key;               ///< the id the instance carries

@@ -3,6 +3,7 @@
 #include "agent_logic.hpp"
 #include "core/swarm.hpp"
 
+#include <map>
 #include <memory>
 #include <numeric>
 #include <random>
@@ -910,4 +911,39 @@ TEST_CASE("the neighbour table knows its hosted agents by id", "[agent]") {
   CHECK(table.hosted_index(3) == 1);
   CHECK(table.hosted_index(12) == 2);
   for (const std::int32_t other : {-1, 0, 4, 11, 13, 9999}) CHECK(table.hosted_index(other) == -1);
+}
+
+TEST_CASE("the neighbour table's index follows arrivals, departures and drops (random property)", "[agent]") {
+  // A reference model: id -> (x, last seen, seq). The table must hold exactly its entries, ascending.
+  std::mt19937 rng(11);
+  agent::NeighbourTable table({2, 5}, 30 * kMs);
+  std::map<std::int32_t, std::tuple<double, std::int64_t, std::uint64_t>> model;
+  std::uint64_t seq = 0;
+  for (std::int64_t now = 0; now < 3000 * kMs; now += kMs) {
+    const int op = std::uniform_int_distribution<int>(0, 9)(rng);
+    const auto id = std::uniform_int_distribution<std::int32_t>(0, 60)(rng);
+    if (op < 7) {
+      ++seq;
+      const double x = static_cast<double>(seq);
+      table.on_state(id, Vec2(x, 0), seq, now, {}, std::nullopt, 0.0, std::nullopt, std::nullopt, 1.0);
+      model[id] = {x, now, seq};
+    } else if (op < 9) {
+      table.on_gone(id);
+      model.erase(id);
+    } else {
+      table.drop_stale(now);
+      for (auto it = model.begin(); it != model.end();)
+        it = now - std::get<1>(it->second) > 30 * kMs ? model.erase(it) : std::next(it);
+    }
+    REQUIRE(table.entries().size() == model.size());
+    auto m = model.begin();
+    for (const auto& e : table.entries()) {
+      REQUIRE(e.id == m->first);
+      REQUIRE(e.cur.x.x() == std::get<0>(m->second));
+      REQUIRE(e.hosted == (e.id == 2 ? 0 : e.id == 5 ? 1 : -1));
+      ++m;
+    }
+  }
+  table.on_state(-1, Vec2(0, 0), ++seq, 0, {}, std::nullopt, 0.0, std::nullopt, std::nullopt, 1.0);  // ignored
+  CHECK(table.entries().size() == model.size());
 }
