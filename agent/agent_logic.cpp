@@ -16,11 +16,19 @@ NeighbourTable::NeighbourTable(std::vector<std::int32_t> hosted, std::int64_t ti
     : hosted_(std::move(hosted)),
       timeout_ns_(timeout_ns),
       idle_timeout_ns_(idle_timeout_ns > 0 ? idle_timeout_ns : timeout_ns),
-      own_(hosted_.size()) {}
+      own_(hosted_.size()) {
+  for (std::size_t k = 0; k < hosted_.size(); ++k) {
+    const std::int32_t id = hosted_[k];
+    if (id < 0) continue;  // never received: a valid sample's id is >= 0
+    const auto slot = static_cast<std::size_t>(id);
+    if (slot >= index_of_.size()) index_of_.resize(slot + 1, -1);
+    if (index_of_[slot] < 0) index_of_[slot] = static_cast<int>(k);  // the first, as a search would find
+  }
+}
 
 int NeighbourTable::hosted_index(std::int32_t id) const {
-  const auto it = std::find(hosted_.begin(), hosted_.end(), id);
-  return it == hosted_.end() ? -1 : static_cast<int>(it - hosted_.begin());
+  const auto slot = static_cast<std::size_t>(id);
+  return id >= 0 && slot < index_of_.size() ? index_of_[slot] : -1;
 }
 
 void NeighbourTable::on_state(std::int32_t id, const core::Vec2& x, std::uint64_t seq, std::int64_t now_ns,
@@ -30,10 +38,17 @@ void NeighbourTable::on_state(std::int32_t id, const core::Vec2& x, std::uint64_
   // The sender's previous step comes with the sample: a lost sample never leaves a hole in lockstep.
   const std::optional<Snapshot> before =
       prev_x ? std::optional<Snapshot>(Snapshot{*prev_x, command, model_time - dt, prev_arc}) : std::nullopt;
-  auto it = std::lower_bound(entries_.begin(), entries_.end(), id, [](const Entry& e, std::int32_t i) { return e.id < i; });
+  if (id < 0) return;  // never a valid sample's (dds::valid_state): nothing to index it by
+  Entry* it = find(id);
   std::uint64_t lost = 0;
-  if (it == entries_.end() || it->id != id) {
-    it = entries_.insert(it, Entry{id, hosted_index(id), now_ns, seq, snap, before.value_or(snap)});
+  if (it == nullptr) {
+    const auto at = std::lower_bound(entries_.begin(), entries_.end(), id, [](const Entry& e, std::int32_t i) { return e.id < i; });
+    const auto k = static_cast<std::size_t>(at - entries_.begin());
+    entries_.insert(at, Entry{id, hosted_index(id), now_ns, seq, snap, before.value_or(snap)});
+    const auto slot = static_cast<std::size_t>(id);
+    if (slot >= pos_of_.size()) pos_of_.resize(slot + 1, -1);
+    reindex(k);
+    it = &entries_[k];
   } else {
     Entry& e = *it;
     if (seq <= e.seq) return;  // duplicate or reordered: keep the newest
@@ -52,25 +67,42 @@ void NeighbourTable::on_state(std::int32_t id, const core::Vec2& x, std::uint64_
   }
 }
 
+NeighbourTable::Entry* NeighbourTable::find(std::int32_t id) {
+  const auto slot = static_cast<std::size_t>(id);
+  if (id < 0 || slot >= pos_of_.size() || pos_of_[slot] < 0) return nullptr;
+  return &entries_[static_cast<std::size_t>(pos_of_[slot])];
+}
+
+void NeighbourTable::reindex(std::size_t from) {
+  for (std::size_t k = from; k < entries_.size(); ++k) pos_of_[static_cast<std::size_t>(entries_[k].id)] = static_cast<int>(k);
+}
+
 void NeighbourTable::on_gone(std::int32_t id) {
-  const auto it = std::lower_bound(entries_.begin(), entries_.end(), id, [](const Entry& e, std::int32_t i) { return e.id < i; });
-  if (it == entries_.end() || it->id != id) return;
+  const Entry* e = find(id);
+  if (e == nullptr) return;
   ++total_.departed;
-  if (it->hosted >= 0) ++own_[static_cast<std::size_t>(it->hosted)].departed;
-  entries_.erase(it);
+  if (e->hosted >= 0) ++own_[static_cast<std::size_t>(e->hosted)].departed;
+  const auto k = static_cast<std::size_t>(e - entries_.data());
+  entries_.erase(entries_.begin() + static_cast<std::ptrdiff_t>(k));
+  pos_of_[static_cast<std::size_t>(id)] = -1;
+  reindex(k);
 }
 
 void NeighbourTable::drop_stale(std::int64_t now_ns, bool commanded) {
   if (now_ns == dropped_at_ns_) return;
   dropped_at_ns_ = now_ns;
   const std::int64_t timeout = commanded ? timeout_ns_ : idle_timeout_ns_;
+  bool dropped = false;
   const auto stale = [&](const Entry& e) {
     if (now_ns - e.last_seen_ns <= timeout) return false;
     ++total_.stale;
     if (e.hosted >= 0) ++own_[static_cast<std::size_t>(e.hosted)].stale;
+    pos_of_[static_cast<std::size_t>(e.id)] = -1;
+    dropped = true;
     return true;
   };
   entries_.erase(std::remove_if(entries_.begin(), entries_.end(), stale), entries_.end());
+  if (dropped) reindex(0);
 }
 
 int NeighbourTable::heard_by(std::int32_t id) const {
@@ -422,13 +454,58 @@ void AgentLogic::book_gap() {
       const double g = (e.cur.x - x_).norm();
       if (gap < 0.0 || g < gap) gap = g;
     }
+  book_gap(gap);
+}
+
+void AgentLogic::book_gap(double gap) {
   if (gap >= 0.0 && (safety_.min_gap < 0.0 || gap < safety_.min_gap)) {
     safety_.min_gap = gap;
     safety_.min_gap_time = t_;
   }
 }
 
-void AgentLogic::take_step(const core::StepResult& law) {
+void AgentLogic::book_gaps(const std::vector<AgentLogic*>& agents) {
+  // One pass over the table for all agents (their positions in a small array the inner loop runs
+  // over), on squared distances: the norm is the square root of the squared norm, and the square root
+  // is monotone, so the smallest norm is the root of the smallest squared norm, bit for bit.
+  thread_local std::vector<double> hx, hy, best;
+  thread_local std::vector<std::int32_t> ids;
+  const std::size_t n = agents.size();
+  hx.resize(n);
+  hy.resize(n);
+  ids.resize(n);
+  best.assign(n, std::numeric_limits<double>::infinity());
+  for (std::size_t k = 0; k < n; ++k) {
+    hx[k] = agents[k]->x_.x();
+    hy[k] = agents[k]->x_.y();
+    ids[k] = agents[k]->id_;
+  }
+  const auto& entries = agents.front()->table_->entries();
+  for (const auto& e : entries) {
+    const double ex = e.cur.x.x(), ey = e.cur.x.y();
+    if (e.hosted >= 0) {  // one of ours: not a neighbour of itself
+      for (std::size_t k = 0; k < n; ++k) {
+        const double dx = ex - hx[k], dy = ey - hy[k];
+        const double d = dx * dx + dy * dy;
+        if (e.id != ids[k] && d < best[k]) best[k] = d;
+      }
+      continue;
+    }
+    for (std::size_t k = 0; k < n; ++k) {  // branch-free: the compiler vectorises it
+      const double dx = ex - hx[k], dy = ey - hy[k];
+      const double d = dx * dx + dy * dy;
+      best[k] = d < best[k] ? d : best[k];
+    }
+  }
+  for (std::size_t k = 0; k < n; ++k) {
+    AgentLogic& a = *agents[k];
+    // Any entry but its own: a gap (infinite only if every distance overflows, as the norms would).
+    const bool any = a.table_->heard_by(a.id_) > 0;
+    a.book_gap(any ? std::sqrt(best[k]) : -1.0);
+  }
+}
+
+void AgentLogic::take_step(const core::StepResult& law, bool gap) {
   std::optional<core::SafetyOutcome> f;
   const core::StepResult safe = filtered(law, f);
   if (external_) {
@@ -456,7 +533,7 @@ void AgentLogic::take_step(const core::StepResult& law) {
   v_ = r.v;
   t_ += cmd_.dt;
   target_age_ += cmd_.dt;
-  book_gap();
+  if (gap) book_gap();
 }
 
 bool AgentLogic::shares_step_with(const AgentLogic& first) const {
@@ -496,7 +573,8 @@ void AgentLogic::step_shared(const std::vector<AgentLogic*>& agents) {
   core::agent_steps(local, hosted, others, t_local, steps);
   // A breach found now is dealt with from the next tick on (shares_step_with is false then).
   for (AgentLogic* a : agents) a->check_fence();
-  for (std::size_t k = 0; k < agents.size(); ++k) agents[k]->take_step(steps[k]);
+  for (std::size_t k = 0; k < agents.size(); ++k) agents[k]->take_step(steps[k], false);
+  book_gaps(agents);
 }
 
 core::Vec2 seeded_start(std::int32_t id, int n, std::uint64_t seed, double half_width) {

@@ -86,7 +86,8 @@ class NeighbourTable {
   NeighbourTable(std::vector<std::int32_t> hosted, std::int64_t timeout_ns, std::int64_t idle_timeout_ns = 0);
 
   /// A valid state received at now_ns (see AgentLogic::on_state); dt: the step of the command the
-  /// receivers follow (the sender's previous state is tagged model_time - dt).
+  /// receivers follow (the sender's previous state is tagged model_time - dt). A negative id (never
+  /// valid) is ignored.
   void on_state(std::int32_t id, const core::Vec2& x, std::uint64_t seq, std::int64_t now_ns, dds::CommandId command,
                 std::optional<double> arc, double model_time, std::optional<core::Vec2> prev_x,
                 std::optional<double> prev_arc, double dt);
@@ -110,10 +111,21 @@ class NeighbourTable {
     std::uint64_t received = 0, lost = 0, stale = 0, departed = 0;
   };
   std::vector<std::int32_t> hosted_;
+  /// index_of_[id]: the index of hosted agent id, -1 for the others (sized to the largest hosted id):
+  /// hosted_index() is asked once per received sample.
+  std::vector<int> index_of_;
   std::int64_t timeout_ns_;
   std::int64_t idle_timeout_ns_;
   std::int64_t dropped_at_ns_ = -1;  ///< the last drop_stale's now_ns
   std::vector<Entry> entries_;
+  /// pos_of_[id]: the index of agent id's entry, -1 if none (sized to the largest id heard): one
+  /// look-up per received sample instead of a search; rebuilt from the changed index on when an
+  /// entry comes or goes.
+  std::vector<int> pos_of_;
+  /// Agent id's entry, nullptr if none.
+  Entry* find(std::int32_t id);
+  /// pos_of_ of entries_[from...] (after an insertion or an erasure there).
+  void reindex(std::size_t from);
   Counts total_;            ///< the process's counts, every agent's samples
   std::vector<Counts> own_; ///< per hosted agent: the part that is its own samples
 };
@@ -292,12 +304,18 @@ class AgentLogic {
   core::Vec2 seen_now(const CentreFrame& f, const Snapshot& s, const dds::CommandId& followed) const;
   /// Drives the vehicle by the law's step r and books the result (position, velocity, model time,
   /// counters).
-  void take_step(const core::StepResult& r);
+  /// gap: book the smallest gap now (book_gap); step_shared books all its agents' at once instead.
+  void take_step(const core::StepResult& r, bool gap = true);
   /// The law's step r through the safety filter (the neighbours as last heard, each with its age), or r
   /// itself when the command does not filter; books the filter's figures. f is set when it filtered.
   core::StepResult filtered(const core::StepResult& r, std::optional<core::SafetyOutcome>& f);
   /// Books the smallest distance from the new position to a neighbour as last heard.
   void book_gap();
+  /// Books `gap` (the smallest distance to a neighbour as last heard; ignored when negative: none) as
+  /// book_gap would.
+  void book_gap(double gap);
+  /// book_gap() of every agent of one table, in one pass over it (the same figures, bit for bit).
+  static void book_gaps(const std::vector<AgentLogic*>& agents);
   /// Checks the position against the fence before a step: a new excursion is a breach (counted, and
   /// breach_action taken); back inside, the excursion ends.
   void check_fence();

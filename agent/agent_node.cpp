@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <condition_variable>
+#include <cstdio>
 #include <deque>
 #include <iostream>
 #include <memory>
@@ -25,6 +26,7 @@
 #include "dds/vehicle_io.hpp"
 #include "dds/participant.hpp"
 #include "util/log.hpp"
+#include "util/phase_clock.hpp"
 #include "util/proc_stats.hpp"
 #include "util/rate_loop.hpp"
 #include "util/signals.hpp"
@@ -121,18 +123,36 @@ class AgentNode {
   void tick() {
     recover_from_stall();
     const std::int64_t now = util::steady_ns();
+    phases_.start_at(util::thread_cpu_ns());
     drain_commands();
     drain_targets();
+    phases_.lap_at(kCommands, util::thread_cpu_ns());
+    state_input_.drain(states_);
+    phases_.lap_at(kUnpack, util::thread_cpu_ns());
     drain_states();
+    phases_.lap_at(kTable, util::thread_cpu_ns());
     if (identity_.yielding()) return farewell(now);
     if (!identity_.may_publish(now)) return;  // the grace period: listening whether an id is in use
     drain_poses();
     step(now);
     command_robots();
+    phases_.lap_at(kLaw, util::thread_cpu_ns());
     // Slow until commanded (agent.idle_rate_hz): a large swarm's discovery runs on a nearly idle host.
     if (logics_.front()->has_command() || ticks_ % idle_every_ == 0) publish();
+    phases_.lap_at(kPublish, util::thread_cpu_ns());
     report();
+    phases_.lap_at(kReport, util::thread_cpu_ns());
   }
+  /// The loop's phases, in this thread's CPU time per tick (a few clock reads per tick, none per
+  /// sample; CPU, not wall time, so that a busy host's preemptions are not booked to a phase), logged
+  /// at exit with the process's CPU split between this thread and the others (Fast DDS's receive and
+  /// event threads): scripts/profile_group.py reads that line.
+  enum Phase : std::size_t { kCommands, kUnpack, kTable, kLaw, kPublish, kReport, kPhases };
+  util::PhaseClock<kPhases> phases_{{"commands", "unpack", "table", "law", "publish", "report"}};
+  /// The loop thread's and the process's CPU time when the loop began, ns.
+  std::int64_t loop_cpu0_ns_ = 0, process_cpu0_ns_ = 0, wall0_ns_ = 0;
+  /// Logs the phases (tick times) and the CPU split since run() began.
+  void log_profile();
   /// After a stall longer than the peers' lease the participant is recreated (dds::Node); participants
   /// DDS Security refused are reported ("refused" events).
   void recover_from_stall();
@@ -163,7 +183,8 @@ class AgentNode {
   /// A refused sample: counted by every hosted agent, logged (throttled per first refused field, e.g.
   /// "state.id" or "state_batch.states[3].x", unless `always`).
   void reject(const char* what, const std::string& log_line, const std::string& why, bool always = false);
-  bool hosted(std::int32_t id) const { return std::find(ids_.begin(), ids_.end(), id) != ids_.end(); }
+  /// Asked once per received sample: the table's index, not a search.
+  bool hosted(std::int32_t id) const { return table_->hosted_index(id) >= 0; }
 
   const std::vector<std::int32_t> ids_;
   const config::Config& cfg_;
@@ -191,6 +212,7 @@ class AgentNode {
   dds::Writer<msg::AgentState> state_writer_;         ///< unless batch_
   dds::Writer<msg::AgentStateBatch> batch_writer_;    ///< when batch_
   std::vector<dds::StateSample> batch_states_;        ///< reused by publish()
+  msg::AgentStateBatch batch_msg_;                     ///< reused by publish()
   dds::Writer<msg::AgentStatus> status_writer_;
   dds::StateInput state_input_;
   dds::Reader<msg::ShapeCommand> command_reader_;
@@ -298,7 +320,11 @@ AgentNode::AgentNode(const std::vector<std::int32_t>& ids, const std::vector<cor
 }
 
 int AgentNode::run() {
+  loop_cpu0_ns_ = util::thread_cpu_ns();
+  process_cpu0_ns_ = util::process_cpu_ns();
+  wall0_ns_ = util::steady_ns();
   while (!done_ && loop_.wait_next(util::stop_flag())) tick();
+  log_profile();
   if (identity_.yielding()) {
     if (opt_.json) emit({{"event", "stop"}, {"ticks", ticks_}, {"signal", util::stop_signal()}, {"refused", true}});
     return 2;  // a bad command line: the id is in use
@@ -327,6 +353,17 @@ int AgentNode::run() {
   if (opt_.json) emit({{"event", "stop"}, {"ticks", ticks_}, {"signal", util::stop_signal()}});
   if (cfg_.agent.leave_by_lease) node_.exit_without_goodbye(0);
   return 0;
+}
+
+void AgentNode::log_profile() {
+  const double wall_s = static_cast<double>(util::steady_ns() - wall0_ns_) * 1e-9;
+  if (wall_s <= 0.0 || phases_.ticks() == 0) return;
+  const double loop_pct = 1e-7 * static_cast<double>(util::thread_cpu_ns() - loop_cpu0_ns_) / wall_s;
+  const double all_pct = 1e-7 * static_cast<double>(util::process_cpu_ns() - process_cpu0_ns_) / wall_s;
+  char cpu[160];
+  std::snprintf(cpu, sizeof cpu, "; cpu %.2f %% of a core: loop thread %.2f %%, other threads %.2f %%", all_pct,
+                loop_pct, all_pct - loop_pct);
+  util::log_info("profile: " + phases_.line() + cpu);
 }
 
 void AgentNode::on_duplicate(std::int32_t id, const dds::SourceId& other, std::int64_t now) {
@@ -454,8 +491,7 @@ void AgentNode::drain_targets() {
   }
 }
 
-void AgentNode::drain_states() {
-  state_input_.drain(states_);
+void AgentNode::drain_states() {  // states_: drained by tick()
   const double dt = logics_.front()->command().dt;  // the hosted agents follow one command
   for (const auto& r : states_) {
     if (r.kind == dds::StateItem::Kind::Gone) {
@@ -467,14 +503,15 @@ void AgentNode::drain_states() {
       continue;
     }
     const dds::StateSample& s = r.state;
-    if (hosted(s.id) && !identity_.ours(r.source)) {  // our id, from another participant
+    const bool ours = hosted(s.id);
+    if (ours && !identity_.ours(r.source)) {  // our id, from another participant
       on_duplicate(s.id, r.source, r.receive_stamp_ns);
       continue;
     }
     // Once into the shared table; each hosted agent leaves its own entry out.
     table_->on_state(s.id, s.x, s.seq, r.receive_stamp_ns, s.command, s.arc, s.model_time, s.prev_x, s.prev_arc, dt);
     // Data age of samples from agents hosted elsewhere (a process's own samples are not a delivery).
-    if (!hosted(s.id) && ages_us_.size() < ages_us_.capacity())
+    if (!ours && ages_us_.size() < ages_us_.capacity())
       ages_us_.push_back(static_cast<double>(r.receive_stamp_ns - s.stamp_ns) * 1e-3);
   }
 }
@@ -564,11 +601,14 @@ void AgentNode::publish() {
     if (batch_) batch_states_.push_back(s);
     else state_writer_.write(dds::to_msg(s));
   }
-  // One sample per part of at most agent.batch_max_states states (one datagram each by default).
+  // One sample per part of at most agent.batch_max_states states (one datagram each by default), each
+  // through the one message reused from tick to tick.
   if (batch_)
     for (const auto& [begin, end] :
-         dds::batch_ranges(batch_states_.size(), static_cast<std::size_t>(cfg_.agent.batch_max_states)))
-      batch_writer_.write(dds::to_msg(batch_states_, begin, end));
+         dds::batch_ranges(batch_states_.size(), static_cast<std::size_t>(cfg_.agent.batch_max_states))) {
+      dds::to_msg(batch_states_, begin, end, batch_msg_);
+      batch_writer_.write(batch_msg_);
+    }
 }
 
 void AgentNode::drain_poses() {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <utility>
 
 namespace shapeform::core {
@@ -74,6 +75,77 @@ Vec2 velocity_at(const ShapeSpec& s, const Curve& curve, const ArcParams& p, con
   return p.k_normal * (q - x);
 }
 
+}  // namespace
+
+void sort_by_arc(std::vector<std::pair<double, std::int32_t>>& all) {
+  // Ids are looked up in small tables; far outside the swarm's id range, a plain sort.
+  constexpr std::int32_t kMaxIndexedId = 1 << 20;
+  thread_local std::vector<std::int32_t> last;       // ids in the order of the previous sorted list
+  thread_local std::vector<std::uint32_t> in, used;  // per id: the call it was in `all`, taken already
+  thread_local std::vector<double> arc_of_id;
+  thread_local std::uint32_t call = 0;
+  thread_local ArcList scratch;
+  ++call;
+  if (call == 0) {  // wrapped: forget the marks
+    std::fill(in.begin(), in.end(), 0u);
+    std::fill(used.begin(), used.end(), 0u);
+    call = 1;
+  }
+  bool indexed = true;
+  for (const auto& [arc, id] : all) {
+    if (id < 0 || id > kMaxIndexedId) {
+      indexed = false;
+      break;
+    }
+    const auto k = static_cast<std::size_t>(id);
+    if (k >= in.size()) {
+      in.resize(k + 1, 0u);
+      used.resize(k + 1, 0u);
+      arc_of_id.resize(k + 1, 0.0);
+    }
+    if (in[k] == call) {  // an id twice: no order to reuse
+      indexed = false;
+      break;
+    }
+    in[k] = call;
+    arc_of_id[k] = arc;
+  }
+  if (!indexed) {
+    std::sort(all.begin(), all.end());
+    last.clear();
+    return;
+  }
+  // The previous order first (ids still present), then the new ids: nearly sorted while the agents
+  // keep their order along the shape, so an insertion sort finishes in about one pass.
+  scratch.clear();
+  for (const std::int32_t id : last) {
+    const auto k = static_cast<std::size_t>(id);
+    if (k < in.size() && in[k] == call && used[k] != call) {
+      used[k] = call;
+      scratch.emplace_back(arc_of_id[k], id);
+    }
+  }
+  for (const auto& e : all)
+    if (used[static_cast<std::size_t>(e.second)] != call) scratch.push_back(e);
+  // Insertion sort with a budget of moves: past it (a reshuffle, the first call), a plain sort. The
+  // pairs are distinct, so both give the one sorted order.
+  std::size_t moves = 0;
+  const std::size_t budget = 8 * scratch.size() + 64;
+  for (std::size_t i = 1; i < scratch.size() && moves <= budget; ++i) {
+    const auto v = scratch[i];
+    std::size_t j = i;
+    for (; j > 0 && v < scratch[j - 1]; --j) scratch[j] = scratch[j - 1];
+    scratch[j] = v;
+    moves += i - j;
+  }
+  if (moves > budget) std::sort(scratch.begin(), scratch.end());
+  all.swap(scratch);
+  last.clear();
+  for (const auto& e : all) last.push_back(e.second);
+}
+
+namespace {
+
 /// A neighbour's arc length: the one it published when finite, else its position projected.
 double arc_of(const ShapeSpec& s, const Curve& curve, const Neighbour& n) {
   return std::isfinite(n.s) ? n.s : closest_point(s, curve, n.x).s;
@@ -88,7 +160,7 @@ Vec2 arc_velocity(const ShapeSpec& s, const Curve& curve, const ArcParams& p, st
   all.clear();
   all.emplace_back(me.s, self_id);
   for (const Neighbour& n : nbrs) all.emplace_back(arc_of(s, curve, n), n.id);
-  std::sort(all.begin(), all.end());
+  sort_by_arc(all);
   int rank = 0;
   while (all[rank].second != self_id) ++rank;
   return velocity_at(s, curve, p, layout(s, curve, p, all), rank, me, x);
@@ -105,7 +177,7 @@ void arc_velocities(const ShapeSpec& s, const Curve& curve, const ArcParams& p, 
     all.emplace_back(me.back().s, h.id);
   }
   for (const Neighbour& n : others) all.emplace_back(arc_of(s, curve, n), n.id);
-  std::sort(all.begin(), all.end());
+  sort_by_arc(all);
   const Layout l = layout(s, curve, p, all);
   out.resize(hosted.size());
   for (std::size_t k = 0; k < hosted.size(); ++k) {

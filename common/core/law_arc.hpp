@@ -2,6 +2,7 @@
 /// The arc law (docs/LAW.md): every agent takes an arc-length slot on the curve, evenly spaced and
 /// kept in order, and moves toward the curve point a bounded step toward its slot.
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "curve.hpp"
@@ -16,6 +17,12 @@ struct ArcParams {
   double k_tangent = 1.0;  ///< fraction of the slot error taken per step along the curve
   double spacing = 1.0;    ///< gap between agents on an infinite line (shape units)
 };
+
+/// Sorts (arc length, id) pairs ascending, as std::sort does (the order is unique: ids are distinct),
+/// in about one pass when the ids come in nearly the order of the previous call on this thread (the
+/// agents keep their order along the shape from one step to the next): the order is remembered per
+/// thread. Falls back to std::sort for a reshuffle, repeated ids or ids outside 0..2^20.
+void sort_by_arc(std::vector<std::pair<double, std::int32_t>>& all);
 
 /// The arc law's velocity for agent self_id at x on shape s (placed at its current centre; curve is
 /// the curve compiled from s). Neighbours' arc lengths are used when given (finite), else computed

@@ -93,8 +93,6 @@ bool valid_state(const msg::AgentState& s, std::string& why) {
   return true;
 }
 
-namespace {
-/// A valid AgentState -> StateSample.
 StateSample to_sample(const msg::AgentState& m) {
   StateSample out;
   out.id = m.id();
@@ -109,7 +107,6 @@ StateSample to_sample(const msg::AgentState& m) {
   out.prev_arc = m.has_arc() ? std::optional<double>(m.prev_arc()) : std::nullopt;
   return out;
 }
-}  // namespace
 
 msg::AgentState to_msg(const StateSample& s) {
   msg::AgentState m;
@@ -140,13 +137,21 @@ bool from_msg(const msg::AgentState& m, StateSample& out, std::string& why) {
 msg::AgentStateBatch to_msg(const std::vector<StateSample>& states) { return to_msg(states, 0, states.size()); }
 
 msg::AgentStateBatch to_msg(const std::vector<StateSample>& states, std::size_t begin, std::size_t end) {
+  msg::AgentStateBatch m;
+  to_msg(states, begin, end, m);
+  return m;
+}
+
+void to_msg(const std::vector<StateSample>& states, msg::AgentStateBatch& out) {
+  to_msg(states, 0, states.size(), out);
+}
+
+void to_msg(const std::vector<StateSample>& states, std::size_t begin, std::size_t end, msg::AgentStateBatch& out) {
   end = std::min(end, states.size());
   begin = std::min(begin, end);
-  msg::AgentStateBatch m;
-  m.first_id(begin < end ? states[begin].id : 0);
-  m.states().reserve(end - begin);
-  for (std::size_t k = begin; k < end; ++k) m.states().push_back(to_msg(states[k]));
-  return m;
+  out.first_id(begin < end ? states[begin].id : 0);
+  out.states().resize(end - begin);  // a reused message keeps its capacity
+  for (std::size_t k = begin; k < end; ++k) out.states()[k - begin] = to_msg(states[k]);
 }
 
 std::vector<std::pair<std::size_t, std::size_t>> batch_ranges(std::size_t count, std::size_t max_states) {
@@ -164,6 +169,14 @@ std::vector<std::pair<std::size_t, std::size_t>> batch_ranges(std::size_t count,
 }
 
 bool from_msg(const msg::AgentStateBatch& m, std::vector<StateSample>& out, std::string& why) {
+  if (!valid_batch(m, why)) return false;
+  out.clear();
+  out.reserve(m.states().size());
+  for (const auto& s : m.states()) out.push_back(to_sample(s));
+  return true;
+}
+
+bool valid_batch(const msg::AgentStateBatch& m, std::string& why) {
   Problems p("state_batch");
   const auto& states = m.states();
   if (states.empty() || states.size() > kMaxBatchStates)
@@ -195,8 +208,8 @@ bool from_msg(const msg::AgentStateBatch& m, std::vector<StateSample>& out, std:
   }
   // Distinct ids: a batch naming one agent twice is malformed (checked on the valid ids only).
   if (all.empty()) {
-    std::vector<std::int32_t> ids;
-    ids.reserve(states.size());
+    thread_local std::vector<std::int32_t> ids;  // reused: one batch per publisher and tick comes here
+    ids.clear();
     for (const auto& s : states) ids.push_back(s.id());
     std::sort(ids.begin(), ids.end());
     const auto dup = std::adjacent_find(ids.begin(), ids.end());
@@ -206,9 +219,6 @@ bool from_msg(const msg::AgentStateBatch& m, std::vector<StateSample>& out, std:
     why = all;
     return false;
   }
-  out.clear();
-  out.reserve(states.size());
-  for (const auto& s : states) out.push_back(to_sample(s));
   return true;
 }
 

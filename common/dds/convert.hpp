@@ -59,13 +59,20 @@ msg::AgentState to_msg(const StateSample& s);
 /// AgentState -> StateSample when valid_state(m) holds (arc and prev_arc are nullopt unless has_arc);
 /// otherwise false, `out` untouched and `why` naming every bad field.
 bool from_msg(const msg::AgentState& m, StateSample& out, std::string& why);
+/// A valid AgentState (valid_state, or an element of a batch valid_batch passed) -> StateSample, as
+/// from_msg converts it, without checking again.
+StateSample to_sample(const msg::AgentState& m);
 
 /// The states of the agents one process hosts -> one AgentStateBatch (first_id: states[0].id; each
 /// element as to_msg(StateSample)). states holds 1 to kMaxBatchStates samples with distinct ids.
 msg::AgentStateBatch to_msg(const std::vector<StateSample>& states);
+/// The same into `out`, whose buffers are reused (a process publishing one batch per tick keeps one).
+void to_msg(const std::vector<StateSample>& states, msg::AgentStateBatch& out);
 
 /// states[begin, end) -> one AgentStateBatch (first_id: states[begin].id), as to_msg(states) of that part.
 msg::AgentStateBatch to_msg(const std::vector<StateSample>& states, std::size_t begin, std::size_t end);
+/// The same into out, a message reused from tick to tick (its sequence keeps its capacity).
+void to_msg(const std::vector<StateSample>& states, std::size_t begin, std::size_t end, msg::AgentStateBatch& out);
 
 /// How a process cuts the `count` states it publishes per tick into AgentStateBatch samples of at most
 /// `max_states` (agent.batch_max_states) each, every sample its own instance (keyed by its first_id):
@@ -79,6 +86,9 @@ std::vector<std::pair<std::size_t, std::size_t>> batch_ranges(std::size_t count,
 /// id appears twice. Otherwise false (the whole batch refused: its publisher is broken), `out`
 /// untouched and `why` naming every bad field, e.g. "state_batch.states[3].x: must be finite, got nan".
 bool from_msg(const msg::AgentStateBatch& m, std::vector<StateSample>& out, std::string& why);
+/// The checks of from_msg(AgentStateBatch) alone: true when from_msg would convert m (its elements then
+/// each convert by to_sample), else false and `why` as from_msg says it.
+bool valid_batch(const msg::AgentStateBatch& m, std::string& why);
 
 /// TargetSample -> TrackingTarget (every field).
 msg::TrackingTarget to_msg(const TargetSample& t);

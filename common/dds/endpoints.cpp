@@ -18,7 +18,9 @@ namespace fdds = eprosima::fastdds::dds;
 namespace detail {
 
 /// The listener of one Reader: takes every sample into a mutex-protected mailbox. No maths here: it
-/// runs on Fast DDS's receive thread.
+/// runs on Fast DDS's receive thread. Nothing is allocated per sample in steady state: each sample is
+/// taken into a slot the reader consumed earlier, reusing its buffers (drain() hands the consumer's
+/// last vector back as spare slots).
 template <class Msg>
 class Mailbox final : public fdds::DataReaderListener {
  public:
@@ -27,24 +29,25 @@ class Mailbox final : public fdds::DataReaderListener {
   }
 
   void on_data_available(fdds::DataReader* reader) override {
-    Msg sample;
     fdds::SampleInfo info;
-    while (is_ok(reader->take_next_sample(&sample, &info))) {
-      const std::int64_t now = util::steady_ns();
-      InstanceState state = InstanceState::Alive;
-      if (info.instance_state == fdds::NOT_ALIVE_DISPOSED_INSTANCE_STATE) {
-        state = InstanceState::Disposed;
-      } else if (info.instance_state == fdds::NOT_ALIVE_NO_WRITERS_INSTANCE_STATE) {
-        state = InstanceState::NoWriters;
-      }
+    // Each sample is taken straight into its slot (under the mutex: drain() only swaps vectors), into
+    // the buffers a consumed sample left there; one that finds the mailbox full into a scratch one.
+    for (;;) {
       std::lock_guard<std::mutex> lock(mutex_);
+      Received<Msg>* slot = next_slot();
+      Msg& into = slot != nullptr ? slot->msg : overflow_;
+      if (!is_ok(reader->take_next_sample(&into, &info))) {
+        if (slot != nullptr) --count_;
+        return;
+      }
+      if (slot == nullptr) ++overflowed_;
       std::int32_t key = -1;
       if constexpr (MsgTraits<Msg>::keyed) {
         // get_key_value() is unsupported in 2.9: remember handle -> id to name invalid samples, and
         // the writer last heard on each instance. (One map node per instance ever seen; nothing
         // allocated per sample.)
         if (info.valid_data) {
-          key = MsgTraits<Msg>::key(sample);
+          key = MsgTraits<Msg>::key(into);
           auto it = instances_.find(info.instance_handle);
           if (it == instances_.end()) it = instances_.emplace(info.instance_handle, Instance{key, {}}).first;
           it->second.writer = info.publication_handle;
@@ -53,13 +56,16 @@ class Mailbox final : public fdds::DataReaderListener {
           if (it != instances_.end()) key = it->second.key;
         }
       }
-      if (pending_.size() >= capacity_) {
-        ++overflowed_;
-        continue;
-      }
-      // An invalid sample carries no data (take leaves `sample` as it was): hand out a default Msg.
-      pending_.push_back(Received<Msg>{info.valid_data ? sample : Msg{}, now, info.valid_data, state, key,
-                                       source_of(info.publication_handle)});
+      if (slot == nullptr) continue;
+      // An invalid sample carries no data (take leaves the message as it was): hand out a default Msg.
+      if (!info.valid_data) slot->msg = Msg{};
+      slot->receive_stamp_ns = util::steady_ns();
+      slot->valid_data = info.valid_data;
+      slot->instance = info.instance_state == fdds::NOT_ALIVE_DISPOSED_INSTANCE_STATE     ? InstanceState::Disposed
+                       : info.instance_state == fdds::NOT_ALIVE_NO_WRITERS_INSTANCE_STATE ? InstanceState::NoWriters
+                                                                                          : InstanceState::Alive;
+      slot->key_id = key;
+      slot->source = source_of(info.publication_handle);
     }
   }
 
@@ -73,22 +79,29 @@ class Mailbox final : public fdds::DataReaderListener {
       std::lock_guard<std::mutex> lock(mutex_);
       for (const auto& [handle, inst] : instances_) {
         if (inst.writer != status.last_publication_handle) continue;
-        if (pending_.size() >= capacity_) {
+        Received<Msg>* slot = next_slot();
+        if (slot == nullptr) {
           ++overflowed_;
           continue;
         }
-        pending_.push_back(
-            Received<Msg>{Msg{}, now, false, InstanceState::NoWriters, inst.key, source_of(inst.writer)});
+        *slot = Received<Msg>{Msg{}, now, false, InstanceState::NoWriters, inst.key, source_of(inst.writer)};
       }
     }
   }
 
-  /// Swaps the pending samples into out (out is cleared first; capacities are recycled).
+  /// Swaps the pending samples into out; out's previous elements (consumed by the caller) become the
+  /// spare slots the listener fills next, so their buffers are reused.
   std::size_t drain(std::vector<Received<Msg>>& out) {
-    out.clear();
-    std::lock_guard<std::mutex> lock(mutex_);
-    out.swap(pending_);
-    return out.size();
+    std::size_t n = 0;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      out.swap(pending_);
+      n = count_;
+      count_ = 0;
+    }
+    // Spare slots not filled this time: dropped (rare: only when fewer samples came than before).
+    out.resize(n);
+    return n;
   }
 
   std::uint64_t overflowed() const {
@@ -97,9 +110,20 @@ class Mailbox final : public fdds::DataReaderListener {
   }
 
  private:
+  /// The next slot to fill (under mutex_): a spare one if there is, else a new one; nullptr when the
+  /// mailbox is full.
+  Received<Msg>* next_slot() {
+    if (count_ >= capacity_) return nullptr;
+    if (count_ == pending_.size()) pending_.emplace_back();
+    return &pending_[count_++];
+  }
+
   const std::size_t capacity_;
   mutable std::mutex mutex_;
+  /// pending_[0, count_): received, not drained yet; the rest: spare slots.
   std::vector<Received<Msg>> pending_;
+  std::size_t count_ = 0;
+  Msg overflow_;  ///< where a sample the full mailbox has no slot for is taken (and dropped)
   std::uint64_t overflowed_ = 0;
   struct Instance {
     std::int32_t key;               ///< the id the instance carries

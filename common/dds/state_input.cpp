@@ -52,7 +52,7 @@ void StateInput::drain(std::vector<StateItem>& out) {
       carried_.erase(it);
       continue;
     }
-    if (!from_msg(r.msg, unpacked_, item.why)) {
+    if (!valid_batch(r.msg, item.why)) {
       item.kind = StateItem::Kind::Rejected;
       out.push_back(std::move(item));
       continue;
@@ -60,11 +60,15 @@ void StateInput::drain(std::vector<StateItem>& out) {
     ++batches_;
     std::vector<std::int32_t>& ids = carried_[instance];
     ids.clear();
-    for (StateSample& s : unpacked_) {
-      ids.push_back(s.id);
-      item.id = s.id;
-      item.state = s;
-      out.push_back(item);
+    // Each element converted straight into its item (no intermediate list of samples).
+    const auto& states = r.msg.states();
+    const std::size_t base = out.size();
+    out.resize(base + states.size(), item);
+    for (std::size_t k = 0; k < states.size(); ++k) {
+      StateItem& one = out[base + k];
+      one.state = to_sample(states[k]);
+      one.id = one.state.id;
+      ids.push_back(one.id);
     }
   }
 }

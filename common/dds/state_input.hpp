@@ -58,7 +58,6 @@ class StateInput {
   Reader<msg::AgentStateBatch> batch_;
   std::vector<Received<msg::AgentState>> single_buf_;
   std::vector<Received<msg::AgentStateBatch>> batch_buf_;
-  std::vector<StateSample> unpacked_;
   /// The ids each batch instance (writer's participant, first_id) carried last.
   std::map<std::pair<SourceId, std::int32_t>, std::vector<std::int32_t>> carried_;
   std::uint64_t batches_ = 0;

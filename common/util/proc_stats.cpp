@@ -9,16 +9,17 @@ namespace shapeform::util {
 
 namespace {
 
-// Process CPU time (user + system, all threads), nanosecond resolution; finer than getrusage's
-// microsecond fields and free of /proc parsing.
-std::int64_t process_cpu_ns() {
+std::int64_t cpu_clock_ns(clockid_t clock) {
   timespec ts{};
-  if (::clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts) != 0) return 0;
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 +
-         static_cast<std::int64_t>(ts.tv_nsec);
+  if (::clock_gettime(clock, &ts) != 0) return 0;
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + static_cast<std::int64_t>(ts.tv_nsec);
 }
 
 }  // namespace
+
+// clock_gettime: nanosecond resolution, finer than getrusage's microsecond fields and free of /proc parsing.
+std::int64_t process_cpu_ns() { return cpu_clock_ns(CLOCK_PROCESS_CPUTIME_ID); }
+std::int64_t thread_cpu_ns() { return cpu_clock_ns(CLOCK_THREAD_CPUTIME_ID); }
 
 double rss_mb() {
   // statm: size resident shared text lib data dt, in pages.

@@ -10,6 +10,11 @@ namespace shapeform::util {
 /// Resident set size of this process in MiB (from /proc/self/statm); -1 if it cannot be read.
 double rss_mb();
 
+/// CPU time of this process (user + system, all threads), ns; 0 if it cannot be read.
+std::int64_t process_cpu_ns();
+/// CPU time of the calling thread (user + system), ns; 0 if it cannot be read.
+std::int64_t thread_cpu_ns();
+
 /// CPU use of this process (all threads) in percent of one core, measured between calls:
 /// 100 = one core fully busy, may exceed 100 with several busy threads.
 class CpuMeter {

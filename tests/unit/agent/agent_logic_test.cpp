@@ -3,6 +3,7 @@
 #include "agent_logic.hpp"
 #include "core/swarm.hpp"
 
+#include <map>
 #include <memory>
 #include <numeric>
 #include <random>
@@ -238,6 +239,8 @@ TEST_CASE("hosted agents stepped together take each one's own step (the arc law,
     // as a shared step sees them.
     for (auto& l : own)
       for (auto& m : own) l->on_state(m->id(), m->position(), seq, 0);
+    // The process hears its own agents too (the law leaves them out; the gap counts them as heard).
+    for (auto& m : shared) table->on_state(m->id(), m->position(), seq, 0, {}, std::nullopt, 0.0, std::nullopt, std::nullopt, 1.0);
     AgentLogic::step_shared(group);
     for (auto& l : own) l->step();
     for (std::size_t k = 0; k < 5; ++k) {
@@ -246,6 +249,10 @@ TEST_CASE("hosted agents stepped together take each one's own step (the arc law,
       CHECK(shared[k]->velocity() == own[k]->velocity());
       CHECK(shared[k]->model_time() == own[k]->model_time());
       CHECK(shared[k]->previous_arc() == own[k]->previous_arc());
+      // The gaps booked in one pass for the group are each agent's own, bit for bit.
+      REQUIRE(own[k]->safety().min_gap > 0.0);
+      CHECK(shared[k]->safety().min_gap == own[k]->safety().min_gap);
+      CHECK(shared[k]->safety().min_gap_time == own[k]->safety().min_gap_time);
     }
   }
   // The group does not share once its agents follow different model times.
@@ -896,4 +903,47 @@ TEST_CASE("fence: a command whose fence leaves the agent outside is a breach; th
     for (int k = 0; k < 100; ++k) a.step();
     CHECK(std::abs(a.position().norm() - 2.0) < 0.01);
   }
+}
+
+TEST_CASE("the neighbour table knows its hosted agents by id", "[agent]") {
+  const agent::NeighbourTable table({7, 3, 12}, 60 * kMs);
+  CHECK(table.hosted_index(7) == 0);
+  CHECK(table.hosted_index(3) == 1);
+  CHECK(table.hosted_index(12) == 2);
+  for (const std::int32_t other : {-1, 0, 4, 11, 13, 9999}) CHECK(table.hosted_index(other) == -1);
+}
+
+TEST_CASE("the neighbour table's index follows arrivals, departures and drops (random property)", "[agent]") {
+  // A reference model: id -> (x, last seen, seq). The table must hold exactly its entries, ascending.
+  std::mt19937 rng(11);
+  agent::NeighbourTable table({2, 5}, 30 * kMs);
+  std::map<std::int32_t, std::tuple<double, std::int64_t, std::uint64_t>> model;
+  std::uint64_t seq = 0;
+  for (std::int64_t now = 0; now < 3000 * kMs; now += kMs) {
+    const int op = std::uniform_int_distribution<int>(0, 9)(rng);
+    const auto id = std::uniform_int_distribution<std::int32_t>(0, 60)(rng);
+    if (op < 7) {
+      ++seq;
+      const double x = static_cast<double>(seq);
+      table.on_state(id, Vec2(x, 0), seq, now, {}, std::nullopt, 0.0, std::nullopt, std::nullopt, 1.0);
+      model[id] = {x, now, seq};
+    } else if (op < 9) {
+      table.on_gone(id);
+      model.erase(id);
+    } else {
+      table.drop_stale(now);
+      for (auto it = model.begin(); it != model.end();)
+        it = now - std::get<1>(it->second) > 30 * kMs ? model.erase(it) : std::next(it);
+    }
+    REQUIRE(table.entries().size() == model.size());
+    auto m = model.begin();
+    for (const auto& e : table.entries()) {
+      REQUIRE(e.id == m->first);
+      REQUIRE(e.cur.x.x() == std::get<0>(m->second));
+      REQUIRE(e.hosted == (e.id == 2 ? 0 : e.id == 5 ? 1 : -1));
+      ++m;
+    }
+  }
+  table.on_state(-1, Vec2(0, 0), ++seq, 0, {}, std::nullopt, 0.0, std::nullopt, std::nullopt, 1.0);  // ignored
+  CHECK(table.entries().size() == model.size());
 }

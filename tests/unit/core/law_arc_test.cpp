@@ -1,6 +1,10 @@
 // The arc law on its own: slots along the curve, the bounded step toward them, the normal rate.
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
+#include <random>
+#include <utility>
+#include <vector>
 #include <limits>
 
 #include "core/law_arc.hpp"
@@ -83,4 +87,26 @@ TEST_CASE("arc law on an open curve: from end to end", "[law][arc]") {
   const std::vector<Neighbour> others = {{1, Vec2(3, 0)}, {2, Vec2(5, 0)}};
   CHECK(arc_velocity(s, *curve, ArcParams{}, 1, Vec2(3, 0), {{0, Vec2(1, 0)}, {2, Vec2(5, 0)}}).norm() < 1e-12);
   CHECK(arc_velocity(s, *curve, ArcParams{}, 0, Vec2(1, 0), others).x() < 0);
+}
+
+TEST_CASE("sort_by_arc sorts as std::sort does, call after call, whatever the order it remembers", "[core][arc]") {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 10.0), jitter(-0.05, 0.05);
+  std::vector<std::pair<double, std::int32_t>> swarm;
+  for (std::int32_t id = 0; id < 300; ++id) swarm.emplace_back(u(rng), id);
+  for (int call = 0; call < 200; ++call) {
+    // The agents move a little (a few overtake), some leave, some join, and the list comes in a new
+    // order; every 50th call a reshuffle, every 70th an id twice, once ids past the indexed range.
+    for (auto& [s, id] : swarm) s += call % 50 == 49 ? u(rng) : jitter(rng);
+    if (call % 7 == 0 && !swarm.empty()) swarm.erase(swarm.begin() + static_cast<std::ptrdiff_t>(rng() % swarm.size()));
+    if (call % 5 == 0) swarm.emplace_back(u(rng), 300 + call);
+    std::vector<std::pair<double, std::int32_t>> in = swarm;
+    std::shuffle(in.begin(), in.end(), rng);
+    if (call % 70 == 69) in.push_back(in.front());
+    if (call == 100) in.emplace_back(1.0, 1 << 24);
+    std::vector<std::pair<double, std::int32_t>> expected = in;
+    std::sort(expected.begin(), expected.end());
+    sort_by_arc(in);
+    REQUIRE(in == expected);
+  }
 }

@@ -537,6 +537,12 @@ TEST_CASE("a state batch converts element by element and is refused whole, namin
   msg::AgentStateBatch m = dds::to_msg(in);
   CHECK(m.first_id() == 40);
   REQUIRE(m.states().size() == 3);
+  // Into a reused message that held a longer, other batch: the same message as a fresh one.
+  std::vector<dds::StateSample> longer(5);
+  for (int k = 0; k < 5; ++k) longer[static_cast<std::size_t>(k)].id = 7 + k;
+  msg::AgentStateBatch reused = dds::to_msg(longer);
+  dds::to_msg(in, reused);
+  CHECK(reused == m);
   std::vector<dds::StateSample> out;
   std::string why;
   REQUIRE(dds::from_msg(m, out, why));

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "util/log.hpp"
+#include "util/phase_clock.hpp"
 #include "util/proc_stats.hpp"
 #include "util/signals.hpp"
 #include "util/stats.hpp"
@@ -295,4 +296,23 @@ TEST_CASE("regenerate_blocks replaces what lies between the markers and keeps th
   CHECK_THROWS_AS(util::regenerate_blocks("# BEGIN GENERATED t: -->\n# END GENERATED\n", "BEGIN GENERATED t: ",
                                           "END GENERATED", gen),
                   std::invalid_argument);
+}
+
+TEST_CASE("PhaseClock books each lap to the phase that ended and means per tick", "[util][stats]") {
+  shapeform::util::PhaseClock<3> clock({"a", "b", "c"});
+  CHECK(clock.mean_us(0) == 0.0);
+  // Tick 1: a 1000 ns, b 3000 ns, c 0; tick 2: a 3000 ns, b 1000 ns, c 2000 ns.
+  clock.start_at(10'000);
+  clock.lap_at(0, 11'000);
+  clock.lap_at(1, 14'000);
+  clock.lap_at(2, 14'000);
+  clock.start_at(100'000);
+  clock.lap_at(0, 103'000);
+  clock.lap_at(1, 104'000);
+  clock.lap_at(2, 106'000);
+  CHECK(clock.ticks() == 2);
+  CHECK(clock.mean_us(0) == Approx(2.0));
+  CHECK(clock.mean_us(1) == Approx(2.0));
+  CHECK(clock.mean_us(2) == Approx(1.0));
+  CHECK(clock.line() == "a 2.0 us, b 2.0 us, c 1.0 us, total 5.0 us per tick over 2 ticks");
 }
