@@ -1,7 +1,8 @@
 #pragma once
-/// Where a loop's time goes, phase by phase: one steady-clock read per phase boundary per tick (never per
-/// sample), the elapsed time booked to the phase that just ended. Pure bookkeeping: the caller passes
-/// the clock readings (lap_at) or lets lap() read util::steady_ns(). Reported once, as a log line.
+/// Where a loop's time goes, phase by phase: one clock reading per phase boundary per tick (never per
+/// sample), the time since the previous boundary booked to the phase that just ended. Pure bookkeeping:
+/// the caller passes the readings (start_at, lap_at) of the clock it chooses (the agent's loop: its
+/// thread's CPU time, util::thread_cpu_ns). Reported once, as a log line.
 #include <array>
 #include <cstddef>
 #include <cstdint>
