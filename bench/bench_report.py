@@ -114,7 +114,7 @@ def sim_section(sim: dict) -> str:
     o.append("\n")
     if peak:
         o.append(text["peak"].format(peaks=", ".join(f"{k} {v / 1e9:.1f} G/s" for k, v in peak.items())))
-        # The issue's two sizes (1000 and 10000 agents), on one core with AVX-512, against the bound.
+        # The two sizes of the simulator's targets (1000 and 10000 agents), on one core with AVX-512, against the bound.
         bound = SIM_FMA_PER_PAIR / peak["avx512"] * 1e9 if "avx512" in peak else None
         rows = [(n, sim_best(sim, n, 1)) for n in (1000, 10000)]
         measured = "; ".join(f"N = {n}: {r['ns_per_pair']:.2f} ns, x{r['ns_per_pair'] / bound:.1f} the bound"
@@ -337,7 +337,7 @@ TARGETS_1000 = [
     ("N=1000 at 20 Hz, 10-20 processes: the arc-law circle converges", "converged", "", 0, str),
     ("N=1000 at 20 Hz, 10-20 processes: the host at most half busy", "host_busy_pct", "max", 50.0,
      lambda v: f"{v:.0f} %"),
-    # Issue 30: the grouped swarm at the transport's floor (its bare baseline of the same shape).
+    # A grouped swarm at the transport's floor: within 1.2x of its bare baseline of the same shape.
     ("N=1000 at 20 Hz, 10-20 processes: host busy within 1.2x of the baseline", "ratio:host_busy_pct", "max", 1.2,
      str),
     ("N=1000 at 20 Hz, 10-20 processes: CPU per agent within 1.2x of the baseline", "ratio:cpu_pct", "max", 1.2, str),
