@@ -142,10 +142,6 @@ msg::AgentStateBatch to_msg(const std::vector<StateSample>& states, std::size_t 
   return m;
 }
 
-void to_msg(const std::vector<StateSample>& states, msg::AgentStateBatch& out) {
-  to_msg(states, 0, states.size(), out);
-}
-
 void to_msg(const std::vector<StateSample>& states, std::size_t begin, std::size_t end, msg::AgentStateBatch& out) {
   end = std::min(end, states.size());
   begin = std::min(begin, end);

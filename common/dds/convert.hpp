@@ -66,8 +66,6 @@ StateSample to_sample(const msg::AgentState& m);
 /// The states of the agents one process hosts -> one AgentStateBatch (first_id: states[0].id; each
 /// element as to_msg(StateSample)). states holds 1 to kMaxBatchStates samples with distinct ids.
 msg::AgentStateBatch to_msg(const std::vector<StateSample>& states);
-/// The same into `out`, whose buffers are reused (a process publishing one batch per tick keeps one).
-void to_msg(const std::vector<StateSample>& states, msg::AgentStateBatch& out);
 
 /// states[begin, end) -> one AgentStateBatch (first_id: states[begin].id), as to_msg(states) of that part.
 msg::AgentStateBatch to_msg(const std::vector<StateSample>& states, std::size_t begin, std::size_t end);

@@ -541,7 +541,7 @@ TEST_CASE("a state batch converts element by element and is refused whole, namin
   std::vector<dds::StateSample> longer(5);
   for (int k = 0; k < 5; ++k) longer[static_cast<std::size_t>(k)].id = 7 + k;
   msg::AgentStateBatch reused = dds::to_msg(longer);
-  dds::to_msg(in, reused);
+  dds::to_msg(in, 0, in.size(), reused);
   CHECK(reused == m);
   std::vector<dds::StateSample> out;
   std::string why;
