@@ -377,7 +377,22 @@ core::StepResult AgentLogic::filtered(const core::StepResult& r, std::optional<c
   // A neighbour may have moved max_step per step since its state: lockstep states of this very step are
   // exact (age 0, the simulator's synchronous update); any other is as old as the time since it was
   // received, in periods, plus the step the neighbour may take while this agent steps.
-  const double max_speed = safety_params_.max_step / cmd_.dt;
+  double max_speed = safety_params_.max_step / cmd_.dt;
+  // Double integrators keep braking segments apart (core/safety.hpp). A neighbour's velocity is known
+  // as the mean of its last step ((x - prev x) / dt), within max_accel h / 2 of its true one: its segment
+  // is blurred by that much times braking_lipschitz; one whose velocity is not known is a disc of the
+  // longest braking distance about its position. The segment's ends move at most 2 max_speed + max_accel h / 2.
+  const bool braking = safety_params_.braking;
+  const double spm = vehicle_.seconds_per_model_time;
+  const double h = cmd_.dt * spm;
+  const double accel = vehicle_.max_accel;
+  double blur = 0.0, unknown = 0.0;
+  if (braking) {
+    const double vmax = vehicle_.max_speed > 0.0 ? vehicle_.max_speed : std::numeric_limits<double>::infinity();
+    max_speed = (2.0 * vmax + (accel > 0.0 ? 0.5 * accel * h : 0.0)) * spm;
+    blur = core::braking_lipschitz(vmax, accel, h) * (accel > 0.0 ? std::min(0.5 * accel * h, vmax) : vmax);
+    unknown = std::isfinite(vmax) ? core::braking_displacement(core::Vec2(vmax, 0.0), accel, h).norm() : vmax;
+  }
   const auto age = [&](std::int64_t seen_ns) {
     return (static_cast<double>(std::max<std::int64_t>(now_ns_ - seen_ns, 0)) * 1e-9 / period_s_ + 1.0) * cmd_.dt;
   };
@@ -393,7 +408,7 @@ core::StepResult AgentLogic::filtered(const core::StepResult& r, std::optional<c
   // A neighbour known at the last step but no longer in the table: kept while its silence is short.
   const auto silent = [&](const Known& g) {
     if (now_ns_ - g.seen_ns > kSilentMemory_ns) return;
-    snbrs_.push_back({g.id, g.x, age(g.seen_ns), max_speed});
+    snbrs_.push_back({g.id, g.x, age(g.seen_ns), max_speed, core::Vec2::Zero(), unknown});
     known_next_.push_back(g);
   };
   snbrs_.clear();
@@ -407,12 +422,20 @@ core::StepResult AgentLogic::filtered(const core::StepResult& r, std::optional<c
     if (lockstep_ && e.cur.command == followed && step_of(e.cur.model_time) > k && e.prev.command == followed)
       use = &e.prev;
     const bool exact = lockstep_ && use->command == followed && step_of(use->model_time) == k;
-    snbrs_.push_back({e.id, use->x, exact ? 0.0 : std::max(age(e.last_seen_ns), lag(*use)), max_speed});
+    core::SafetyNeighbour& j =
+        snbrs_.emplace_back(core::SafetyNeighbour{e.id, use->x, exact ? 0.0 : std::max(age(e.last_seen_ns), lag(*use)), max_speed});
+    if (braking) {
+      const bool step_before = use == &e.cur && e.prev.command == use->command &&
+                               std::abs(use->model_time - cmd_.dt - e.prev.model_time) <= 1e-9 * (1.0 + std::abs(use->model_time));
+      j.brake = step_before ? core::braking_displacement((use->x - e.prev.x) / h, accel, h) : core::Vec2::Zero();
+      j.blur = step_before ? blur : unknown;
+    }
     known_next_.push_back({e.id, e.cur.x, e.last_seen_ns});
   }
   for (; g != known_.end(); ++g) silent(*g);
   known_.swap(known_next_);
-  f = core::safety_filter(safety_params_, safety_state_, id_, x_, r.x, snbrs_, zones_);
+  f = core::safety_filter(safety_params_, safety_state_, id_, x_, r.x, snbrs_, zones_,
+                          braking ? core::braking_displacement(vehicle_state_.velocity, accel, h) : core::Vec2::Zero());
   safety_.interventions += f->intervened ? 1 : 0;
   safety_.sidesteps += f->sidestep_started ? 1 : 0;
   safety_.broken += static_cast<std::uint64_t>(f->broken);

@@ -94,6 +94,50 @@ Vec2 turn_right(const Vec2& v, double deg) {
   return {c * v.x() - s * v.y(), s * v.x() + c * v.y()};
 }
 
+/// The closest points of the segments [a0, a1] and [b0, b1]: p on the first, q on the second (one
+/// point where they cross).
+void closest_points(const Vec2& a0, const Vec2& a1, const Vec2& b0, const Vec2& b1, Vec2& p, Vec2& q) {
+  const Vec2 ea = a1 - a0, eb = b1 - b0;
+  const double den = cross(ea, eb);
+  if (den != 0.0) {
+    const double t = cross(b0 - a0, eb) / den, u = cross(b0 - a0, ea) / den;
+    if (t >= 0.0 && t <= 1.0 && u >= 0.0 && u <= 1.0) {
+      p = q = a0 + t * ea;
+      return;
+    }
+  }
+  // Apart (or parallel): the nearest pair has an end of one segment in it.
+  const Vec2 cand[4][2] = {{a0, segment_point(b0, b1, a0)},
+                           {a1, segment_point(b0, b1, a1)},
+                           {segment_point(a0, a1, b0), b0},
+                           {segment_point(a0, a1, b1), b1}};
+  double best = std::numeric_limits<double>::infinity();
+  for (const auto& c : cand) {
+    const double l = (c[1] - c[0]).squaredNorm();
+    if (l < best) best = l, p = c[0], q = c[1];
+  }
+}
+
+/// The point of the segment [a, b] nearest a convex piece (one inside it when the segment enters it).
+Vec2 nearest_on_segment(const ConvexZone& z, const Vec2& a, const Vec2& b) {
+  if (z.circle) return segment_point(a, b, z.centre);
+  Vec2 best_p = a;
+  double best = std::numeric_limits<double>::infinity();
+  const auto take = [&](const Vec2& on, double dist) {
+    if (dist < best) best = dist, best_p = on;
+  };
+  take(a, distance(z, a));
+  take(b, distance(z, b));
+  const std::size_t n = z.vertices.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec2& v = z.vertices[i];
+    Vec2 on, at;
+    closest_points(a, b, v, z.vertices[(i + 1) % n], on, at);
+    take(on, (at - on).norm());
+  }
+  return best_p;
+}
+
 }  // namespace
 
 std::vector<std::string> keep_out_problems(const KeepOutZone& z) {
@@ -316,7 +360,21 @@ SafetyParams safety_params(const Command& cmd, const VehicleParams& vehicle) {
   const double own =
       vehicle.max_speed > 0.0 ? vehicle.max_speed * cmd.dt * vehicle.seconds_per_model_time : 0.0;
   p.max_step = law > 0.0 && own > 0.0 ? std::min(law, own) : std::max(law, own);
+  p.braking = vehicle.model == VehicleModel::DoubleIntegrator;
   return p;
+}
+
+bool SafetyOutcome::holds(const Vec2& x1, const Vec2& stop1) const {
+  if (!braking) return in_cell(x1);
+  const Vec2 end = from + brake;
+  const double t = 1e-12 * (1.0 + from.norm() + brake.norm());
+  for (const Vec2& q : {x1, stop1}) {
+    const double off = (segment_point(from, end, q) - q).norm();
+    if (still ? off > t : off > grow + t) return false;
+    for (const HalfPlane& h : cell)
+      if (!h.contains(q, tol(h.b))) return false;
+  }
+  return true;
 }
 
 bool SafetyOutcome::in_cell(const Vec2& p) const {
@@ -328,10 +386,14 @@ bool SafetyOutcome::in_cell(const Vec2& p) const {
 
 SafetyOutcome safety_filter(const SafetyParams& p, SafetyState& state, std::int32_t self_id, const Vec2& x,
                             const Vec2& wanted, const std::vector<SafetyNeighbour>& nbrs,
-                            const std::vector<ConvexZone>& zones) {
+                            const std::vector<ConvexZone>& zones, const Vec2& brake) {
   SafetyOutcome out;
   out.from = x;
   out.max_step = p.max_step;
+  out.braking = p.braking;
+  // The agent's braking segment [x, stop] (a point unless braking).
+  const Vec2 stop = p.braking ? Vec2(x + brake) : x;
+  out.brake = stop - x;
   const double d = p.min_separation;
   // Each constraint's source, for blocking_id / blocking_zone: >= 0 a neighbour's id, else -1 - zone.
   thread_local std::vector<std::int64_t> source;
@@ -351,7 +413,35 @@ SafetyOutcome safety_filter(const SafetyParams& p, SafetyState& state, std::int3
   Vec2 near_n = Vec2::Zero();
   std::int32_t near_id = -1;
   double reach_others = std::numeric_limits<double>::infinity();
-  if (d > 0.0) {
+  if (d > 0.0 && p.braking) {
+    // Segments (see the header): the half-plane between the closest points, holding the own segment.
+    for (const SafetyNeighbour& j : nbrs) {
+      Vec2 pi, pj;
+      closest_points(x, stop, j.x, j.x + j.brake, pi, pj);
+      const Vec2 diff = pj - pi;
+      const double gap = diff.norm();
+      const Vec2 pos = j.x - x;
+      const double dist = pos.norm();
+      HalfPlane h;
+      h.n = gap > 0.0 ? Vec2(diff / gap) : dist > 0.0 ? Vec2(pos / dist) : Vec2(self_id < j.id ? 1.0 : -1.0, 0.0);
+      if (dist < d - 1e-9 * (1.0 + d)) {
+        ++out.broken;
+        away -= dist > 0.0 ? Vec2(pos / dist) : h.n;
+        nearest_broken = std::min(nearest_broken, dist);
+      }
+      const double margin = j.max_speed * j.age_s + j.blur;
+      const double top = std::max(h.n.dot(x), h.n.dot(stop));  // the own segment's farthest toward j
+      if (!(std::isfinite(margin) && margin >= 0.0)) {
+        h.b = top;
+        reach = 0.0;
+      } else {
+        h.b = std::max(top, h.n.dot(pi) + std::max(0.0, 0.5 * (gap - d) - margin));
+        if (margin > 0.0) reach = std::min(reach, std::max(0.0, 0.5 * (gap - margin - d)));
+      }
+      out.cell.push_back(h);
+      source.push_back(j.id);
+    }
+  } else if (d > 0.0) {
     for (const SafetyNeighbour& j : nbrs) {
       bool broken = false;
       const HalfPlane h = separation_half_plane(self_id, x, j, d, broken);
@@ -382,6 +472,13 @@ SafetyOutcome safety_filter(const SafetyParams& p, SafetyState& state, std::int3
   for (const ConvexZone& z : zones) {
     bool in = false;
     out.cell.push_back(keep_out_half_plane(z, x, in));
+    if (p.braking && stop != x) {
+      // The half-plane at the segment's point nearest the piece, widened to hold the whole segment.
+      bool at_in = false;
+      HalfPlane& h = out.cell.back();
+      h = keep_out_half_plane(z, nearest_on_segment(z, x, stop), at_in);
+      h.b = std::max({h.b, h.n.dot(x), h.n.dot(stop)});
+    }
     source.push_back(-1 - static_cast<std::int64_t>(z.zone));
     if (in) {
       ++out.inside_zones;
@@ -391,13 +488,13 @@ SafetyOutcome safety_filter(const SafetyParams& p, SafetyState& state, std::int3
   // The fence's sides shrunk by its margin; one that x breaks (an agent outside: pushed by a vehicle's
   // momentum, placed there, a fence moved under it) becomes "go no further out", so x stays in the cell.
   for (const HalfPlane& h : p.fence) {
-    out.cell.push_back({h.n, std::max(h.b, h.n.dot(x))});
+    out.cell.push_back({h.n, p.braking ? std::max({h.b, h.n.dot(x), h.n.dot(stop)}) : std::max(h.b, h.n.dot(x))});
     source.push_back(std::numeric_limits<std::int64_t>::min());
   }
   if (reach < std::numeric_limits<double>::infinity())
     out.max_step = p.max_step > 0.0 ? std::min(p.max_step, reach) : reach;
   const bool frozen = reach == 0.0;  // a stale neighbour too near to move at all: stand still ...
-  const bool back_off = frozen && too_near == 1;  // ... or back straight away from the one
+  const bool back_off = frozen && too_near == 1 && !p.braking;  // ... or back straight away from the one
   double ray = 0.0;                                // how far it may back off
   if (back_off) {
     ray = std::min(p.max_step > 0.0 ? p.max_step : std::numeric_limits<double>::infinity(), reach_others);
@@ -415,6 +512,7 @@ SafetyOutcome safety_filter(const SafetyParams& p, SafetyState& state, std::int3
     out.max_step = ray;
   }
   out.still = frozen && !back_off;
+  if (p.braking) out.grow = reach;
   // While sidestepping, an agent that can only back off does (the right-hand turn has no room).
   const auto solve = [&](const Vec2& goal) {
     if (!frozen) return closest_feasible(goal, out.cell, x, out.max_step);
@@ -478,6 +576,31 @@ StepResult drive_safely(const VehicleParams& p, VehicleState& s, const StepResul
   const auto command = [&](const Vec2& point) { return StepResult{point, (point - x) / dt, law.clamped}; };
   VehicleState trial = s;
   StepResult r = drive(p, trial, command(f.x), dt, workspace);
+  if (f.braking && p.model == VehicleModel::DoubleIntegrator) {
+    const double h = dt * p.seconds_per_model_time;
+    const auto stop_of = [&](const VehicleState& v) { return Vec2(v.x + braking_displacement(v.velocity, p.max_accel, h)); };
+    if (f.holds(r.x, stop_of(trial))) {
+      s = trial;
+      return r;
+    }
+    // On the way from braking (which keeps the cell) to the velocity toward f.x: the last that keeps it.
+    const Vec2 toward = trial.velocity;
+    const Vec2 brake = braking_velocity(s.velocity, p.max_accel, h);
+    const auto with = [&](double t, VehicleState& v) {
+      v = s;
+      return drive(p, v, command(Vec2(x + h * (brake + t * (toward - brake)))), dt, workspace);
+    };
+    double lo = 0.0, hi = 1.0;
+    for (int k = 0; k < 40; ++k) {
+      const double mid = 0.5 * (lo + hi);
+      const StepResult m = with(mid, trial);
+      (f.holds(m.x, stop_of(trial)) ? lo : hi) = mid;
+    }
+    r = with(lo, trial);
+    outside = !f.holds(r.x, stop_of(trial));
+    s = trial;
+    return r;
+  }
   if (moves_as_law(p) || f.in_cell(r.x)) {
     s = trial;
     return r;

@@ -34,6 +34,20 @@
 /// neighbour keeping its exact half-plane, too). This holds when every speed bound is honest and every
 /// age is measured; the price is that an agent within d + margin of a stale neighbour stands still.
 ///
+/// Double integrators (SafetyParams::braking): a vehicle that cannot stop within one step can keep its
+/// position in its cell and still carry on out of it. Each agent is then its braking segment B = [x, x +
+/// braking_displacement(v)], and the cells separate segments: the half-plane against j passes between
+/// the closest points p_i of B_i and p_j of B_j (D = |p_j - p_i|, n = (p_j - p_i) / D) at d / 2 from the
+/// middle, and the agent keeps its new segment [x1, stop1] in it. B_i lies behind n . p_i, so braking
+/// one more step (whose segment is a part of B_i) always keeps the cell: the programme always has a
+/// solution, and two agents at least d apart as segments stay so, positions and the whole motion of the
+/// step included (the step's path is a parabola inside the triangle x, x + h v0 / 2, x1, all in the cell).
+/// Stale or blurred neighbours (margin r = max_speed * age + blur, max_speed here the speed of the
+/// segment's ends): the new segment stays within (D - r - d) / 2 of B_i (`grow`), which with the
+/// neighbour doing the same keeps d whatever their views (the segment analogue of the disc above); none
+/// is left (a stale neighbour too near) and the agent brakes. Zones and the fence are kept the same way
+/// (half-planes that hold B_i). The velocity is chosen by drive_safely.
+///
 /// Deadlock: a step cut to below `stuck_fraction` of the law's while the law asks for more than
 /// `stuck_min_step` is "held"; after `stuck_steps` held steps in a row the agent turns its wanted step
 /// by `sidestep_deg` clockwise (the right-hand rule of Zhou et al.: two agents meeting head-on both
@@ -43,6 +57,7 @@
 ///
 /// Pure: Eigen and the standard library; no clock (ages are given).
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -60,6 +75,12 @@ struct SafetyNeighbour {
   Vec2 x = Vec2::Zero();   ///< its last known position, shape units
   double age_s = 0.0;      ///< how old x is, s (0: a state of this very step)
   double max_speed = 0.0;  ///< bound on its speed, shape units per s: its margin is max_speed * age_s
+  /// Double integrators (SafetyParams::braking): its braking displacement (braking_displacement) at x,
+  /// shape units, so that it is known as the segment [x, x + brake]; max_speed then bounds how fast
+  /// that segment's ends move, and blur how far its true segment may lie from this one at the sample's
+  /// time (a velocity known only as the mean of its last step).
+  Vec2 brake = Vec2::Zero();
+  double blur = 0.0;
 };
 
 /// The filter's settings (from the command: Command::min_separation, Command::keep_out, the speed limit).
@@ -74,6 +95,9 @@ struct SafetyParams {
   /// fence edge) that the step stays in; empty: none. A side that x itself breaks becomes "go no
   /// further out" (n . p <= n . x), so an agent outside is never pushed further out and always has a step.
   std::vector<HalfPlane> fence;
+  /// The agents are double integrators, which cannot stop at once: each keeps its braking segment
+  /// (where it would stop braking as hard as it may), not only its position, in its cell (see below).
+  bool braking = false;
 };
 
 /// Whether a command's steps go through the filter: safety.min_separation > 0, a keep-out zone, a
@@ -158,21 +182,32 @@ struct SafetyOutcome {
   bool still = false;     ///< a stale neighbour too near for any step: the cell is `from` alone
   /// Whether p is in the cell (to rounding).
   bool in_cell(const Vec2& p) const;
+  /// Braking (SafetyParams::braking): the agent's braking segment at the step's start is [from, from +
+  /// brake]; its new one [x1, stop1] must lie in the cell's half-planes and within `grow` of the old
+  /// (still: on it). Braking itself always does.
+  bool braking = false;
+  Vec2 brake = Vec2::Zero();
+  double grow = std::numeric_limits<double>::infinity();
+  /// Whether a step to x1 whose braking would stop at stop1 keeps the cell (braking), or in_cell(x1).
+  bool holds(const Vec2& x1, const Vec2& stop1) const;
 };
 
 /// The filter on one agent's step: agent `self_id` at x, the law's wanted new position `wanted`, the
 /// neighbours it hears and the zones' convex pieces (convex_pieces). With d = 0 and no zones the
 /// answer is `wanted` itself (the caller should not call it then: the law's bits stay untouched).
+/// With p.braking, `brake` is the agent's own braking displacement (its velocity's, braking_displacement).
 SafetyOutcome safety_filter(const SafetyParams& p, SafetyState& state, std::int32_t self_id, const Vec2& x,
                             const Vec2& wanted, const std::vector<SafetyNeighbour>& nbrs,
-                            const std::vector<ConvexZone>& zones);
+                            const std::vector<ConvexZone>& zones, const Vec2& brake = Vec2::Zero());
 
 /// The vehicle's motion on the filter's step: drive toward f.x; when the vehicle would end outside the
 /// cell (a double integrator's momentum, a unicycle's linearised steering), the commanded point is
 /// chosen again among: the point that lands the vehicle on f.x (the double integrator's v1 = 2 (f.x -
 /// x) / h - v0), then the same toward points halfway, a quarter, ... of the way, then standing still;
 /// the first that lands in the cell is taken, else the one that lands nearest it. Sets `outside` when
-/// none landed in the cell.
+/// none landed in the cell. Braking (a double integrator): the velocity toward f.x when its step and
+/// braking segment keep the cell (SafetyOutcome::holds), else the one nearest it on the way from braking
+/// (which always keeps it) to it, by bisection.
 StepResult drive_safely(const VehicleParams& p, VehicleState& s, const StepResult& law,
                         const SafetyOutcome& f, double dt, double workspace, bool& outside);
 

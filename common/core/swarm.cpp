@@ -61,8 +61,9 @@ Vec2 Swarm::move_safely(int i, const StepResult& r) {
   snbrs_.clear();
   // The synchronous simulator: every neighbour's state is of this very step (age 0).
   for (std::size_t j = 0; j < x_.size(); ++j)
-    if (j != k) snbrs_.push_back({static_cast<std::int32_t>(j), x_[j], 0.0, 0.0});
-  const SafetyOutcome f = safety_filter(safety_, safety_state_[k], i, x_[k], r.x, snbrs_, zones_);
+    if (j != k) snbrs_.push_back({static_cast<std::int32_t>(j), x_[j], 0.0, 0.0, brakes_.empty() ? Vec2::Zero() : brakes_[j]});
+  const SafetyOutcome f = safety_filter(safety_, safety_state_[k], i, x_[k], r.x, snbrs_, zones_,
+                                        brakes_.empty() ? Vec2::Zero() : brakes_[k]);
   counts_.interventions += f.intervened ? 1 : 0;
   counts_.sidesteps += f.sidestep_started ? 1 : 0;
   counts_.broken += f.broken;
@@ -105,6 +106,12 @@ void Swarm::step() {
   // Held, nobody moves: the filter has nothing to keep.
   const bool safe = filters(cmd_) && !cmd_.hold;
   blocked_ = 0;
+  // Double integrators: every braking segment as the step starts (the vehicles change as they move).
+  brakes_.clear();
+  if (safe && safety_.braking && !vehicles_.empty()) {
+    const double h = cmd_.dt * vehicle_.seconds_per_model_time;
+    for (const VehicleState& v : vehicles_) brakes_.push_back(braking_displacement(v.velocity, vehicle_.max_accel, h));
+  }
   for (int i = 0; i < n; ++i) {
     nbrs_.clear();
     for (int j = 0; j < n; ++j)

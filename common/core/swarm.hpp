@@ -87,6 +87,7 @@ class Swarm {
   SafetyParams safety_;                 ///< from the command and the vehicle
   std::vector<SafetyState> safety_state_;
   std::vector<SafetyNeighbour> snbrs_;
+  std::vector<Vec2> brakes_;  ///< double integrators: each one's braking displacement at the step's start
   SafetyCounts counts_;
   int blocked_ = 0;
   std::vector<std::int64_t> blocked_by_;

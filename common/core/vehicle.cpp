@@ -153,6 +153,25 @@ void stop(VehicleState& s) {
   s.yaw_rate = 0.0;
 }
 
+Vec2 braking_velocity(const Vec2& v, double max_accel, double h) {
+  return max_accel > 0.0 ? Vec2(v - saturate(v, max_accel * h)) : Vec2::Zero();
+}
+
+Vec2 braking_displacement(const Vec2& v, double max_accel, double h) {
+  const double u = v.norm();
+  if (u == 0.0) return Vec2::Zero();
+  // n whole steps at dv = a h, then one from the rest r to 0: h (n u - a h n^2 / 2) + h r / 2.
+  const double dv = max_accel * h;
+  const double n = max_accel > 0.0 ? std::floor(u / dv) : 0.0;
+  const double r = u - n * dv;
+  const double length = h * (n * u - 0.5 * dv * n * n) + 0.5 * h * r;
+  return (length / u) * v;
+}
+
+double braking_lipschitz(double max_speed, double max_accel, double h) {
+  return (max_accel > 0.0 ? max_speed / max_accel : 0.0) + 0.5 * h;
+}
+
 UnicycleCommand unicycle_command(const VehicleParams& p, double heading, const Vec2& step, double h) {
   const Vec2 b = rotate(-heading, step);
   if (p.steering == Steering::Linearised) return linearised_command(p, b, h);

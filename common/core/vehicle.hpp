@@ -91,6 +91,16 @@ StepResult drive(const VehicleParams& p, VehicleState& s, const StepResult& law,
 /// Stops the vehicle where it is (a held command: no step is taken to brake over).
 void stop(VehicleState& s);
 
+/// A double integrator braking as hard as it may: each step of h s shortens its velocity by max_accel h
+/// (to 0 when shorter; to 0 at once when max_accel <= 0) and moves its point by h (v0 + v1) / 2, as
+/// drive does. braking_velocity is the velocity one such step leaves; braking_displacement is where
+/// the point stops, relative to where it is, along v: its braking segment is [x, x + that].
+Vec2 braking_velocity(const Vec2& v, double max_accel, double h);
+Vec2 braking_displacement(const Vec2& v, double max_accel, double h);
+/// A bound on |braking_displacement(v1) - braking_displacement(v0)| / |v1 - v0| for speeds up to
+/// max_speed: max_speed / max_accel + h / 2 (h / 2 without an acceleration limit).
+double braking_lipschitz(double max_speed, double max_accel, double h);
+
 /// A unicycle's command: forward speed v (m/s, negative = backwards) and yaw rate w (rad/s).
 struct UnicycleCommand {
   double v = 0.0;
