@@ -28,6 +28,9 @@ AGENTS = 12
 SEPARATION = 0.25
 # Every agent to the origin: the line x1 = 0 (the x2 axis) from agents on the x1 axis.
 LINE_90 = ["shape.kind=line", "shape.m=0", "shape.c=0", "shape.rotation_deg=90", "dynamics.max_speed=0.1"]
+# A point mass at 0.05 per step with 0.01 per step^2 (one step = 1 s of vehicle time): it needs 5 steps
+# and 0.125 to stop from full speed, half the separation.
+DOUBLE_INTEGRATOR = ["vehicle.model=double_integrator", "vehicle.max_speed=0.05", "vehicle.max_accel=0.01"]
 
 
 class SafetyTest(harness.LauncherTestCase):
@@ -50,11 +53,15 @@ class SafetyTest(harness.LauncherTestCase):
         self.assertGreater(len(full), 10, "recorded samples of the whole swarm")
         return min(math.dist(a, b) for x in full for a, b in itertools.combinations(x, 2))
 
-    def test_crossing_kept_apart_on_processes(self):
+    def line_start(self):
         init = os.path.join(self.run_dir, "line.csv")
         with open(init, "w") as f:
             for i in range(AGENTS):
                 f.write("%.4f,0\n" % (0.5 * (i - (AGENTS - 1) / 2)))
+        return init
+
+    def test_crossing_kept_apart_on_processes(self):
+        init = self.line_start()
         # Unfiltered first: the start forces agents closer than the separation.
         p = self.launch("off", LINE_90, init)
         self.assertEqual(p.wait(150), 0, "the unfiltered swarm converges")
@@ -78,6 +85,24 @@ class SafetyTest(harness.LauncherTestCase):
         self.assertEqual(last["min_separation_run"], on["min_separation_run"])
         self.assertEqual(last["filter_interventions"], on["filter_interventions"])
 
+    def test_double_integrators_crossing_kept_apart_on_processes(self):
+        """Point masses that cannot stop within a step keep their braking segments apart (docs/SAFETY.md,
+        "Vehicles that cannot stop at once"): never closer than the separation, and they still cross."""
+        init = self.line_start()
+        p = self.launch("double_off", LINE_90 + DOUBLE_INTEGRATOR, init)
+        self.assertEqual(p.wait(150), 0, "the unfiltered double integrators converge")
+        self.assertLess(harness.summary(p.out())["min_separation_run"], SEPARATION,
+                        "without the filter their crossing comes closer")
+        p = self.launch("double", LINE_90 + ["safety.min_separation=%g" % SEPARATION] + DOUBLE_INTEGRATOR, init)
+        self.assertEqual(p.wait(150), 0, "the filtered double integrators converge")
+        on = harness.summary(p.out())
+        self.assertTrue(on["converged"])
+        self.assertGreaterEqual(on["min_separation_run"], SEPARATION - 1e-9,
+                                "no two agents closer than safety.min_separation at any step")
+        self.assertGreater(on["filter_interventions"], 0, "the filter moved steps")
+        self.assertEqual(on["promises_broken"], 0)
+        self.assertGreaterEqual(self.recorded_min(harness.events(p.out(), "run")[0]["dir"]), SEPARATION - 1e-9,
+                                "recorded positions kept apart")
 
     def agents_where(self, sup, ok):
         """Whether every agent's position satisfies ok(x, y), by the supervisor's status."""
