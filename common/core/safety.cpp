@@ -583,20 +583,49 @@ StepResult drive_safely(const VehicleParams& p, VehicleState& s, const StepResul
       s = trial;
       return r;
     }
-    // On the way from braking (which keeps the cell) to the velocity toward f.x: the last that keeps it.
+    // The safe velocity nearest `toward` (the one toward f.x): first the last that keeps the cell on the
+    // way from braking (which always does) to it, then a few rounds of a pattern search about that one
+    // (rays at +-30, 60 and 85 degrees off the way to `toward`), each ray by bisection.
     const Vec2 toward = trial.velocity;
-    const Vec2 brake = braking_velocity(s.velocity, p.max_accel, h);
-    const auto with = [&](double t, VehicleState& v) {
-      v = s;
-      return drive(p, v, command(Vec2(x + h * (brake + t * (toward - brake)))), dt, workspace);
+    const Vec2 v0 = s.velocity;
+    const double reach = p.max_accel > 0.0 ? p.max_accel * h : std::numeric_limits<double>::infinity();
+    const double fast = p.max_speed > 0.0 ? p.max_speed : std::numeric_limits<double>::infinity();
+    const auto safe = [&](const Vec2& v1) {
+      if ((v1 - v0).norm() > reach * (1.0 + 1e-12) || v1.norm() > fast * (1.0 + 1e-12)) return false;
+      const Vec2 x1 = x + (0.5 * h) * (v0 + v1);
+      return f.holds(x1, x1 + braking_displacement(v1, p.max_accel, h));
     };
-    double lo = 0.0, hi = 1.0;
-    for (int k = 0; k < 40; ++k) {
-      const double mid = 0.5 * (lo + hi);
-      const StepResult m = with(mid, trial);
-      (f.holds(m.x, stop_of(trial)) ? lo : hi) = mid;
+    // The farthest safe point from `from` (safe) along `way`, t in [0, 1].
+    const auto along = [&](const Vec2& from, const Vec2& way) {
+      if (safe(from + way)) return 1.0;
+      double lo = 0.0, hi = 1.0;
+      for (int k = 0; k < 30; ++k) {
+        const double mid = 0.5 * (lo + hi);
+        (safe(from + mid * way) ? lo : hi) = mid;
+      }
+      return lo;
+    };
+    const Vec2 brake = braking_velocity(v0, p.max_accel, h);
+    Vec2 v = brake + along(brake, toward - brake) * (toward - brake);
+    for (int round = 0; round < 6; ++round) {
+      const Vec2 g = toward - v;
+      if (g.norm() <= 1e-12 * (1.0 + toward.norm())) break;
+      Vec2 best = v;
+      for (const double deg : {30.0, -30.0, 60.0, -60.0, 85.0, -85.0}) {
+        const Vec2 way = std::cos(deg * kPi / 180.0) * turn_right(g, deg);  // to the foot of toward on the ray
+        const Vec2 c = v + along(v, way) * way;
+        if ((c - toward).norm() < (best - toward).norm()) best = c;
+      }
+      if (best == v) break;
+      v = best;
     }
-    r = with(lo, trial);
+    const auto with = [&](const Vec2& v1, VehicleState& st) {
+      st = s;
+      return drive(p, st, command(Vec2(x + h * v1)), dt, workspace);
+    };
+    r = with(v, trial);
+    // drive's rounding (or the workspace's edge) can leave the cell by an ulp: then brake.
+    if (!f.holds(r.x, stop_of(trial))) r = with(brake, trial);
     outside = !f.holds(r.x, stop_of(trial));
     s = trial;
     return r;
