@@ -107,6 +107,9 @@ def one(build, n, seed, k, law, vehicle, steps):
 
 
 PROC_SPEED = 0.1  # dynamics.max_speed on processes: the speed bound the stale margins rest on (docs/SAFETY.md)
+# The vehicles on processes: the double integrator at the law's speed, 5 steps (and d) to stop from it.
+PROC_VEHICLES = {"integrator": [],
+                 "double_integrator": ["vehicle.model=double_integrator", "vehicle.max_speed=0.1", "vehicle.max_accel=0.02"]}
 
 
 def launch(build, law, start, sets, separation, out, rate):
@@ -139,12 +142,12 @@ def launch(build, law, start, sets, separation, out, rate):
     return j
 
 
-def one_processes(build, n, seed, k, law, out, rate):
+def one_processes(build, n, seed, k, law, vehicle, out, rate):
     name, start, shape = starts(n, seed)[k]
-    on = launch(build, law, start, shape, SEPARATION, out, rate)
-    off = launch(build, law, start, shape, 0, out, rate)
+    on = launch(build, law, start, shape + PROC_VEHICLES[vehicle], SEPARATION, out, rate)
+    off = launch(build, law, start, shape + PROC_VEHICLES[vehicle], 0, out, rate)
     val = lambda j, key: j.get(key) if j.get(key) is not None else float("nan")  # noqa: E731
-    return {"start": name, "n": n, "seed": seed, "law": law, "vehicle": "integrator (processes)",
+    return {"start": name, "n": n, "seed": seed, "law": law, "vehicle": vehicle,
             "min_on": val(on, "min_separation_run"), "min_off": val(off, "min_separation_run"),
             "converged_on": on["converged"], "converged_off": off["converged"],
             "time_on": on["model_time"] if on["converged"] else None,
@@ -159,13 +162,18 @@ def table_processes(rows, rate):
            f"| median model time to converge (filter / none) | sidesteps per run | agents blocked at the end | "
            f"data age p99, ms (period {1000 / rate:.0f} ms) |",
            "|---|---|---|---|---|---|---|---|---|---|"]
+    # Rows of one vehicle set (each measured set has its own block); the start names the vehicle when mixed.
+    key = lambda r: (r["start"], r["n"], r["law"], r.get("vehicle", "integrator"))  # noqa: E731
+    mixed = len({k[3] for k in map(key, rows)}) > 1
     keys = []
     for r in rows:
-        if (r["start"], r["n"], r["law"]) not in keys:
-            keys.append((r["start"], r["n"], r["law"]))
+        if key(r) not in keys:
+            keys.append(key(r))
     fmt = lambda v: "–" if v is None else f"{v:.0f}"  # noqa: E731
     for k in keys:
-        g = [r for r in rows if (r["start"], r["n"], r["law"]) == k]
+        g = [r for r in rows if key(r) == k]
+        if mixed:
+            k = (f"{k[0]} ({k[3]})",) + k[1:]
         ages = [r["age_p99_ms"] for r in g if r["age_p99_ms"] is not None]
         age = f"{max(ages):.1f}" if ages else "–"
         out.append(f"| {k[0]} | {k[1]} | {k[2]} | {min(r['min_on'] for r in g):.4f} | "
@@ -181,13 +189,13 @@ def table_processes(rows, rate):
 def measure_processes(a, sizes):
     """Every case on agent processes, filtered and not, one run at a time (they share the host's cores)."""
     out = a.out or os.path.join(ROOT, "runs", datetime.datetime.utcnow().strftime("%Y%m%dT%H%M%SZ") + "-safety-processes")
-    jobs = [(n, seed, k, law) for n in sizes for k in range(5) for law in a.laws.split(",")
-            for seed in range(1, a.seeds + 1)]
+    jobs = [(n, seed, k, law, v) for v in a.vehicles.split(",") for n in sizes for k in range(5)
+            for law in a.laws.split(",") for seed in range(1, a.seeds + 1)]
     rows = []
-    for i, (n, seed, k, law) in enumerate(jobs):
-        rows.append(one_processes(a.build, n, seed, k, law, os.path.join(out, "launches"), a.rate))
+    for i, (n, seed, k, law, v) in enumerate(jobs):
+        rows.append(one_processes(a.build, n, seed, k, law, v, os.path.join(out, "launches"), a.rate))
         r = rows[-1]
-        print(f"safety: {i + 1}/{len(jobs)} processes {r['start']} N={n} {law} seed {seed}: min {r['min_on']:.4f} "
+        print(f"safety: {i + 1}/{len(jobs)} processes {r['start']} N={n} {law} {v} seed {seed}: min {r['min_on']:.4f} "
               f"(off {r['min_off']:.4f}), converged {r['converged_on']} / {r['converged_off']}, "
               f"data age p99 {r['age_p99_ms']} ms", file=sys.stderr, flush=True)
     return rows, out
@@ -342,6 +350,12 @@ def main():
 
 def main_processes(a):
     sizes = [int(s) for s in (a.sizes if a.sizes != "12,50,200" else "12,50").split(",")]
+    if a.vehicles == ",".join(v[0] for v in VEHICLES):
+        a.vehicles = "integrator"
+    unknown = [v for v in a.vehicles.split(",") if v not in PROC_VEHICLES]
+    if unknown:
+        print(f"safety.py: --vehicles {','.join(unknown)}: on processes only {', '.join(PROC_VEHICLES)}", file=sys.stderr)
+        return 2
     if a.seeds == 20:
         a.seeds = 2
     if a.replot:
@@ -356,8 +370,9 @@ def main_processes(a):
     md = table_processes(rows, a.rate)
     below = [r for r in rows if r["min_on"] < SEPARATION - 1e-9]
     ages = [r["age_p99_ms"] for r in rows if r["age_p99_ms"] is not None]
-    summary = (f"{len(rows)} cases on agent processes at {a.rate:g} Hz, safety.min_separation = {SEPARATION}, "
-               f"dynamics.max_speed = {PROC_SPEED}: {len(below)} filtered runs below it (smallest "
+    vehicles = sorted({r.get("vehicle", "integrator").replace(" (processes)", "") for r in rows})
+    summary = (f"{len(rows)} cases on agent processes at {a.rate:g} Hz, vehicle {', '.join(vehicles)}, "
+               f"safety.min_separation = {SEPARATION}, dynamics.max_speed = {PROC_SPEED}: {len(below)} filtered runs below it (smallest "
                f"{min(r['min_on'] for r in rows):.4f}); without the filter {sum(r['min_off'] < SEPARATION for r in rows)} "
                f"below it (smallest {min(r['min_off'] for r in rows):.4f}); data age p99 at most "
                f"{max(ages) if ages else float('nan'):.1f} ms.\n")
@@ -370,7 +385,9 @@ def main_processes(a):
     cmdline = read_text(command).strip() if os.path.exists(command) else "scripts/safety.py --processes"
     print(summary + md)
     if a.write_docs:
-        write_block(BEGIN.replace("-->", "(processes) -->"), f"`{cmdline}`: " + summary + "\n" + md)
+        # One block per vehicle set: the integrator's is "(processes)".
+        tag = "(processes)" if vehicles == ["integrator"] else "(processes, " + ", ".join(vehicles) + ")"
+        write_block(BEGIN.replace("-->", tag + " -->"), f"`{cmdline}`: " + summary + "\n" + md)
     return 0
 
 
