@@ -133,10 +133,7 @@ struct Outputs {
 };
 
 sim::SimOptions sim_options(const Args& a, const config::Config& cfg, int agents) {
-  sim::SimOptions opt;
-  const auto& cv = cfg.supervisor.converge;
-  opt.settle = {cv.band_abs, cv.band_rel, cv.gap_cv_max};
-  opt.converge = cv;
+  sim::SimOptions opt = sim::run_options(cfg.supervisor.converge, cfg.vehicle, cfg.swarm.seed);
   opt.kernel = a.kernel == "agent"   ? core::Kernel::Agent
                : a.kernel == "batch" ? core::Kernel::Batch
                                      : sim::auto_kernel(agents, cfg.vehicle);
@@ -150,8 +147,6 @@ sim::SimOptions sim_options(const Args& a, const config::Config& cfg, int agents
     throw std::runtime_error("--kernel batch: the batched kernel moves agents as the integrator model only, and "
                              "vehicle.model is " + std::string(core::to_string(cfg.vehicle.model)) +
                              ": use --kernel agent or auto");
-  opt.vehicle = cfg.vehicle;
-  opt.heading_seed = cfg.swarm.seed;
   opt.separation = a.separation;
   opt.batch.threads = a.threads;
   return opt;

@@ -14,6 +14,16 @@
 
 namespace shapeform::sim {
 
+SimOptions run_options(const core::ConvergenceParams& converge, const core::VehicleParams& vehicle,
+                       std::uint64_t heading_seed) {
+  SimOptions opt;
+  opt.settle = {converge.band_abs, converge.band_rel, converge.gap_cv_max};
+  opt.converge = converge;
+  opt.vehicle = vehicle;
+  opt.heading_seed = heading_seed;
+  return opt;
+}
+
 namespace {
 /// One CSV fragment with the metric table's values ("" for undefined values).
 std::string metric_csv_values(const core::Metrics& m) {

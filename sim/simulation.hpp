@@ -37,6 +37,11 @@ struct SimOptions {
   bool separation = false;
 };
 
+/// The options shapeform_sim runs a configuration with: the supervisor's verdict (its convergence
+/// parameters and the settle bands they imply), the vehicle and the seed of the start headings.
+SimOptions run_options(const core::ConvergenceParams& converge, const core::VehicleParams& vehicle,
+                       std::uint64_t heading_seed);
+
 /// The run-long safety figures: the smallest pairwise distance over every step (not a metric of one
 /// snapshot, so it lives here and in the simulator's JSON summary, beside the filter's counts).
 struct SeparationRecord {

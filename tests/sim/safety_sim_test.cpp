@@ -101,12 +101,7 @@ sim::SimResult run(const std::string& law, const Start& s, const std::vector<std
   sets.push_back("sim.steps=" + std::to_string(steps));
   const config::Config cfg = config::load(
       kSourceDir + "/config/scenarios/" + (law == "arc" ? "arc_circle" : "circle") + ".yaml", sets);
-  sim::SimOptions opt;
-  const auto& cv = cfg.supervisor.converge;
-  opt.settle = {cv.band_abs, cv.band_rel, cv.gap_cv_max};
-  opt.converge = cv;
-  opt.vehicle = cfg.vehicle;
-  opt.heading_seed = cfg.swarm.seed;
+  sim::SimOptions opt = sim::run_options(cfg.supervisor.converge, cfg.vehicle, cfg.swarm.seed);
   opt.separation = true;
   return sim::run_simulation(cfg.command, s.x, cfg.sim.steps, opt);
 }

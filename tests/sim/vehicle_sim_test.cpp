@@ -17,12 +17,7 @@ const std::string kSourceDir = SHAPEFORM_SOURCE_DIR;
 sim::SimResult run(const std::string& scenario, std::vector<std::string> sets, long steps = -1) {
   if (steps >= 0) sets.push_back("sim.steps=" + std::to_string(steps));
   const config::Config cfg = config::load(kSourceDir + "/config/scenarios/" + scenario + ".yaml", sets);
-  sim::SimOptions opt;
-  const auto& cv = cfg.supervisor.converge;
-  opt.settle = {cv.band_abs, cv.band_rel, cv.gap_cv_max};
-  opt.converge = cv;
-  opt.vehicle = cfg.vehicle;
-  opt.heading_seed = cfg.swarm.seed;
+  const sim::SimOptions opt = sim::run_options(cfg.supervisor.converge, cfg.vehicle, cfg.swarm.seed);
   return sim::run_simulation(cfg.command,
                              core::uniform_start(cfg.swarm.agents, cfg.swarm.seed, cfg.swarm.init_half_width),
                              cfg.sim.steps, opt);
