@@ -590,16 +590,28 @@ StepResult drive_safely(const VehicleParams& p, VehicleState& s, const StepResul
     const Vec2 v0 = s.velocity;
     const double reach = p.max_accel > 0.0 ? p.max_accel * h : std::numeric_limits<double>::infinity();
     const double fast = p.max_speed > 0.0 ? p.max_speed : std::numeric_limits<double>::infinity();
+    // Only the cell's lines within the vehicle's reach can bind: |x1 - x| <= h max_speed and the new
+    // braking displacement is at most the longest, so the search checks those alone.
+    thread_local SafetyOutcome near;
+    near.braking = true;
+    near.from = f.from;
+    near.brake = f.brake;
+    near.grow = f.grow;
+    near.still = f.still;
+    near.cell.clear();
+    const double far = h * fast + braking_displacement(Vec2(fast, 0.0), p.max_accel, h).norm();
+    for (const HalfPlane& c : f.cell)
+      if (!(c.b - c.n.dot(x) > far * (1.0 + 1e-9) + tol(c.b))) near.cell.push_back(c);
     const auto safe = [&](const Vec2& v1) {
       if ((v1 - v0).norm() > reach * (1.0 + 1e-12) || v1.norm() > fast * (1.0 + 1e-12)) return false;
       const Vec2 x1 = x + (0.5 * h) * (v0 + v1);
-      return f.holds(x1, x1 + braking_displacement(v1, p.max_accel, h));
+      return near.holds(x1, x1 + braking_displacement(v1, p.max_accel, h));
     };
     // The farthest safe point from `from` (safe) along `way`, t in [0, 1].
     const auto along = [&](const Vec2& from, const Vec2& way) {
       if (safe(from + way)) return 1.0;
       double lo = 0.0, hi = 1.0;
-      for (int k = 0; k < 30; ++k) {
+      for (int k = 0; k < 20; ++k) {
         const double mid = 0.5 * (lo + hi);
         (safe(from + mid * way) ? lo : hi) = mid;
       }
@@ -607,7 +619,7 @@ StepResult drive_safely(const VehicleParams& p, VehicleState& s, const StepResul
     };
     const Vec2 brake = braking_velocity(v0, p.max_accel, h);
     Vec2 v = brake + along(brake, toward - brake) * (toward - brake);
-    for (int round = 0; round < 6; ++round) {
+    for (int round = 0; round < 4; ++round) {
       const Vec2 g = toward - v;
       if (g.norm() <= 1e-12 * (1.0 + toward.norm())) break;
       Vec2 best = v;
