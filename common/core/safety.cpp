@@ -371,6 +371,12 @@ bool SafetyOutcome::holds(const Vec2& x1, const Vec2& stop1) const {
   for (const Vec2& q : {x1, stop1}) {
     const double off = (segment_point(from, end, q) - q).norm();
     if (still ? off > t : off > grow + t) return false;
+    if (away != Vec2::Zero()) {
+      // In the shadow {b - s away : b on the segment, s >= 0}: the ray from q along `away` meets it.
+      Vec2 on, at;
+      closest_points(from, end, q, q + (off + brake.norm() + 1.0) * away, on, at);
+      if ((at - on).norm() > t) return false;
+    }
     for (const HalfPlane& h : cell)
       if (!h.contains(q, tol(h.b))) return false;
   }
@@ -436,7 +442,20 @@ SafetyOutcome safety_filter(const SafetyParams& p, SafetyState& state, std::int3
         reach = 0.0;
       } else {
         h.b = std::max(top, h.n.dot(pi) + std::max(0.0, 0.5 * (gap - d) - margin));
-        if (margin > 0.0) reach = std::min(reach, std::max(0.0, 0.5 * (gap - margin - d)));
+        const double room = 0.5 * (gap - margin - d);
+        if (margin > 0.0) {
+          reach = std::min(reach, std::max(0.0, room));
+          if (room > 0.0) {
+            reach_others = std::min(reach_others, room);
+          } else if (gap > margin) {
+            // Too near for any growth, but the true segment is beyond the margin: backing away is safe.
+            ++too_near;
+            near_n = h.n;
+            near_id = j.id;
+          } else {
+            too_near += 2;
+          }
+        }
       }
       out.cell.push_back(h);
       source.push_back(j.id);
@@ -494,7 +513,7 @@ SafetyOutcome safety_filter(const SafetyParams& p, SafetyState& state, std::int3
   if (reach < std::numeric_limits<double>::infinity())
     out.max_step = p.max_step > 0.0 ? std::min(p.max_step, reach) : reach;
   const bool frozen = reach == 0.0;  // a stale neighbour too near to move at all: stand still ...
-  const bool back_off = frozen && too_near == 1 && !p.braking;  // ... or back straight away from the one
+  const bool back_off = frozen && too_near == 1;  // ... or back straight away from the one
   double ray = 0.0;                                // how far it may back off
   if (back_off) {
     ray = std::min(p.max_step > 0.0 ? p.max_step : std::numeric_limits<double>::infinity(), reach_others);
@@ -503,16 +522,23 @@ SafetyOutcome safety_filter(const SafetyParams& p, SafetyState& state, std::int3
       if (toward > 0.0) ray = std::min(ray, std::max(0.0, (h.b - h.n.dot(x)) / toward));
     }
     if (!std::isfinite(ray)) ray = 0.0;
-    // The cell becomes the ray: the line through x along n (both sides) and the disc of radius `ray`.
-    const Vec2 side(-near_n.y(), near_n.x());
-    out.cell.push_back({side, side.dot(x)});
-    out.cell.push_back({-side, -side.dot(x)});
-    source.push_back(near_id);
-    source.push_back(near_id);
+    if (p.braking) {
+      // The new segment stays in the own segment's shadow away from the neighbour (SafetyOutcome::away),
+      // within the other stale neighbours' room.
+      out.away = near_n;
+      out.grow = reach_others;
+    } else {
+      // The cell becomes the ray: the line through x along n (both sides) and the disc of radius `ray`.
+      const Vec2 side(-near_n.y(), near_n.x());
+      out.cell.push_back({side, side.dot(x)});
+      out.cell.push_back({-side, -side.dot(x)});
+      source.push_back(near_id);
+      source.push_back(near_id);
+    }
     out.max_step = ray;
   }
   out.still = frozen && !back_off;
-  if (p.braking) out.grow = reach;
+  if (p.braking && !back_off) out.grow = reach;
   // While sidestepping, an agent that can only back off does (the right-hand turn has no room).
   const auto solve = [&](const Vec2& goal) {
     if (!frozen) return closest_feasible(goal, out.cell, x, out.max_step);

@@ -45,7 +45,8 @@
 /// Stale or blurred neighbours (margin r = max_speed * age + blur, max_speed here the speed of the
 /// segment's ends): the new segment stays within (D - r - d) / 2 of B_i (`grow`), which with the
 /// neighbour doing the same keeps d whatever their views (the segment analogue of the disc above); none
-/// is left (a stale neighbour too near) and the agent brakes. Zones and the fence are kept the same way
+/// is left (a stale neighbour too near) and the agent brakes, or, with exactly one such neighbour, backs
+/// away from it (SafetyOutcome::away) as the integrator does. Zones and the fence are kept the same way
 /// (half-planes that hold B_i). The velocity is chosen by drive_safely.
 ///
 /// Deadlock: a step cut to below `stuck_fraction` of the law's while the law asks for more than
@@ -188,6 +189,11 @@ struct SafetyOutcome {
   bool braking = false;
   Vec2 brake = Vec2::Zero();
   double grow = std::numeric_limits<double>::infinity();
+  /// Braking, backing off from one stale neighbour too near for any growth: the new segment stays in
+  /// the old one's shadow away from it ({b - s away : b in the old segment, s >= 0}, `away` the unit
+  /// vector toward the neighbour), which moves no point of it nearer the neighbour's true segment (that
+  /// lies beyond the margin); zero otherwise.
+  Vec2 away = Vec2::Zero();
   /// Whether a step to x1 whose braking would stop at stop1 keeps the cell (braking), or in_cell(x1).
   bool holds(const Vec2& x1, const Vec2& stop1) const;
 };

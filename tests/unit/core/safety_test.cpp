@@ -774,7 +774,7 @@ TEST_CASE("safety: double integrators crossing at speed keep d with braking segm
                               << old_below);
 }
 
-TEST_CASE("safety: a double integrator with a stale, blurred neighbour brakes when there is no room, and keeps its cell",
+TEST_CASE("safety: a double integrator with stale, blurred neighbours too near backs away or brakes, and keeps its cell",
           "[safety][braking]") {
   SafetyParams p;
   p.min_separation = 0.25;
@@ -785,9 +785,21 @@ TEST_CASE("safety: a double integrator with a stale, blurred neighbour brakes wh
   // The neighbour's segment is 0.3 beyond the own one's end: with a margin of 0.1 there is (0.3 - 0.1 -
   // 0.25) / 2 < 0 room: brake only.
   const SafetyOutcome f = safety_filter(p, st, 0, x, Vec2(1, 0), {{1, Vec2(0.5, 0), 0.1, 0.5, Vec2(0.1, 0), 0.05}}, {}, brake);
-  CHECK(f.still);
-  CHECK(f.holds(Vec2(0.05, 0), Vec2(0.2, 0)));      // braking: on the old segment
+  // One such neighbour, whose true segment is beyond the margin: back away from it, in the own
+  // segment's shadow (two such: brake).
+  CHECK_FALSE(f.still);
+  CHECK(f.away == Vec2(1, 0));
+  CHECK(f.holds(Vec2(0.05, 0), Vec2(0.2, 0)));         // braking: on the old segment
+  CHECK(f.holds(Vec2(-0.05, 0), Vec2(0.1, 0)));        // backing away along it
   CHECK_FALSE(f.holds(Vec2(0.05, 0), Vec2(0.21, 0)));  // a step that would stop further on
+  CHECK_FALSE(f.holds(Vec2(0.05, 0), Vec2(0.1, 0.01)));  // or off its line
+  const SafetyOutcome two = safety_filter(p, st, 0, x, Vec2(1, 0),
+                                          {{1, Vec2(0.5, 0), 0.1, 0.5, Vec2(0.1, 0), 0.05},
+                                           {2, Vec2(-0.3, 0), 0.1, 0.5, Vec2(-0.1, 0), 0.05}},
+                                          {}, brake);
+  CHECK(two.still);
+  CHECK(two.holds(Vec2(0.05, 0), Vec2(0.2, 0)));
+  CHECK_FALSE(two.holds(Vec2(-0.05, 0), Vec2(0.1, 0)));
   // With room (margin 0.01): the new segment may grow by (0.3 - 0.01 - 0.25) / 2 = 0.02 beyond the old.
   const SafetyOutcome g = safety_filter(p, st, 0, x, Vec2(1, 0), {{1, Vec2(0.5, 0), 0.01, 0.5, Vec2(0.1, 0), 0.005}}, {}, brake);
   CHECK_FALSE(g.still);
@@ -865,4 +877,58 @@ TEST_CASE("safety: a double integrator's filtered velocity against the nearest s
   CHECK(excess.back() < 0.02);
   WARN("double integrator, " << excess.size() << " cut velocities: excess over the best / (a h): median " << at(0.5)
                              << ", 90 % " << at(0.9) << ", max " << excess.back());
+}
+
+TEST_CASE("safety: two double integrators seeing each other a step late back off when too near, and pass",
+          "[safety][braking]") {
+  // As agent processes see them: the other's state of one step earlier, its velocity the mean of its
+  // step before that (blurred by braking_lipschitz * a h / 2), its segment's ends at most 2 vmax + a h / 2
+  // per unit age. Without backing off two such agents within the margins freeze for ever.
+  VehicleParams vp;
+  vp.model = VehicleModel::DoubleIntegrator;
+  vp.max_speed = 0.1;
+  vp.max_accel = 0.05;
+  const double h = 1.0;
+  SafetyParams p;
+  p.min_separation = 0.25;
+  p.max_step = 0.1;
+  p.braking = true;
+  const double blur = braking_lipschitz(vp.max_speed, vp.max_accel, h) * 0.5 * vp.max_accel * h;
+  const double ends = 2.0 * vp.max_speed + 0.5 * vp.max_accel * h;
+  // 0.3 apart: beyond d, within d + the margins (0.29), so neither segment may grow.
+  VehicleState s[2] = {vehicle_start(Vec2(-0.15, 0.01), 0.0), vehicle_start(Vec2(0.15, -0.01), 0.0)};
+  Vec2 seen[2] = {s[0].x, s[1].x}, seen_v[2] = {Vec2::Zero(), Vec2::Zero()}, last_mean[2] = {Vec2::Zero(), Vec2::Zero()};
+  const Vec2 goal[2] = {Vec2(2, 0), Vec2(-2, 0)};
+  SafetyState st[2];
+  double closest = 1e9;
+  int backed = 0, outside = 0;
+  for (int k = 0; k < 1500; ++k) {
+    VehicleState next[2] = {s[0], s[1]};
+    for (int i = 0; i < 2; ++i) {
+      const Vec2 step = goal[i] - s[i].x;
+      const Vec2 wanted = s[i].x + (step.norm() > 0.1 ? Vec2(0.1 * step.normalized()) : step);
+      const SafetyNeighbour j{1 - i, seen[1 - i], 1.0, ends, braking_displacement(seen_v[1 - i], vp.max_accel, h), blur};
+      const SafetyOutcome f = safety_filter(p, st[i], i, s[i].x, wanted, {j}, {},
+                                            braking_displacement(s[i].velocity, vp.max_accel, h));
+      backed += f.away != Vec2::Zero() ? 1 : 0;
+      bool out = false;
+      drive_safely(vp, next[i], {wanted, (wanted - s[i].x) / h, false}, f, h, 1e6, out);
+      outside += out ? 1 : 0;
+    }
+    // Next step's view: the state before this step (one step old by then), with the mean velocity of
+    // the step that ended there.
+    for (int i = 0; i < 2; ++i) {
+      seen[i] = s[i].x;
+      seen_v[i] = last_mean[i];
+      last_mean[i] = (next[i].x - s[i].x) / h;
+    }
+    s[0] = next[0];
+    s[1] = next[1];
+    closest = std::min(closest, (s[0].x - s[1].x).norm());
+  }
+  CHECK(closest >= 0.25 - 1e-9);
+  CHECK(outside == 0);
+  CHECK(backed > 0);
+  CHECK((s[0].x - goal[0]).norm() < 0.01);  // both arrived
+  CHECK((s[1].x - goal[1]).norm() < 0.01);
 }
