@@ -316,19 +316,19 @@ class Watch:
                 pass
         return now
 
-    def whole(self, ids, meshed=True):
+    def whole(self, ids):
         """The swarm of `ids` is whole: the supervisor reports exactly them alive, each reports hearing all
-        the others (when meshed), and the supervisor says converged."""
+        the others, and the supervisor says converged."""
         return (self.alive == set(ids) and self.converged and
-                (not meshed or all(self.heard.get(i) == len(ids) - 1 for i in ids)))
+                all(self.heard.get(i) == len(ids) - 1 for i in ids))
 
-    def until_whole(self, ids, t_from, timeout, hold=HOLD_S, meshed=True):
+    def until_whole(self, ids, t_from, timeout, hold=HOLD_S):
         """The first moment from t_from on after which the swarm of `ids` stays whole for `hold` seconds
         (seconds after t_from), or None when that does not happen within timeout seconds."""
         since = None
         while True:
             now = self.poll(len(ids))
-            if self.whole(ids, meshed):
+            if self.whole(ids):
                 since = now if since is None else since
                 if now - since >= hold:
                     return since - t_from
