@@ -995,12 +995,13 @@ namespace {
 /// 12 free-running arc-law agents on three hosts of four (ids 0-3, 4-7, 8-11), as scripts/reliability.sh
 /// places them, every host losing a fraction p of the datagrams it sends and of those it receives: a
 /// state from one host to another is lost for each receiver on its own with probability 1 - (1 - p)^2,
-/// within a host never. Period 20 ms (50 Hz), each agent at its own phase, deliveries 3 ms late; the
-/// agents keep a silent neighbour timeout_ns. worst_moved: the largest distance of any agent from its
-/// start at any tick.
+/// within a host never. Period 20 ms (50 Hz), each agent at its own phase, deliveries `latency` late;
+/// the agents keep a silent neighbour timeout_ns. worst_moved: the largest distance of any agent from
+/// its start at any tick.
 std::vector<AgentLogic> lossy_lan(const core::CompiledCommand& cmd, const std::vector<Vec2>& start, int periods,
-                                  double p, std::int64_t timeout_ns, double& worst_moved) {
-  constexpr std::int64_t P = 20 * kMs, latency = 3 * kMs;
+                                  double p, std::int64_t timeout_ns, double& worst_moved,
+                                  std::int64_t latency = 3 * kMs) {
+  constexpr std::int64_t P = 20 * kMs;
   const int n = static_cast<int>(start.size());
   std::vector<AgentLogic> agents;
   for (int i = 0; i < n; ++i) {
@@ -1074,10 +1075,11 @@ TEST_CASE("loss on every host changes neither who is in the swarm nor the arc la
   CHECK(config::AgentConfig{}.rate_hz == 50.0);  // the 20 ms period of lossy_lan
   std::vector<Vec2> slots;
   for (int i = 0; i < 12; ++i) slots.emplace_back(4 * std::cos(0.3 + i * M_PI / 6), 4 * std::sin(0.3 + i * M_PI / 6));
-  for (const double p : {0.2, 0.4}) {
-    CAPTURE(p);
+  // Late as well as lost: 45 ms is more than two periods, so every state used is that old.
+  for (const auto& [p, latency] : {std::pair{0.2, 3 * kMs}, std::pair{0.4, 3 * kMs}, std::pair{0.4, 45 * kMs}}) {
+    CAPTURE(p, latency);
     double moved = 0.0;
-    const auto agents = lossy_lan(arc_circle(), slots, 1500, p, timeout, moved);  // 30 s
+    const auto agents = lossy_lan(arc_circle(), slots, 1500, p, timeout, moved, latency);  // 30 s
     for (const auto& a : agents) {
       CHECK(a.counters().stale_dropped == 0);
       CHECK(a.neighbours() == 11);
