@@ -264,8 +264,7 @@ AgentNode::AgentNode(const std::vector<std::int32_t>& ids, const std::vector<cor
       group_(ids.size() > 1),
       batch_(group_ && cfg.agent.batch_state),
       table_(std::make_shared<NeighbourTable>(
-          ids, static_cast<std::int64_t>(cfg.agent.neighbour_timeout_periods / cfg.agent.rate_hz * 1e9),
-          static_cast<std::int64_t>(cfg.agent.neighbour_timeout_periods / cfg.agent.idle_state_rate_hz() * 1e9))),
+          ids, cfg.agent.neighbour_timeout_ns(), cfg.agent.idle_neighbour_timeout_ns())),
       node_(agent_transport(cfg, ids), node_name(ids)),
       state_writer_(batch_ ? dds::Writer<msg::AgentState>() : node_.writer<msg::AgentState>(dds::TopicId::State)),
       batch_writer_(batch_ ? node_.writer<msg::AgentStateBatch>(dds::TopicId::StateBatch)

@@ -196,8 +196,7 @@ int run(const std::vector<std::int32_t>& ids, bool batch, const config::Config& 
                                                        fdds::StatusMask::data_available());
     if (!state_writer || !status_writer || !state_reader) throw std::runtime_error("create endpoint failed");
 
-    const double period_s = 1.0 / cfg.agent.rate_hz;
-    const auto timeout_ns = static_cast<std::int64_t>(cfg.agent.neighbour_timeout_periods * period_s * 1e9);
+    const std::int64_t timeout_ns = cfg.agent.neighbour_timeout_ns();
     const auto status_every = std::max<std::uint64_t>(
         1, static_cast<std::uint64_t>(std::llround(cfg.agent.rate_hz / cfg.agent.status_rate_hz)));
     const double share = 1.0 / static_cast<double>(ids.size());  // of the process figures, per agent

@@ -61,7 +61,7 @@ class FoxgloveSink : public view::SampleSink {
 /// 0.3 s, so a recording's 10 Hz rows do not flicker), dead after the supervisor's agent timeout.
 view::SceneParams scene_params(const config::Config& cfg) {
   view::SceneParams p;
-  p.stale_s = std::max(0.3, cfg.agent.neighbour_timeout_periods / cfg.agent.rate_hz);
+  p.stale_s = std::max(0.3, 1e-9 * static_cast<double>(cfg.agent.neighbour_timeout_ns()));
   p.dead_s = std::max(p.stale_s, cfg.supervisor.agent_timeout_s);
   return p;
 }

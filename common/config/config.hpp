@@ -39,7 +39,11 @@ struct SimConfig {
 /// Agent process settings.
 struct AgentConfig {
   double rate_hz = 50.0;                  ///< control loop rate
-  double neighbour_timeout_periods = 3.0; ///< drop a neighbour unheard for this many periods
+  /// Drop a neighbour unheard for this many periods. Loss alone must not do it: a neighbour whose k
+  /// states in a row are lost is dropped, which happens to a pair losing a fraction q of its exchanges
+  /// (1 - q) q^k of its ticks; 40 periods keep that below 1e-8 at q = 0.64 (40 % loss on both hosts), so
+  /// who is in the swarm does not change with loss (docs/RELIABILITY.md, "Loss on every host").
+  double neighbour_timeout_periods = 40.0;
   double status_rate_hz = 1.0;            ///< agent status publication rate
   /// Listening time before the first publication, s: an agent that hears its id from another
   /// participant meanwhile refuses to run (exit 2) instead of joining as a duplicate.
@@ -53,6 +57,14 @@ struct AgentConfig {
   double idle_rate_hz = 1000.0;
   /// The state rate before the first command: idle_rate_hz, at most the loop rate.
   double idle_state_rate_hz() const { return idle_rate_hz < rate_hz ? idle_rate_hz : rate_hz; }
+  /// neighbour_timeout_periods of the loop, ns: how long a commanded agent keeps a silent neighbour.
+  std::int64_t neighbour_timeout_ns() const {
+    return static_cast<std::int64_t>(neighbour_timeout_periods / rate_hz * 1e9);
+  }
+  /// neighbour_timeout_periods at the state rate before the first command (idle_state_rate_hz), ns.
+  std::int64_t idle_neighbour_timeout_ns() const {
+    return static_cast<std::int64_t>(neighbour_timeout_periods / idle_state_rate_hz() * 1e9);
+  }
   /// A process hosting several agents publishes their states as one AgentStateBatch per tick
   /// (shapeform/state_batch) instead of one AgentState per agent (shapeform/state).
   bool batch_state = true;

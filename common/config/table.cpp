@@ -203,7 +203,10 @@ std::vector<P> build() {
       [](auto& c) -> auto& { return c.agent.rate_hz; }));
   t.push_back(real(
       "agent.neighbour_timeout_periods", "periods", params::at_least(1),
-      "drop a neighbour unheard for this many loop periods",
+      "drop a neighbour unheard for this many loop periods (a clean exit drops it at once, a participant "
+      "lost to DDS after `transport.lease_s` at the latest). Lost samples alone must not: a pair losing a fraction q of its exchanges drops each other on "
+      "(1 - q) q^k of its ticks; the default 40 keeps that below 1e-8 at q = 0.64 (40 % loss on both hosts) "
+      "and keeps a silent agent 0.8 s at 50 Hz",
       [](auto& c) -> auto& { return c.agent.neighbour_timeout_periods; }));
   t.push_back(real(
       "agent.status_rate_hz", "Hz", params::above_up_to(0, kMaxRateHz),

@@ -148,8 +148,9 @@ class LanTest(harness.LanSwarmTestCase):
             self.assertLessEqual(abs(m["shape_error_mean"] - sim["shape_error_mean"]), 0.05,
                                  "the plateau: processes %.4f, simulator %.4f" % (m["shape_error_mean"],
                                                                                  sim["shape_error_mean"]))
-            # The loss was real: every host's rules dropped datagrams of the swarm, and the agents felt it
-            # (a neighbour unheard for 3 periods is dropped from the law for a while).
+            # The loss was real: every host's rules dropped datagrams of the swarm; and it changed nobody's
+            # neighbours: lost samples alone never reach agent.neighbour_timeout_periods (40: 0.36^40 ~ 2e-18).
+            # With the former 3 periods about a quarter of the statuses were short of a neighbour.
             dropped = {h: self.dropped(h) for h in hosts}
             short = sum(1 for a, mk in zip(agents, marks) for e in a.events("status", mk)
                         if e["neighbours_heard"] < AGENTS - 1)
@@ -159,7 +160,7 @@ class LanTest(harness.LanSwarmTestCase):
                                                                     short, total), flush=True)
             for h in hosts:
                 self.assertGreater(dropped[h], 100, "host %s dropped datagrams" % h)
-            self.assertGreater(short, 0, "some statuses show a neighbour missed")
+            self.assertEqual(short, 0, "statuses short of a neighbour: loss alone dropped a live neighbour")
             self.assert_all_alive(agents + [sup])
         finally:
             for h in hosts:

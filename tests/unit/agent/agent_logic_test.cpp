@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include "agent_logic.hpp"
+#include "config/config.hpp"
 #include "core/swarm.hpp"
 
 #include <map>
@@ -988,4 +989,131 @@ TEST_CASE("the neighbour table's index follows arrivals, departures and drops (r
   }
   table.on_state(-1, Vec2(0, 0), ++seq, 0, {}, std::nullopt, 0.0, std::nullopt, std::nullopt, 1.0);  // ignored
   CHECK(table.entries().size() == model.size());
+}
+
+namespace {
+/// 12 free-running arc-law agents on three hosts of four (ids 0-3, 4-7, 8-11), as scripts/reliability.sh
+/// places them, every host losing a fraction p of the datagrams it sends and of those it receives: a
+/// state from one host to another is lost for each receiver on its own with probability 1 - (1 - p)^2,
+/// within a host never. Period 20 ms (50 Hz), each agent at its own phase, deliveries `latency` late;
+/// the agents keep a silent neighbour timeout_ns. worst_moved: the largest distance of any agent from
+/// its start at any tick.
+std::vector<AgentLogic> lossy_lan(const core::CompiledCommand& cmd, const std::vector<Vec2>& start, int periods,
+                                  double p, std::int64_t timeout_ns, double& worst_moved,
+                                  std::int64_t latency = 3 * kMs) {
+  constexpr std::int64_t P = 20 * kMs;
+  const int n = static_cast<int>(start.size());
+  std::vector<AgentLogic> agents;
+  for (int i = 0; i < n; ++i) {
+    agents.emplace_back(i, start[i], timeout_ns);
+    agents.back().set_period(1e-9 * static_cast<double>(P));
+  }
+  std::mt19937 rng(29);
+  std::uniform_int_distribution<std::int64_t> phase(0, P - 1);
+  std::bernoulli_distribution lost(1.0 - (1.0 - p) * (1.0 - p));
+  std::vector<std::int64_t> offset;
+  for (int i = 0; i < n; ++i) offset.push_back(phase(rng));
+  struct Delivery {
+    std::int64_t at;
+    int from, to;
+    Vec2 x;
+    std::uint64_t seq;
+    double t;
+    std::optional<double> arc;
+  };
+  std::vector<Delivery> inflight;
+  std::vector<std::uint64_t> seq(static_cast<std::size_t>(n), 0);
+  for (int i = 0; i < n; ++i)  // every agent heard before the command (the supervisor waits for them)
+    for (int j = 0; j < n; ++j)
+      if (i != j) agents[static_cast<std::size_t>(j)].on_state(i, start[static_cast<std::size_t>(i)], ++seq[static_cast<std::size_t>(i)], 0);
+  for (auto& a : agents) adopt(a, cmd, 1);
+  std::vector<std::pair<std::int64_t, int>> ticks;
+  for (int k = 1; k <= periods; ++k)
+    for (int i = 0; i < n; ++i) ticks.emplace_back(k * P + offset[static_cast<std::size_t>(i)], i);
+  std::sort(ticks.begin(), ticks.end());
+  worst_moved = 0.0;
+  for (const auto& [now, i] : ticks) {
+    for (auto it = inflight.begin(); it != inflight.end();) {
+      if (it->at > now) {
+        ++it;
+        continue;
+      }
+      auto& to = agents[static_cast<std::size_t>(it->to)];
+      to.on_state(it->from, it->x, it->seq, it->at, agents[static_cast<std::size_t>(it->from)].command_id(), it->arc, it->t);
+      it = inflight.erase(it);
+    }
+    AgentLogic& a = agents[static_cast<std::size_t>(i)];
+    a.drop_stale(now);
+    a.step();
+    worst_moved = std::max(worst_moved, (a.position() - start[static_cast<std::size_t>(i)]).norm());
+    const std::uint64_t s = ++seq[static_cast<std::size_t>(i)];
+    for (int j = 0; j < n; ++j)
+      if (j != i && (j / 4 == i / 4 || !lost(rng)))
+        inflight.push_back({now + latency, i, j, a.position(), s, a.model_time(), a.arc()});
+  }
+  return agents;
+}
+
+core::CompiledCommand arc_circle() {
+  core::Command c;
+  c.law = core::Law::Arc;
+  c.shape.kind = core::ShapeKind::Circle;
+  c.shape.r0 = 4;
+  c.arc.k_normal = 0.5;  // config/scenarios/arc_circle.yaml's
+  c.arc.k_tangent = 1.0;
+  return core::compile(c);
+}
+}  // namespace
+
+TEST_CASE("loss on every host changes neither who is in the swarm nor the arc law's slots", "[agent][loss]") {
+  // 40 % loss on every host: 64 % of the exchanges between hosts lost. The swarm already stands on its
+  // slots (12 evenly spaced on the circle), which every agent computes alike from the same states; a
+  // neighbour dropped for silence changes the count and the ranks (slots L/11 apart) in one agent's view,
+  // which then leaves its slot. With the default timeout no live neighbour is dropped, and the agents
+  // stand still (the states they keep are their neighbours' states now).
+  const std::int64_t timeout = config::AgentConfig{}.neighbour_timeout_ns();
+  CHECK(config::AgentConfig{}.rate_hz == 50.0);  // the 20 ms period of lossy_lan
+  std::vector<Vec2> slots;
+  for (int i = 0; i < 12; ++i) slots.emplace_back(4 * std::cos(0.3 + i * M_PI / 6), 4 * std::sin(0.3 + i * M_PI / 6));
+  // Late as well as lost: 45 ms is more than two periods, so every state used is that old.
+  for (const auto& [p, latency] : {std::pair{0.2, 3 * kMs}, std::pair{0.4, 3 * kMs}, std::pair{0.4, 45 * kMs}}) {
+    CAPTURE(p, latency);
+    double moved = 0.0;
+    const auto agents = lossy_lan(arc_circle(), slots, 1500, p, timeout, moved, latency);  // 30 s
+    for (const auto& a : agents) {
+      CHECK(a.counters().stale_dropped == 0);
+      CHECK(a.neighbours() == 11);
+      CHECK(a.counters().samples_received > 0);
+    }
+    CHECK(moved < 1e-9);
+  }
+  // The former 3 periods (60 ms): neighbours dropped and re-admitted all the time, and agents leave their
+  // slots by up to a third of the gap between slots (2.1).
+  double moved = 0.0;
+  const auto agents = lossy_lan(arc_circle(), slots, 1500, 0.2, 60 * kMs, moved);
+  std::uint64_t dropped = 0;
+  for (const auto& a : agents) dropped += a.counters().stale_dropped;
+  CHECK(dropped > 100);
+  CHECK(moved > 0.1);
+}
+
+TEST_CASE("at 40 % loss on every host the arc law forms its exact, evenly spaced circle", "[agent][loss]") {
+  // From the seeded start of config/scenarios/arc_circle.yaml's swarm, with states up to several periods
+  // old (each neighbour's newest state is 1 / 0.36 = 2.8 periods old on average across hosts): the same
+  // circle as without loss, on the curve and evenly spaced, in the same order.
+  const std::int64_t timeout = config::AgentConfig{}.neighbour_timeout_ns();
+  const auto start = core::uniform_start(12, 1);
+  double moved = 0.0;
+  const auto agents = lossy_lan(arc_circle(), start, 1500, 0.4, timeout, moved);
+  std::vector<std::pair<double, int>> by_angle;
+  for (const auto& a : agents) {
+    CHECK(a.counters().stale_dropped == 0);
+    CHECK(std::abs(a.position().norm() - 4.0) < 1e-6);
+    by_angle.emplace_back(std::atan2(a.position().y(), a.position().x()), a.id());
+  }
+  std::sort(by_angle.begin(), by_angle.end());
+  for (std::size_t k = 0; k < by_angle.size(); ++k) {
+    const double next = k + 1 < by_angle.size() ? by_angle[k + 1].first : by_angle[0].first + 2 * M_PI;
+    CHECK(std::abs(next - by_angle[k].first - M_PI / 6) < 1e-6);
+  }
 }
