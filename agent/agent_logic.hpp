@@ -194,6 +194,12 @@ class AgentLogic {
   /// centre: the difference is then not the age of a state (free running, a state is at most one step
   /// old) but clocks that started apart (a late joiner counts its model time from its own adoption).
   static constexpr long kMaxCentreFrameSteps = 1;
+  /// Following the supervisor's target: by how many steps of the centre's motion a neighbour state
+  /// received age_s ago (on a loop of period_s, one step per period) is behind this agent's step.
+  /// The state came out of the neighbour's step against the centre then, feed-forward included, so it
+  /// is one step ahead of that centre: age - 1 periods, from -1 (it stepped just now) through 0 (it
+  /// stepped a period ago, as this agent did) to more for a lost sample. Pure.
+  static double centre_frame_steps(double age_s, double period_s) { return age_s / period_s - 1.0; }
 
   /// Whether this agent's step may be taken together with `first`'s in one core::agent_steps: both
   /// free running, on the same command (core::shares_steps) at the same model time with the same
@@ -297,11 +303,18 @@ class AgentLogic {
   struct CentreFrame {
     bool moving = false;  ///< feed-forward tracking of a moving centre: states of other steps move with it
     core::Vec2 velocity = core::Vec2::Zero();  ///< dC/dt at the step's time, the feed-forward it adds
+    /// Following the supervisor's target, whose centre every agent extrapolates over the time since it
+    /// was received (the same centre at one instant whatever the tick phase): a state is moved by its
+    /// age on this agent's clock, not by the steps between model times.
+    bool by_age = false;
   };
   static CentreFrame centre_frame(const core::CompiledCommand& local, double t);
-  /// Neighbour state s as this agent's step sees it: moved into its model time when f.moving, s is of
-  /// the followed command and at most kMaxCentreFrameSteps steps (but not 0) from this agent's step.
-  core::Vec2 seen_now(const CentreFrame& f, const Snapshot& s, const dds::CommandId& followed) const;
+  /// Neighbour state s (received at seen_ns) as this agent's step sees it, when f.moving and s is of
+  /// the followed command: following the target (f.by_age), moved by centre_frame_steps(age) steps of
+  /// the centre; otherwise moved into this agent's model time when at most kMaxCentreFrameSteps steps
+  /// (but not 0) from its step.
+  core::Vec2 seen_now(const CentreFrame& f, const Snapshot& s, std::int64_t seen_ns,
+                      const dds::CommandId& followed) const;
   /// Drives the vehicle by the law's step r and books the result (position, velocity, model time,
   /// counters).
   /// gap: book the smallest gap now (book_gap); step_shared books all its agents' at once instead.
@@ -341,7 +354,9 @@ class AgentLogic {
   core::CompiledCommand cmd_;  ///< the arbiter's command (the default one before any)
   double t_ = 0.0;  ///< model time since the command was adopted
   std::optional<TargetSample> target_;
-  double target_age_ = 0.0;  ///< model time since the target was received
+  /// Model time since the target was received: set from the tick's time by drop_stale (the time since
+  /// it was received, one dt per period), and one dt more per step between.
+  double target_age_ = 0.0;
   std::int64_t target_seen_ns_ = 0;
   std::shared_ptr<NeighbourTable> table_;
   std::vector<core::Neighbour> nbrs_;  ///< reused every step
