@@ -17,8 +17,8 @@ and a supervisor on loopback; fixed seeds; each test's runs one after another on
   target moved on over the time since it was received, and each neighbour's state is moved with the
   centre by its age (AgentLogic::step), so the tracked problem is the static one in the centre's frame.
   A tracked run cannot be compared with a fixed-centre run of the same phasing (each run draws its own),
-  so the free-running test holds each tracked run's centroid error (median after the transient) within
-  0.1 of the fixed-centre problem's, over 10 tracked phasings on both paths and both laws. Without
+  so the free-running test holds each tracked run's centroid error (median after the transient) to at
+  most 0.1 above the fixed-centre problem's, over 10 tracked phasings on both paths and both laws. Without
   feed-forward the centroid error is about 4.
 
   On the line path the swarm starts around C(0) (the seeded start shifted by C(0) = (-10, -10)): from
@@ -168,9 +168,10 @@ class PaperClaimsTest(harness.SwarmTestCase):
         # The default mode: free-running processes, each ticking at its own phase, so every run is a
         # fresh draw of tick phasings and no fixed-centre run shares a tracked run's. What a user tracking
         # a moving target expects is the swarm around it as around a still one: each tracked run's
-        # centroid error (median over t = 200..300: the paper's law chatters, one instant is noise)
-        # within 0.1 of the fixed-centre problem's, here one fixed-centre run per law and path
+        # centroid error (median over t = 200..300: the paper's law chatters, one instant is noise) at
+        # most 0.1 above the fixed-centre problem's, here one fixed-centre run per law and path
         # (scripts/paper/free_running.py measures the problem's spread over many; docs/RESULTS.md).
+        # Closer to the centre is no failure: tracked runs of the paper's law rest up to 0.1 closer.
         # 10 tracked phasings in all, on both paths and both laws.
         tracked = {("paper", "line"): 3, ("paper", "circle"): 3, ("arc", "line"): 2, ("arc", "circle"): 2}
         for (law, path), runs in tracked.items():
@@ -187,7 +188,7 @@ class PaperClaimsTest(harness.SwarmTestCase):
                     msg = (f"{law} {path} run {j}: centroid error tracked {c_ff:.3f}, fixed centre {c_fx:.3f}; "
                            f"ring error tracked {r_ff:.3f}")
                     sys.stderr.write(msg + "\n")
-                    self.assertLessEqual(abs(c_ff - c_fx), 0.1, msg)
+                    self.assertLessEqual(c_ff - c_fx, 0.1, msg)
                     self.assertLess(r_ff, 0.7, msg)  # on a ring of radius about r0 around the centre
 
 if __name__ == "__main__":
