@@ -259,11 +259,6 @@ void AgentLogic::drop_stale(std::int64_t now_ns) {
   now_ns_ = now_ns;
   table_->drop_stale(now_ns, has_command());
   if (target_ && now_ns - target_seen_ns_ > kTargetTimeout_ns) target_.reset();
-  // The centre moves on from the target over the time since it was received, not over the steps since:
-  // counted in steps, each agent's centre would lag the supervisor's by its own tick phase (up to a
-  // step of the centre's motion, a different offset per agent and per run).
-  if (target_)
-    target_age_ = static_cast<double>(std::max<std::int64_t>(now_ns - target_seen_ns_, 0)) * 1e-9 / period_s_ * cmd_.dt;
 }
 
 std::optional<core::Vec2> AgentLogic::tracked_centre() const {
@@ -322,7 +317,7 @@ bool AgentLogic::step() {
   const core::CompiledCommand local = follow_target ? effective_command() : cmd_;
   const double t_local = follow_target ? 0.0 : t_;
   CentreFrame frame = centre_frame(local, t_local);
-  frame.by_age = follow_target;
+  frame.by_target = follow_target;
   nbrs_.clear();
   bool ready = true;
   for (const auto& e : table_->entries()) {
@@ -368,11 +363,11 @@ AgentLogic::CentreFrame AgentLogic::centre_frame(const core::CompiledCommand& lo
 core::Vec2 AgentLogic::seen_now(const CentreFrame& f, const Snapshot& s, std::int64_t seen_ns,
                                 const dds::CommandId& followed) const {
   if (!f.moving || s.command != followed) return s.x;
-  if (f.by_age) {
-    // Every agent's centre is the target's at the instant of its tick, so a state's place in the
-    // centre's frame is set by when it was taken, on this agent's clock (the table drops old ones).
-    const double age_s = static_cast<double>(std::max<std::int64_t>(now_ns_ - seen_ns, 0)) * 1e-9;
-    return s.x + (centre_frame_steps(age_s, period_s_) * cmd_.dt) * f.velocity;
+  if (f.by_target) {
+    // Every agent steps against the newest target's centre: the supervisor's ticks are the frames (the
+    // supervisor measures at them too), and a state's frame is set by the targets since it was taken.
+    const auto period_ns = std::max<std::int64_t>(std::llround(period_s_ * 1e9), 1);
+    return s.x + (centre_frame_steps(seen_ns, target_seen_ns_, target_age_ / cmd_.dt, period_ns) * cmd_.dt) * f.velocity;
   }
   // With feed-forward every agent's step carries the centre's motion dC/dt dt, so a state `behind`
   // steps older than this agent's is that much of the centre's motion behind (ahead when negative):
@@ -574,7 +569,7 @@ void AgentLogic::step_shared(const std::vector<AgentLogic*>& agents) {
   const core::CompiledCommand local = follow_target ? first.effective_command() : first.cmd_;
   const double t_local = follow_target ? 0.0 : first.t_;
   CentreFrame frame = centre_frame(local, t_local);
-  frame.by_age = follow_target;
+  frame.by_target = follow_target;
   // The agents hosted here are taken as they are now (hosted), the others as last heard (moved into
   // the hosted agents' model time as step() moves them).
   for (const auto& e : first.table_->entries()) {

@@ -195,11 +195,17 @@ class AgentLogic {
   /// old) but clocks that started apart (a late joiner counts its model time from its own adoption).
   static constexpr long kMaxCentreFrameSteps = 1;
   /// Following the supervisor's target: by how many steps of the centre's motion a neighbour state
-  /// received age_s ago (on a loop of period_s, one step per period) is behind this agent's step.
-  /// The state came out of the neighbour's step against the centre then, feed-forward included, so it
-  /// is one step ahead of that centre: age - 1 periods, from -1 (it stepped just now) through 0 (it
-  /// stepped a period ago, as this agent did) to more for a lost sample. Pure.
-  static double centre_frame_steps(double age_s, double period_s) { return age_s / period_s - 1.0; }
+  /// received at state_ns is behind this agent's step, which uses the target received at target_ns
+  /// moved on by target_age_steps of its own steps (0 while a target comes every period). The state
+  /// came out of the neighbour's step against the newest target then, feed-forward included, so it is
+  /// one step ahead of that target's centre: -1 when it was taken after this agent's target arrived
+  /// (both stepped against the same one), and one more per target period before (period_ns; the
+  /// supervisor's loop runs at the agents' rate by default), plus this agent's own steps since. Pure.
+  static double centre_frame_steps(std::int64_t state_ns, std::int64_t target_ns, double target_age_steps,
+                                   std::int64_t period_ns) {
+    const std::int64_t arrivals = state_ns < target_ns ? (target_ns - state_ns) / period_ns + 1 : 0;
+    return target_age_steps + static_cast<double>(arrivals) - 1.0;
+  }
 
   /// Whether this agent's step may be taken together with `first`'s in one core::agent_steps: both
   /// free running, on the same command (core::shares_steps) at the same model time with the same
@@ -303,14 +309,15 @@ class AgentLogic {
   struct CentreFrame {
     bool moving = false;  ///< feed-forward tracking of a moving centre: states of other steps move with it
     core::Vec2 velocity = core::Vec2::Zero();  ///< dC/dt at the step's time, the feed-forward it adds
-    /// Following the supervisor's target, whose centre every agent extrapolates over the time since it
-    /// was received (the same centre at one instant whatever the tick phase): a state is moved by its
-    /// age on this agent's clock, not by the steps between model times.
-    bool by_age = false;
+    /// Following the supervisor's target: every agent steps against the centre of the newest target
+    /// (moved on by its own steps since, when one is late), so the frames are the supervisor's ticks
+    /// and a state is moved by the targets that arrived since it was taken (centre_frame_steps), not by
+    /// the steps between model times.
+    bool by_target = false;
   };
   static CentreFrame centre_frame(const core::CompiledCommand& local, double t);
   /// Neighbour state s (received at seen_ns) as this agent's step sees it, when f.moving and s is of
-  /// the followed command: following the target (f.by_age), moved by centre_frame_steps(age) steps of
+  /// the followed command: following the target (f.by_target), moved by centre_frame_steps steps of
   /// the centre; otherwise moved into this agent's model time when at most kMaxCentreFrameSteps steps
   /// (but not 0) from its step.
   core::Vec2 seen_now(const CentreFrame& f, const Snapshot& s, std::int64_t seen_ns,
@@ -354,9 +361,7 @@ class AgentLogic {
   core::CompiledCommand cmd_;  ///< the arbiter's command (the default one before any)
   double t_ = 0.0;  ///< model time since the command was adopted
   std::optional<TargetSample> target_;
-  /// Model time since the target was received: set from the tick's time by drop_stale (the time since
-  /// it was received, one dt per period), and one dt more per step between.
-  double target_age_ = 0.0;
+  double target_age_ = 0.0;  ///< model time since the target was received (one dt per step)
   std::int64_t target_seen_ns_ = 0;
   std::shared_ptr<NeighbourTable> table_;
   std::vector<core::Neighbour> nbrs_;  ///< reused every step
