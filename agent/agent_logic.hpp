@@ -184,11 +184,12 @@ class AgentLogic {
   /// its state of step k for the same command, and uses exactly those states; the tracked centre is
   /// then the command's path at the agent's own model time. This is the simulator's synchronous
   /// update, so processes and simulator compute the same numbers. Returns whether it stepped.
-  /// Tracking a moving centre with feed-forward, a neighbour's state of another step (free running:
+  /// Tracking a moving centre with feed-forward, a neighbour's state of another frame (free running:
   /// one that already stepped in this period, or one not heard since its last step) is seen where it
-  /// would be at this agent's model time: moved with the centre, x_j + dC/dt (t - t_j), at most
-  /// kMaxCentreFrameSteps steps apart (see centre_frame()). In lockstep every state used is of the
-  /// agent's own step, so nothing moves.
+  /// would be in this agent's: moved with the centre by dC/dt per step. Following the supervisor's
+  /// target, by the targets that arrived since the state was taken (centre_frame_steps); on the
+  /// command's own path, by the steps between model times, at most kMaxCentreFrameSteps (see
+  /// centre_frame()). In lockstep every state used is of the agent's own step, so nothing moves.
   bool step();
   /// Neighbour states more steps than this from the agent's own are taken as heard, not moved with the
   /// centre: the difference is then not the age of a state (free running, a state is at most one step
