@@ -367,7 +367,8 @@ core::Vec2 AgentLogic::seen_now(const CentreFrame& f, const Snapshot& s, std::in
     // Every agent steps against the newest target's centre: the supervisor's ticks are the frames (the
     // supervisor measures at them too), and a state's frame is set by the targets since it was taken.
     const auto period_ns = std::max<std::int64_t>(std::llround(period_s_ * 1e9), 1);
-    return s.x + (centre_frame_steps(seen_ns, target_seen_ns_, target_age_ / cmd_.dt, period_ns) * cmd_.dt) * f.velocity;
+    const double steps = centre_frame_steps(seen_ns, target_seen_ns_, target_age_ / cmd_.dt, period_ns);
+    return s.x + (steps * cmd_.dt) * f.velocity;
   }
   // With feed-forward every agent's step carries the centre's motion dC/dt dt, so a state `behind`
   // steps older than this agent's is that much of the centre's motion behind (ahead when negative):

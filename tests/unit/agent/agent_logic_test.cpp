@@ -778,8 +778,9 @@ TEST_CASE("following the target: a state's place in the centre's frame is set by
   }
 }
 
-TEST_CASE("free running after the target, in any tick phases, is the fixed-centre swarm in the centre's frame",
-          "[agent][tracking]") {
+TEST_CASE(
+    "free running after the target, in any tick phases, is the fixed-centre swarm in the centre's frame",
+    "[agent][tracking]") {
   // Processes as they run: each agent ticks at its own phase of the period, the supervisor publishes the
   // target at its own, every state is heard when it is published. Around a centre moving at constant
   // velocity with feed-forward, and around it held still, from the same start and phases: seen in the
@@ -829,8 +830,8 @@ TEST_CASE("free running after the target, in any tick phases, is the fixed-centr
           const std::int64_t now = std::llround((static_cast<double>(p) + ph) * static_cast<double>(kPeriod));
           const double t = (static_cast<double>(p) + ph) * cmd.dt;  // the supervisor's model time
           if (who < 0) {
-            for (auto& a : agents) a.on_target({1, t, cmd.tracking.path.point + t * cmd.tracking.path.velocity,
-                                                cmd.tracking.path.velocity}, now);
+            const Vec2 centre = cmd.tracking.path.point + t * cmd.tracking.path.velocity;
+            for (auto& a : agents) a.on_target({1, t, centre, cmd.tracking.path.velocity}, now);
             continue;
           }
           if (p == 0) continue;  // the first target comes at the supervisor's phase of period 0
