@@ -316,7 +316,8 @@ bool AgentLogic::step() {
   const bool follow_target = following_target();
   const core::CompiledCommand local = follow_target ? effective_command() : cmd_;
   const double t_local = follow_target ? 0.0 : t_;
-  const CentreFrame frame = centre_frame(local, t_local);
+  CentreFrame frame = centre_frame(local, t_local);
+  frame.by_target = follow_target;
   nbrs_.clear();
   bool ready = true;
   for (const auto& e : table_->entries()) {
@@ -329,7 +330,7 @@ bool AgentLogic::step() {
       if (e.cur.command != followed || cur < k) ready = false;
       else if (cur > k && e.prev.command == followed && step_of(e.prev.model_time) == k) use = &e.prev;
     }
-    core::Neighbour n{e.id, seen_now(frame, *use, followed)};
+    core::Neighbour n{e.id, seen_now(frame, *use, e.last_seen_ns, followed)};
     if (arc_law && use->command == followed && use->arc) n.s = *use->arc;
     nbrs_.push_back(n);
   }
@@ -359,9 +360,16 @@ AgentLogic::CentreFrame AgentLogic::centre_frame(const core::CompiledCommand& lo
   return f;
 }
 
-core::Vec2 AgentLogic::seen_now(const CentreFrame& f, const Snapshot& s,
+core::Vec2 AgentLogic::seen_now(const CentreFrame& f, const Snapshot& s, std::int64_t seen_ns,
                                 const dds::CommandId& followed) const {
   if (!f.moving || s.command != followed) return s.x;
+  if (f.by_target) {
+    // Every agent steps against the newest target's centre: the supervisor's ticks are the frames (the
+    // supervisor measures at them too), and a state's frame is set by the targets since it was taken.
+    const auto period_ns = std::max<std::int64_t>(std::llround(period_s_ * 1e9), 1);
+    const double steps = centre_frame_steps(seen_ns, target_seen_ns_, target_age_ / cmd_.dt, period_ns);
+    return s.x + (steps * cmd_.dt) * f.velocity;
+  }
   // With feed-forward every agent's step carries the centre's motion dC/dt dt, so a state `behind`
   // steps older than this agent's is that much of the centre's motion behind (ahead when negative):
   // the static problem in the centre's frame needs it where it would be now.
@@ -584,12 +592,13 @@ void AgentLogic::step_shared(const std::vector<AgentLogic*>& agents) {
   const bool follow_target = first.following_target();
   const core::CompiledCommand local = follow_target ? first.effective_command() : first.cmd_;
   const double t_local = follow_target ? 0.0 : first.t_;
-  const CentreFrame frame = centre_frame(local, t_local);
+  CentreFrame frame = centre_frame(local, t_local);
+  frame.by_target = follow_target;
   // The agents hosted here are taken as they are now (hosted), the others as last heard (moved into
   // the hosted agents' model time as step() moves them).
   for (const auto& e : first.table_->entries()) {
     if (e.hosted >= 0) continue;
-    core::Neighbour n{e.id, first.seen_now(frame, e.cur, followed)};
+    core::Neighbour n{e.id, first.seen_now(frame, e.cur, e.last_seen_ns, followed)};
     if (e.cur.command == followed && e.cur.arc) n.s = *e.cur.arc;
     others.push_back(n);
   }

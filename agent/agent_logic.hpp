@@ -184,16 +184,29 @@ class AgentLogic {
   /// its state of step k for the same command, and uses exactly those states; the tracked centre is
   /// then the command's path at the agent's own model time. This is the simulator's synchronous
   /// update, so processes and simulator compute the same numbers. Returns whether it stepped.
-  /// Tracking a moving centre with feed-forward, a neighbour's state of another step (free running:
+  /// Tracking a moving centre with feed-forward, a neighbour's state of another frame (free running:
   /// one that already stepped in this period, or one not heard since its last step) is seen where it
-  /// would be at this agent's model time: moved with the centre, x_j + dC/dt (t - t_j), at most
-  /// kMaxCentreFrameSteps steps apart (see centre_frame()). In lockstep every state used is of the
-  /// agent's own step, so nothing moves.
+  /// would be in this agent's: moved with the centre by dC/dt per step. Following the supervisor's
+  /// target, by the targets that arrived since the state was taken (centre_frame_steps); on the
+  /// command's own path, by the steps between model times, at most kMaxCentreFrameSteps (see
+  /// centre_frame()). In lockstep every state used is of the agent's own step, so nothing moves.
   bool step();
   /// Neighbour states more steps than this from the agent's own are taken as heard, not moved with the
   /// centre: the difference is then not the age of a state (free running, a state is at most one step
   /// old) but clocks that started apart (a late joiner counts its model time from its own adoption).
   static constexpr long kMaxCentreFrameSteps = 1;
+  /// Following the supervisor's target: by how many steps of the centre's motion a neighbour state
+  /// received at state_ns is behind this agent's step, which uses the target received at target_ns
+  /// moved on by target_age_steps of its own steps (0 while a target comes every period). The state
+  /// came out of the neighbour's step against the newest target then, feed-forward included, so it is
+  /// one step ahead of that target's centre: -1 when it was taken after this agent's target arrived
+  /// (both stepped against the same one), and one more per target period before (period_ns; the
+  /// supervisor's loop runs at the agents' rate by default), plus this agent's own steps since. Pure.
+  static double centre_frame_steps(std::int64_t state_ns, std::int64_t target_ns, double target_age_steps,
+                                   std::int64_t period_ns) {
+    const std::int64_t arrivals = state_ns < target_ns ? (target_ns - state_ns) / period_ns + 1 : 0;
+    return target_age_steps + static_cast<double>(arrivals) - 1.0;
+  }
 
   /// Whether this agent's step may be taken together with `first`'s in one core::agent_steps: both
   /// free running, on the same command (core::shares_steps) at the same model time with the same
@@ -297,11 +310,19 @@ class AgentLogic {
   struct CentreFrame {
     bool moving = false;  ///< feed-forward tracking of a moving centre: states of other steps move with it
     core::Vec2 velocity = core::Vec2::Zero();  ///< dC/dt at the step's time, the feed-forward it adds
+    /// Following the supervisor's target: every agent steps against the centre of the newest target
+    /// (moved on by its own steps since, when one is late), so the frames are the supervisor's ticks
+    /// and a state is moved by the targets that arrived since it was taken (centre_frame_steps), not by
+    /// the steps between model times.
+    bool by_target = false;
   };
   static CentreFrame centre_frame(const core::CompiledCommand& local, double t);
-  /// Neighbour state s as this agent's step sees it: moved into its model time when f.moving, s is of
-  /// the followed command and at most kMaxCentreFrameSteps steps (but not 0) from this agent's step.
-  core::Vec2 seen_now(const CentreFrame& f, const Snapshot& s, const dds::CommandId& followed) const;
+  /// Neighbour state s (received at seen_ns) as this agent's step sees it, when f.moving and s is of
+  /// the followed command: following the target (f.by_target), moved by centre_frame_steps steps of
+  /// the centre; otherwise moved into this agent's model time when at most kMaxCentreFrameSteps steps
+  /// (but not 0) from its step.
+  core::Vec2 seen_now(const CentreFrame& f, const Snapshot& s, std::int64_t seen_ns,
+                      const dds::CommandId& followed) const;
   /// Drives the vehicle by the law's step r and books the result (position, velocity, model time,
   /// counters).
   /// gap: book the smallest gap now (book_gap); step_shared books all its agents' at once instead.
@@ -341,7 +362,7 @@ class AgentLogic {
   core::CompiledCommand cmd_;  ///< the arbiter's command (the default one before any)
   double t_ = 0.0;  ///< model time since the command was adopted
   std::optional<TargetSample> target_;
-  double target_age_ = 0.0;  ///< model time since the target was received
+  double target_age_ = 0.0;  ///< model time since the target was received (one dt per step)
   std::int64_t target_seen_ns_ = 0;
   std::shared_ptr<NeighbourTable> table_;
   std::vector<core::Neighbour> nbrs_;  ///< reused every step

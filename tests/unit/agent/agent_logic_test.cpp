@@ -746,6 +746,116 @@ TEST_CASE("free running on the line path with feed-forward is the fixed-centre s
   for (int i = 0; i < 8; ++i) CHECK((ff[i] - moved - fx[i]).norm() < 1e-9);
 }
 
+TEST_CASE("following the target: a state's place in the centre's frame is set by the targets since it",
+          "[agent][tracking]") {
+  // Taken by a neighbour's step against the newest target then, feed-forward included: one step ahead
+  // of that target's centre. Times in ms, targets every 20 ms, the one in use received at 0.
+  CHECK(AgentLogic::centre_frame_steps(10, 0, 0.0, 20) == -1.0);  // after it: the same target, a step on
+  CHECK(AgentLogic::centre_frame_steps(0, 0, 0.0, 20) == -1.0);
+  CHECK(AgentLogic::centre_frame_steps(-5, 0, 0.0, 20) == 0.0);   // against the one before, as this agent
+  CHECK(AgentLogic::centre_frame_steps(-25, 0, 0.0, 20) == 1.0);  // a sample lost since
+  CHECK(AgentLogic::centre_frame_steps(-45, 0, 0.0, 20) == 2.0);
+  CHECK(AgentLogic::centre_frame_steps(10, 0, 1.0, 20) == 0.0);   // a late target: this agent stepped on
+  const core::CompiledCommand c = tracking_ff();
+  const Vec2 x0(-9, -10), x1(-11, -9.5), centre(-8, -8), vt(0.2, 0.0);
+  core::CompiledCommand local = c;
+  local.tracking.path.point = centre;
+  local.tracking.path.velocity = vt;
+  for (const auto& [heard_ms, steps] : std::vector<std::pair<std::int64_t, double>>{
+           {10, -1.0}, {-5, 0.0}, {-25, 1.0}, {-45, 2.0}}) {
+    AgentLogic a(0, x0, 100 * kMs);
+    a.set_period(0.02);
+    REQUIRE(adopt(a, c, 1));
+    a.on_target({1, 20.0, centre, vt}, 100 * kMs);
+    // The model time says nothing here (a clock that started apart): the targets since do.
+    a.on_state(1, x1, 1, 100 * kMs + heard_ms * kMs, a.command_id(), std::nullopt, 7.0);
+    a.drop_stale(115 * kMs);
+    CHECK((*a.tracked_centre() - centre).norm() < 1e-12);
+    a.step();
+    const Vec2 seen = x1 + (steps * c.dt) * vt;
+    const core::StepResult expect = core::agent_step(local, 0, x0, {core::Neighbour{1, seen}}, 0.0);
+    INFO("heard at " << heard_ms << " ms");
+    CHECK((a.position() - expect.x).norm() < 1e-12);
+  }
+}
+
+TEST_CASE(
+    "free running after the target, in any tick phases, is the fixed-centre swarm in the centre's frame",
+    "[agent][tracking]") {
+  // Processes as they run: each agent ticks at its own phase of the period, the supervisor publishes the
+  // target at its own, every state is heard when it is published. Around a centre moving at constant
+  // velocity with feed-forward, and around it held still, from the same start and phases: seen in the
+  // frames of the supervisor's ticks, one problem (each agent steps against the newest target, each
+  // neighbour moved by the targets since its state). Moving neighbours by the steps between model times
+  // instead, the two differ by up to a step of the centre's motion.
+  constexpr std::int64_t kPeriod = 20 * kMs;
+  const int n = 8;
+  const std::vector<double> phase = {0.91, 0.13, 0.55, 0.07, 0.72, 0.38, 0.64, 0.29};
+  const double sup_phase = 0.46;
+  const long periods = 60;
+  for (const auto law : {core::Law::Paper, core::Law::Arc}) {
+    core::CompiledCommand moving = tracking_ff();
+    moving.law = law;
+    core::CompiledCommand fixed = moving;
+    fixed.tracking.path.velocity = Vec2::Zero();
+    const Vec2 c0 = moving.tracking.path.point, v = moving.tracking.path.velocity;
+    std::vector<Vec2> start = core::uniform_start(n, 3);
+    for (auto& x : start) x += c0;
+    // The supervisor tick whose target agent i stepped against last in `period` (in periods).
+    const auto target_of = [&](int i, long period) {
+      return static_cast<double>(phase[i] > sup_phase ? period : period - 1) + sup_phase;
+    };
+    // Agents step from period 1 on, and are heard from their first step: agent i's start is its place
+    // against the first target it steps against; the moving run starts there in the centre's frame.
+    const auto run = [&](const core::CompiledCommand& cmd) {
+      const Vec2 vc = cmd.tracking.path.velocity;
+      std::vector<AgentLogic> agents;
+      for (int i = 0; i < n; ++i) {
+        agents.emplace_back(i, start[i] + (target_of(i, 1) * cmd.dt) * vc, 3 * kPeriod);
+        agents.back().set_period(1e-9 * static_cast<double>(kPeriod));
+      }
+      std::vector<std::uint64_t> seq(n, 0);
+      const auto publish = [&](int i, std::int64_t now) {
+        ++seq[i];
+        for (auto& b : agents)
+          b.on_state(i, agents[i].position(), seq[i], now, agents[i].command_id(), agents[i].arc(),
+                     agents[i].model_time());
+      };
+      for (auto& a : agents) REQUIRE(adopt(a, cmd, 1));
+      // Events of one period in time order: the supervisor's target and each agent's tick.
+      std::vector<std::pair<double, int>> events{{sup_phase, -1}};
+      for (int i = 0; i < n; ++i) events.push_back({phase[i], i});
+      std::sort(events.begin(), events.end());
+      for (long p = 0; p < periods; ++p)
+        for (const auto& [ph, who] : events) {
+          const std::int64_t now = std::llround((static_cast<double>(p) + ph) * static_cast<double>(kPeriod));
+          const double t = (static_cast<double>(p) + ph) * cmd.dt;  // the supervisor's model time
+          if (who < 0) {
+            const Vec2 centre = cmd.tracking.path.point + t * cmd.tracking.path.velocity;
+            for (auto& a : agents) a.on_target({1, t, centre, cmd.tracking.path.velocity}, now);
+            continue;
+          }
+          if (p == 0) continue;  // the first target comes at the supervisor's phase of period 0
+          agents[who].drop_stale(now);
+          agents[who].step();
+          publish(who, now);
+        }
+      std::vector<Vec2> out;
+      for (const auto& a : agents) out.push_back(a.position());
+      return out;
+    };
+    const auto ff = run(moving);
+    const auto fx = run(fixed);
+    for (int i = 0; i < n; ++i) {
+      // Agent i's last step, in period periods - 1: its state is of the centre one step after its target.
+      const Vec2 moved = (target_of(i, periods - 1) + 1.0) * moving.dt * v;
+      INFO("law " << static_cast<int>(law) << ", agent " << i);
+      CHECK((ff[i] - moved - fx[i]).norm() < 1e-9);
+      CHECK((fx[i] - start[i] - (1.0 + phase[i]) * moving.dt * fixed.tracking.path.velocity).norm() > 0.1);
+    }
+  }
+}
+
 namespace {
 /// The line x1 = 0 (every agent on the x1 axis has its closest point at the origin), the arc law, with
 /// a speed limit and the safety filter at separation d.
