@@ -9,7 +9,8 @@
 #
 #   -n N            number of agent processes, ids 0..N-1 (default: the rows of --init, else the
 #                   scenario's swarm.agents); from the min_agents of config/large_swarm.sets on
-#                   (50), its large-swarm settings are added before any --set (which win)
+#                   (50; with --secure from its min_secured_agents, 16), its large-swarm settings
+#                   are added before any --set (which win)
 #   --scenario NAME config/scenarios/NAME.yaml, or a path to a YAML file
 #   --fleet FILE    run on the hosts of a fleet file (config/fleets/*.yaml, format in
 #                   config/fleets/README.md): each process on its host with the lan profile bound to the
@@ -284,6 +285,9 @@ elif [ -n "$max_participants" ] && [ $((n + 1 + nveh)) -gt "$max_participants" ]
 fi
 # A large swarm on this host: the settings of config/large_swarm.sets first, so the user's --set win.
 large_min=$(sed -n 's/^min_agents=//p' "$root/config/large_swarm.sets")
+# A secured swarm needs them earlier: Fast DDS 2.9.1 sends every handshake and key-exchange message to
+# every matched participant (docs/SECURITY.md, Cost).
+[ $secure -eq 1 ] && large_min=$(sed -n 's/^min_secured_agents=//p' "$root/config/large_swarm.sets")
 if [ -z "$fleet" ] && [ "$n" -ge "$large_min" ]; then
   mapfile -t large < <(grep -E '^[a-z_]+\.[a-z_.]+=' "$root/config/large_swarm.sets")
   sets=("${large[@]}" "${sets[@]+"${sets[@]}"}")
