@@ -375,6 +375,11 @@ if [ $secure -eq 1 ]; then
 fi
 
 agents_timeout=$((30 + n / 2))
+# Agents start this many seconds apart. A secured swarm from min_secured_agents on: 0.5 s, so that each
+# newcomer's handshakes (sent to every participant) end before the next one's begin; measured with
+# scripts/secure_mesh.py, 25 processes meshed in 17-19 s paced against 43-44 s at once (docs/SECURITY.md).
+agent_interval=0.02
+[ $secure -eq 1 ] && [ -z "$fleet" ] && [ "$n" -ge "$large_min" ] && agent_interval=0.5
 # A secured swarm of many processes meshes in tens of seconds (docs/SECURITY.md, Cost: 25 processes in
 # 20 to 55 s on a loaded 2-core host): wait for it before commanding a half-meshed swarm.
 [ $secure -eq 1 ] && agents_timeout=$((30 + 3 * n))
@@ -698,7 +703,7 @@ for ((i = 0; i < n; i++)); do
     "${startarg[@]}" "${setargs[@]}" "${hsets[@]+"${hsets[@]}"}" --json
   agent_pids+=("$started_pid")
   on_ssh "${agent_host[$i]-}" && ssh_agent_pids+=("$started_pid")
-  sleep 0.02 # a slight stagger avoids a discovery storm
+  sleep "$agent_interval" # a stagger avoids a discovery storm
 done
 say "started $n agents (pids ${agent_pids[0]}..${agent_pids[$((n - 1))]}) and the supervisor (pid $sup_pid)"
 
