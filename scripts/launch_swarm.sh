@@ -364,13 +364,13 @@ if [ $secure -eq 1 ]; then
         [ -n "$vehicles" ] && printf ' --enclave %s' "${needed[@]:0:${#needed[@]}-n}"))"
   done
   setargs+=(--set security.enabled=true --set "security.keystore=$keystore")
-  # Measured (docs/SECURITY.md, Cost, scripts/secure_mesh.py; with the large-swarm settings, which a
-  # secured swarm gets from min_secured_agents on): 20 processes meshed in 11 s, 25 in 27 to 55 s,
-  # 50 not within 80 s (every handshake message goes to every participant: N^3), while 1000 agents in
+  # Measured (docs/SECURITY.md, Cost, scripts/secure_mesh.py; with the large-swarm settings and the 0.5 s
+  # pacing, which a secured swarm gets from min_secured_agents on): 25 processes meshed in 17-19 s,
+  # 50 not within 70 s (every handshake message goes to every participant: N^3), while 1000 agents in
   # 20 group processes meshed in 8 s.
-  [ "$n" -le 20 ] || say "warning: $n secured agent processes: with DDS Security, Fast DDS 2.9.1 sends every" \
-    "handshake message to every participant; on a 2-core host 25 processes took 27-55 s to mesh and 50 did" \
-    "not within 80 s (docs/SECURITY.md, Cost); host several agents per process (shapeform_agent_group:" \
+  [ "$n" -le 25 ] || say "warning: $n secured agent processes: with DDS Security, Fast DDS 2.9.1 sends every" \
+    "handshake message to every participant; on a 2-core host 25 processes meshed in 17-19 s and 50 did" \
+    "not within 70 s (docs/SECURITY.md, Cost); host several agents per process (shapeform_agent_group:" \
     "1000 agents in 20 secured processes meshed in 8 s) or spread them over hosts (--fleet)"
 fi
 
