@@ -45,7 +45,9 @@
 #   --secure        DDS Security for every process (security.enabled: authenticated, access-controlled,
 #                   encrypted; docs/SECURITY.md), with a new keystore made in RUN/keystore
 #                   (scripts/make_keystore.sh RUN/keystore --agents N, and --enclave vehicle with
-#                   --vehicles) unless --keystore is given
+#                   --vehicles) unless --keystore is given; from min_secured_agents (16) agent
+#                   processes on, the large-swarm settings and agents started 0.5 s apart
+#                   (docs/SECURITY.md, Cost)
 #                   (a fleet with ssh hosts needs --keystore: the keystore must be on every host)
 #   --keystore DIR  use this keystore (implies --secure); it must hold the enclaves supervisor,
 #                   agent_0..agent_{N-1} (and viewer with --view, vehicle with --vehicles); with ssh hosts,
