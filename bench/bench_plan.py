@@ -20,9 +20,9 @@ NOTES: dict = tomllib.loads((Path(__file__).resolve().parent / "notes.toml").rea
 
 
 def large_swarm_sets() -> list[str]:
-    """The launcher's large-swarm overrides (config/large_swarm.sets, without its min_agents line)."""
+    """The launcher's large-swarm overrides (config/large_swarm.sets, without its min_agents lines)."""
     lines = (ROOT / "config" / "large_swarm.sets").read_text().splitlines()
-    return [ln for ln in lines if "=" in ln and not ln.startswith(("#", "min_agents="))]
+    return [ln for ln in lines if "=" in ln and not ln.startswith(("#", "min_agents=", "min_secured_agents="))]
 
 
 LARGE_MIN = int(next(ln.split("=", 1)[1] for ln in (ROOT / "config" / "large_swarm.sets").read_text().splitlines()

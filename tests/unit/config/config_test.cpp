@@ -138,13 +138,17 @@ TEST_CASE("config/large_swarm.sets loads as --set overrides") {
   std::ifstream in(kSourceDir + "/config/large_swarm.sets");
   REQUIRE(in.good());
   std::vector<std::string> sets;
-  int min_agents = 0;
+  int min_agents = 0, min_secured_agents = 0;
   for (std::string line; std::getline(in, line);) {
     if (line.empty() || line[0] == '#') continue;
     if (line.rfind("min_agents=", 0) == 0) min_agents = std::stoi(line.substr(11));
+    else if (line.rfind("min_secured_agents=", 0) == 0) min_secured_agents = std::stoi(line.substr(19));
     else sets.push_back(line);
   }
   CHECK(min_agents >= 2);
+  // A secured swarm needs them earlier (docs/SECURITY.md, Cost), never later.
+  CHECK(min_secured_agents >= 2);
+  CHECK(min_secured_agents <= min_agents);
   REQUIRE(sets.size() >= 5);
   const Config large = load("", sets);  // an unknown key or a bad value throws, naming it
   CHECK(large.agent.idle_rate_hz > 0);

@@ -1,0 +1,247 @@
+#!/usr/bin/python3
+"""How long a secured swarm takes to mesh on this host, and what it costs (docs/SECURITY.md, Cost).
+
+  scripts/secure_mesh.py -n N [--groups G] [--runs R] [--plain] [--stagger S] [--timeout S]
+                         [--domain D] [--keystore DIR] [--set key=value]... [--openssl-conf FILE]
+                         [--pcap FILE] [--build DIR]
+
+Starts N agents (no supervisor) on loopback, domain D (default 70), secured with the keystore DIR
+(default: made once in /tmp/shapeform_mesh_keys by scripts/make_keystore.sh), as N agent processes
+or, with --groups G, as G shapeform_agent_group processes of N/G agents each. Process k starts
+k * S seconds after the first (--stagger, default 0: all at once). It reads each process's
+"hearing K neighbours" lines and reports, per run, one JSON line on stdout:
+
+  {"n":N,"processes":P,"secured":true,"stagger_s":S,"mesh_s":T or null,"heard_min":K,
+   "cpu_pct_per_agent":C,"rss_mb_per_agent":M,"load_1min":L,...}
+
+mesh_s: seconds from the first start until every agent hears all N-1 others (null: not within
+--timeout, default 20 + N); heard_min: the least any process heard at the end. CPU: the processes'
+CPU time over the 10 s after the mesh (or after the timeout), per agent, in % of one core. With
+--pcap FILE, loopback traffic of the domain's ports is captured (tcpdump, needs root) and the
+RTPS DATA submessages of the handshake writer (ParticipantStatelessMessage, entity 0x000201c3)
+counted (handshake_data, handshake_bytes), and the distinct messages among them (handshake_messages:
+by sender and sequence number; Fast DDS 2.9.1 sends each to every matched participant). Every process started is stopped before
+the next run. Exit 0 when every run meshed, 3 otherwise, 2 on bad arguments.
+"""
+import argparse
+import json
+import os
+import re
+import signal
+import struct
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+HEARING = re.compile(r"hear(?:ing|s at least) (\d+) neighbours")
+STATELESS_WRITER = bytes.fromhex("000201c3")
+
+
+def parse_args():
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0],
+                                formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__)
+    p.add_argument("-n", type=int, required=True, help="agents")
+    p.add_argument("--groups", type=int, default=0, help="host the agents in G group processes")
+    p.add_argument("--runs", type=int, default=1)
+    p.add_argument("--plain", action="store_true", help="no security (the control)")
+    p.add_argument("--stagger", type=float, default=0.0, help="seconds between process starts")
+    p.add_argument("--timeout", type=float, default=None)
+    p.add_argument("--domain", type=int, default=70)
+    p.add_argument("--keystore", default="/tmp/shapeform_mesh_keys")
+    p.add_argument("--set", action="append", default=[], dest="sets")
+    p.add_argument("--openssl-conf", default=None, help="OPENSSL_CONF for the agents")
+    p.add_argument("--pcap", default=None)
+    p.add_argument("--build", default=str(ROOT / "build"))
+    a = p.parse_args()
+    if a.n < 2:
+        p.error("-n must be at least 2, got %d" % a.n)
+    if a.groups < 0 or (a.groups and a.n % a.groups):
+        p.error("--groups %d must divide -n %d" % (a.groups, a.n))
+    for s in a.sets:
+        if "=" not in s:
+            p.error("--set %r is not key=value" % s)
+    if a.timeout is None:
+        a.timeout = 20.0 + a.n
+    return a
+
+
+def cpu_ticks(pid):
+    try:
+        with open("/proc/%d/stat" % pid) as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+        return int(fields[11]) + int(fields[12])
+    except (OSError, IndexError, ValueError):
+        return 0
+
+
+def rss_mb(pid):
+    try:
+        with open("/proc/%d/status" % pid) as f:
+            for line in f:
+                if line.startswith("VmRSS:"):
+                    return int(line.split()[1]) / 1024.0
+    except OSError:
+        pass
+    return 0.0
+
+
+class Member:
+    """One process and the most neighbours its log says it (each of its agents) hears."""
+
+    def __init__(self, cmd, env, log):
+        self.heard = 0
+        self.log = open(log, "w")
+        self.proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=env,
+                                     start_new_session=True, text=True)
+        self.thread = threading.Thread(target=self._read, daemon=True)
+        self.thread.start()
+
+    def _read(self):
+        for line in self.proc.stderr:
+            self.log.write(line)
+            m = HEARING.search(line)
+            if m:
+                self.heard = int(m.group(1))
+
+    def stop(self):
+        if self.proc.poll() is None:
+            os.killpg(self.proc.pid, signal.SIGTERM)
+
+    def kill(self):
+        if self.proc.poll() is None:
+            os.killpg(self.proc.pid, signal.SIGKILL)
+
+
+def count_handshakes(pcap):
+    """DATA submessages of the stateless (handshake) writer in a pcap of loopback: (all, per datagram)."""
+    data = Path(pcap).read_bytes()
+    if len(data) < 24:
+        return {"datagrams": 0, "handshake_data": 0}
+    magic = struct.unpack("<I", data[:4])[0]
+    endian = "<" if magic in (0xA1B2C3D4, 0xA1B23C4D) else ">"
+    linktype = struct.unpack(endian + "I", data[20:24])[0]
+    l2 = 14 if linktype == 1 else (16 if linktype == 113 else 4)
+    pos, datagrams, hs, hs_bytes, unique = 24, 0, 0, 0, set()
+    while pos + 16 <= len(data):
+        incl = struct.unpack(endian + "I", data[pos + 8:pos + 12])[0]
+        pkt = data[pos + 16:pos + 16 + incl]
+        pos += 16 + incl
+        ip = pkt[l2:]
+        if len(ip) < 28 or ip[9] != 17:
+            continue
+        udp = ip[(ip[0] & 0x0F) * 4:]
+        rtps = udp[8:]
+        if rtps[:4] != b"RTPS":
+            continue
+        datagrams += 1
+        off = 20
+        while off + 4 <= len(rtps):
+            sid, flags = rtps[off], rtps[off + 1]
+            length = struct.unpack(("<" if flags & 1 else ">") + "H", rtps[off + 2:off + 4])[0]
+            body = rtps[off + 4:off + 4 + length] if length else rtps[off + 4:]
+            if sid == 0x15 and body[8:12] == STATELESS_WRITER:
+                hs += 1
+                hs_bytes += len(rtps)
+                unique.add((rtps[8:20], body[12:20]))  # sender's GUID prefix, sequence number
+            if length == 0:
+                break
+            off += 4 + length
+    return {"datagrams": datagrams, "handshake_data": hs, "handshake_messages": len(unique),
+            "handshake_bytes": hs_bytes}
+
+
+def run_once(a, run_dir):
+    binary = Path(a.build) / "bin" / ("shapeform_agent_group" if a.groups else "shapeform_agent")
+    procs = a.groups or a.n
+    per = a.n // procs
+    env = dict(os.environ)
+    if a.openssl_conf:
+        env["OPENSSL_CONF"] = a.openssl_conf
+    sets = [] if a.plain else ["security.enabled=true", "security.keystore=" + a.keystore]
+    sets += ["swarm.agents=%d" % a.n] + a.sets
+    tcpdump = None
+    if a.pcap:
+        base = 7400 + 250 * a.domain
+        tcpdump = subprocess.Popen(["tcpdump", "-i", "lo", "-w", a.pcap, "-U", "udp portrange %d-%d" %
+                                    (base, base + 249)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        time.sleep(0.5)  # tcpdump opens its socket; only a capture's completeness depends on it
+    members = []
+    load = os.getloadavg()[0]
+    t0 = time.monotonic()
+    mesh = None
+    try:
+        for k in range(procs):
+            while time.monotonic() < t0 + k * a.stagger:
+                time.sleep(0.02)
+            ids = ["--ids", "%d-%d" % (k * per, k * per + per - 1)] if a.groups else ["--id", str(k)]
+            cmd = [str(binary)] + ids + ["--seed", "1", "--domain", str(a.domain)]
+            for s in sets:
+                cmd += ["--set", s]
+            members.append(Member(cmd, env, run_dir / ("proc_%d.log" % k)))
+        while time.monotonic() < t0 + a.timeout:
+            if all(m.heard >= a.n - 1 for m in members):
+                mesh = time.monotonic() - t0
+                break
+            dead = [m for m in members if m.proc.poll() is not None]
+            if dead:
+                break
+            time.sleep(0.05)
+        c0 = sum(cpu_ticks(m.proc.pid) for m in members)
+        w0 = time.monotonic()
+        time.sleep(10.0)
+        c1 = sum(cpu_ticks(m.proc.pid) for m in members)
+        cpu = (c1 - c0) / os.sysconf("SC_CLK_TCK") / (time.monotonic() - w0) * 100.0 / a.n
+        rss = sum(rss_mb(m.proc.pid) for m in members) / a.n
+        heard_min = min(m.heard for m in members)
+        exited = [i for i, m in enumerate(members) if m.proc.poll() is not None]
+    finally:
+        for m in members:
+            m.stop()
+        deadline = time.monotonic() + 10
+        while time.monotonic() < deadline and any(m.proc.poll() is None for m in members):
+            time.sleep(0.1)
+        for m in members:
+            m.kill()
+            m.proc.wait()
+            m.thread.join(timeout=5)
+            m.log.close()
+        if tcpdump:
+            tcpdump.send_signal(signal.SIGINT)
+            tcpdump.wait()
+    out = {"n": a.n, "processes": procs, "secured": not a.plain, "stagger_s": a.stagger,
+           "mesh_s": None if mesh is None else round(mesh, 2), "heard_min": heard_min,
+           "cpu_pct_per_agent": round(cpu, 2), "rss_mb_per_agent": round(rss, 1), "load_1min": round(load, 2),
+           "sets": a.sets, "openssl_conf": a.openssl_conf, "exited": exited}
+    if a.pcap:
+        out.update(count_handshakes(a.pcap))
+    return out
+
+
+def main():
+    a = parse_args()
+    # A group process's identity is its first agent's (docs/SECURITY.md): only those enclaves are needed.
+    step = a.n // a.groups if a.groups else 1
+    missing = [k for k in range(0, a.n, step) if not Path(a.keystore, "enclaves", "agent_%d" % k).is_dir()]
+    if not a.plain and missing:
+        args = [str(ROOT / "scripts" / "make_keystore.sh"), a.keystore]
+        for k in missing:
+            args += ["--enclave", "agent_%d" % k]
+        subprocess.run(args, check=True, stdout=subprocess.DEVNULL)
+    work = ROOT / "runs" / (time.strftime("%Y%m%dT%H%M%S", time.gmtime()) + "-secure_mesh")
+    ok = True
+    for r in range(a.runs):
+        run_dir = work / ("run_%d" % r)
+        run_dir.mkdir(parents=True, exist_ok=True)
+        res = run_once(a, run_dir)
+        res["run"] = r
+        res["logs"] = str(run_dir)
+        print(json.dumps(res), flush=True)
+        ok = ok and res["mesh_s"] is not None
+    return 0 if ok else 3
+
+
+if __name__ == "__main__":
+    sys.exit(main())
