@@ -619,11 +619,7 @@ StepResult drive_safely(const VehicleParams& p, VehicleState& s, const StepResul
     // Only the cell's lines within the vehicle's reach can bind: |x1 - x| <= h max_speed and the new
     // braking displacement is at most the longest, so the search checks those alone.
     thread_local SafetyOutcome near;
-    near.braking = true;
-    near.from = f.from;
-    near.brake = f.brake;
-    near.grow = f.grow;
-    near.still = f.still;
+    near = f;  // (the copy reuses the thread's storage)
     near.cell.clear();
     const double far = h * fast + braking_displacement(Vec2(fast, 0.0), p.max_accel, h).norm();
     for (const HalfPlane& c : f.cell)

@@ -694,20 +694,32 @@ TEST_CASE("braking: the displacement changes at most braking_lipschitz times the
 }
 
 namespace {
+/// A small robot as a point mass: 0.5 m/s, 0.5 m/s^2.
+VehicleParams point_mass() {
+  VehicleParams vp;
+  vp.model = VehicleModel::DoubleIntegrator;
+  vp.max_speed = 0.5;
+  vp.max_accel = 0.5;
+  return vp;
+}
+
+/// The filter's settings for point_mass() at steps of dt: d = 0.25, with braking segments or not.
+SafetyParams point_mass_filter(double dt, bool segments) {
+  SafetyParams p;
+  p.min_separation = 0.25;
+  p.max_step = point_mass().max_speed * dt;
+  p.braking = segments;
+  return p;
+}
+
 /// n double integrators from rest, each sent to a goal through the others, the filter on (with braking
 /// segments when `segments`), synchronous states; returns the smallest distance of two after any step
 /// and counts the steps whose vehicle left its cell.
 double braking_swarm(const std::vector<Vec2>& start, const std::vector<Vec2>& goal, bool segments, int steps,
                      int& outside, std::vector<Vec2>* end = nullptr) {
-  VehicleParams vp;
-  vp.model = VehicleModel::DoubleIntegrator;
-  vp.max_speed = 0.5;
-  vp.max_accel = 0.5;
+  const VehicleParams vp = point_mass();
   const double dt = 0.1, h = dt;
-  SafetyParams p;
-  p.min_separation = 0.25;
-  p.max_step = vp.max_speed * dt;
-  p.braking = segments;
+  const SafetyParams p = point_mass_filter(dt, segments);
   const std::size_t n = start.size();
   std::vector<VehicleState> v;
   for (const Vec2& x : start) v.push_back(vehicle_start(x, 0.0));
@@ -818,15 +830,9 @@ TEST_CASE("safety: a double integrator's filtered velocity against the nearest s
   // the law's velocity than the best (docs/SAFETY.md quotes the figures).
   std::mt19937_64 rng(34);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  VehicleParams vp;
-  vp.model = VehicleModel::DoubleIntegrator;
-  vp.max_speed = 0.5;
-  vp.max_accel = 0.5;
+  const VehicleParams vp = point_mass();
   const double dt = 0.5, h = dt;
-  SafetyParams p;
-  p.min_separation = 0.25;
-  p.max_step = vp.max_speed * dt;
-  p.braking = true;
+  const SafetyParams p = point_mass_filter(dt, true);
   std::vector<double> excess;  // |ours - law| - |best - law|, in units of the reachable disc's radius a h
   int cut = 0;
   for (int trial = 0; trial < 2000; ++trial) {
