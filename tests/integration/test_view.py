@@ -242,6 +242,10 @@ class ViewTest(harness.SwarmTestCase):
         self.browser.get(url)
         poll(lambda: (lambda d: d and d.get("mode") == "replay" and len(d["agents"]) == AGENTS)(self.drawn()), 15,
              "the replay to draw %d agents" % AGENTS)
+        # Paused once the agents have moved (the recording starts before the command: until then every
+        # trail is one point, and a pause that early leaves the trails' check nothing to compare).
+        poll(lambda: sum(len(p) for p in self.browser.execute_script("return window.shapeformKept()")["trails"].values())
+             > AGENTS, 15, "the replay to draw trails of more than one point")
         self.browser.find_element("id", "play").click()  # pause
         d = poll(lambda: (lambda d: d if d["replay"] and not d["replay"]["playing"] else None)(self.drawn()), 5,
                  "the replay to pause")
