@@ -399,7 +399,7 @@ core::StepResult AgentLogic::filtered(const core::StepResult& r, std::optional<c
     const double vmax = vehicle_.max_speed > 0.0 ? vehicle_.max_speed : std::numeric_limits<double>::infinity();
     max_speed = (2.0 * vmax + (accel > 0.0 ? 0.5 * accel * h : 0.0)) * spm;
     blur = core::braking_lipschitz(vmax, accel, h) * (accel > 0.0 ? std::min(0.5 * accel * h, vmax) : vmax);
-    unknown = std::isfinite(vmax) ? core::braking_displacement(core::Vec2(vmax, 0.0), accel, h).norm() : vmax;
+    unknown = core::braking_distance(vmax, accel, h);
   }
   const auto age = [&](std::int64_t seen_ns) {
     return (static_cast<double>(std::max<std::int64_t>(now_ns_ - seen_ns, 0)) * 1e-9 / period_s_ + 1.0) * cmd_.dt;

@@ -621,7 +621,7 @@ StepResult drive_safely(const VehicleParams& p, VehicleState& s, const StepResul
     thread_local SafetyOutcome near;
     near = f;  // (the copy reuses the thread's storage)
     near.cell.clear();
-    const double far = h * fast + braking_displacement(Vec2(fast, 0.0), p.max_accel, h).norm();
+    const double far = h * fast + braking_distance(fast, p.max_accel, h);
     for (const HalfPlane& c : f.cell)
       if (!(c.b - c.n.dot(x) > far * (1.0 + 1e-9) + tol(c.b))) near.cell.push_back(c);
     const auto safe = [&](const Vec2& v1) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "envelope.hpp"
@@ -157,15 +158,19 @@ Vec2 braking_velocity(const Vec2& v, double max_accel, double h) {
   return max_accel > 0.0 ? Vec2(v - saturate(v, max_accel * h)) : Vec2::Zero();
 }
 
-Vec2 braking_displacement(const Vec2& v, double max_accel, double h) {
-  const double u = v.norm();
-  if (u == 0.0) return Vec2::Zero();
+double braking_distance(double u, double max_accel, double h) {
+  if (!std::isfinite(u)) return std::numeric_limits<double>::infinity();
   // n whole steps at dv = a h, then one from the rest r to 0: h (n u - a h n^2 / 2) + h r / 2.
   const double dv = max_accel * h;
   const double n = max_accel > 0.0 ? std::floor(u / dv) : 0.0;
   const double r = u - n * dv;
-  const double length = h * (n * u - 0.5 * dv * n * n) + 0.5 * h * r;
-  return (length / u) * v;
+  return h * (n * u - 0.5 * dv * n * n) + 0.5 * h * r;
+}
+
+Vec2 braking_displacement(const Vec2& v, double max_accel, double h) {
+  const double u = v.norm();
+  if (u == 0.0) return Vec2::Zero();
+  return (braking_distance(u, max_accel, h) / u) * v;
 }
 
 double braking_lipschitz(double max_speed, double max_accel, double h) {

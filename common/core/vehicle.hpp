@@ -97,6 +97,8 @@ void stop(VehicleState& s);
 /// the point stops, relative to where it is, along v: its braking segment is [x, x + that].
 Vec2 braking_velocity(const Vec2& v, double max_accel, double h);
 Vec2 braking_displacement(const Vec2& v, double max_accel, double h);
+/// Its length from speed u: how far braking from u takes the point (infinite for an infinite u).
+double braking_distance(double u, double max_accel, double h);
 /// A bound on |braking_displacement(v1) - braking_displacement(v0)| / |v1 - v0| for speeds up to
 /// max_speed: max_speed / max_accel + h / 2 (h / 2 without an acceleration limit).
 double braking_lipschitz(double max_speed, double max_accel, double h);
