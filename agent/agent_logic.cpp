@@ -387,18 +387,21 @@ core::StepResult AgentLogic::filtered(const core::StepResult& r, std::optional<c
   // received, in periods, plus the step the neighbour may take while this agent steps.
   double max_speed = safety_params_.max_step / cmd_.dt;
   // Double integrators keep braking segments apart (core/safety.hpp). A neighbour's velocity is known
-  // as the mean of its last step ((x - prev x) / dt), within max_accel h / 2 of its true one: its segment
-  // is blurred by that much times braking_lipschitz; one whose velocity is not known is a disc of the
-  // longest braking distance about its position. The segment's ends move at most 2 max_speed + max_accel h / 2.
+  // as the mean of its last step ((x - prev x) / dt), within max_accel h / 2 of its true one, so its
+  // speed is at most that much above the mean's and its segment is blurred by that much times
+  // braking_lipschitz at that speed; over its age the segment's ends move at most braking_reach from
+  // that speed (2 vmax + max_accel h / 2 per step from full speed, far less from a slow one: agents
+  // held near each other are slow, and a bound of full speed would leave them no room). One whose
+  // velocity is not known is a disc of the longest braking distance, its ends moving at full speed.
   const bool braking = safety_params_.braking;
   const double spm = vehicle_.seconds_per_model_time;
   const double h = cmd_.dt * spm;
   const double accel = vehicle_.max_accel;
-  double blur = 0.0, unknown = 0.0;
+  const double vmax = vehicle_.max_speed > 0.0 ? vehicle_.max_speed : std::numeric_limits<double>::infinity();
+  const double unsure = accel > 0.0 ? std::min(0.5 * accel * h, vmax) : vmax;  // |true - mean velocity|
+  double unknown = 0.0;
   if (braking) {
-    const double vmax = vehicle_.max_speed > 0.0 ? vehicle_.max_speed : std::numeric_limits<double>::infinity();
     max_speed = (2.0 * vmax + (accel > 0.0 ? 0.5 * accel * h : 0.0)) * spm;
-    blur = core::braking_lipschitz(vmax, accel, h) * (accel > 0.0 ? std::min(0.5 * accel * h, vmax) : vmax);
     unknown = core::braking_distance(vmax, accel, h);
   }
   const auto age = [&](std::int64_t seen_ns) {
@@ -435,8 +438,16 @@ core::StepResult AgentLogic::filtered(const core::StepResult& r, std::optional<c
     if (braking) {
       const bool step_before = use == &e.cur && e.prev.command == use->command &&
                                std::abs(use->model_time - cmd_.dt - e.prev.model_time) <= 1e-9 * (1.0 + std::abs(use->model_time));
-      j.brake = step_before ? core::braking_displacement((use->x - e.prev.x) / h, accel, h) : core::Vec2::Zero();
-      j.blur = step_before ? blur : unknown;
+      j.brake = core::Vec2::Zero();
+      j.blur = unknown;
+      if (step_before) {
+        const core::Vec2 mean = (use->x - e.prev.x) / h;
+        const double speed = std::min(vmax, mean.norm() + unsure);
+        j.brake = core::braking_displacement(mean, accel, h);
+        j.blur = core::braking_lipschitz(speed, accel, h) * unsure;
+        // The margin is max_speed * age: the mean speed of the segment's ends over the age.
+        if (j.age_s > 0.0) j.max_speed = core::braking_reach(speed, j.age_s / cmd_.dt, vmax, accel, h) / j.age_s;
+      }
     }
     known_next_.push_back({e.id, e.cur.x, e.last_seen_ns});
   }

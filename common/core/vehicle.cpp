@@ -177,6 +177,28 @@ double braking_lipschitz(double max_speed, double max_accel, double h) {
   return (max_accel > 0.0 ? max_speed / max_accel : 0.0) + 0.5 * h;
 }
 
+double braking_reach(double speed, double steps, double max_speed, double max_accel, double h) {
+  if (!(steps > 0.0)) return 0.0;
+  const double dv = max_accel > 0.0 ? max_accel * h : std::numeric_limits<double>::infinity();
+  const double s0 = std::min(speed, max_speed);
+  // Whole steps before the speed bound is reached (s_(i+1) = s0 + (i + 1) dv <= max_speed).
+  const double rising = dv > 0.0 ? std::floor((max_speed - s0) / dv) : 0.0;
+  const auto whole = [&](double k) {
+    if (k <= 0.0) return 0.0;
+    const double j = std::min(k, rising);
+    double moved = j > 0.0 ? h * (j * s0 + 0.5 * dv * j * j) : 0.0;
+    if (k > j) moved += 0.5 * h * (std::min(max_speed, s0 + j * dv) + max_speed) + (k - j - 1.0) * h * max_speed;
+    const double sk = std::min(max_speed, s0 + k * dv);
+    const double turned = std::min(braking_lipschitz(sk, max_accel, h) * std::min(k * dv, sk + s0),
+                                   braking_distance(sk, max_accel, h) + braking_distance(s0, max_accel, h));
+    return moved + turned;
+  };
+  const double k = std::floor(steps), frac = steps - k;
+  const double r = whole(k);
+  const double out = frac > 0.0 ? r + frac * (whole(k + 1.0) - r) : r;
+  return std::isfinite(out) ? out : std::numeric_limits<double>::infinity();
+}
+
 UnicycleCommand unicycle_command(const VehicleParams& p, double heading, const Vec2& step, double h) {
   const Vec2 b = rotate(-heading, step);
   if (p.steering == Steering::Linearised) return linearised_command(p, b, h);

@@ -102,6 +102,15 @@ double braking_distance(double u, double max_accel, double h);
 /// A bound on |braking_displacement(v1) - braking_displacement(v0)| / |v1 - v0| for speeds up to
 /// max_speed: max_speed / max_accel + h / 2 (h / 2 without an acceleration limit).
 double braking_lipschitz(double max_speed, double max_accel, double h);
+/// How far the ends of a double integrator's braking segment [x, x + braking_displacement(v)] may move
+/// in `steps` steps of h s (fractional: linear between whole steps, as a margin of speed times age is)
+/// from a velocity of speed at most `speed`: its speed after i steps is at most s_i = min(max_speed,
+/// speed + i max_accel h), its point moves at most h (s_i + s_(i+1)) / 2 per step, and its braking
+/// displacement changes by at most braking_lipschitz(s_k) min(k max_accel h, s_k + speed), and never by
+/// more than braking_distance(s_k) + braking_distance(speed). From max_speed that is steps (2 max_speed +
+/// max_accel h / 2) h, the bound for a neighbour of unknown speed; a slow one's segment moves far less.
+/// Infinite when the speed is unbounded (max_speed infinite and no acceleration limit).
+double braking_reach(double speed, double steps, double max_speed, double max_accel, double h);
 
 /// A unicycle's command: forward speed v (m/s, negative = backwards) and yaw rate w (rad/s).
 struct UnicycleCommand {

@@ -993,14 +993,21 @@ TEST_CASE("safety filter: free-running double integrators with late and lost sta
       }
       CHECK(interventions > 0);
       CHECK(broken == 0);
-      // With states up to a couple of periods late they still form the line (every agent on x1 = 0);
-      // with older ones the margins leave no room near a neighbour and the agent brakes, reported as held.
-      double off_line = 0.0;
+      // With states up to a couple of periods late they still form the line (every agent on x1 = 0).
+      // States 7.5 periods late: a neighbour's segment may have moved far (margins of 2 vmax + a h / 2 per
+      // period of age at full speed), but the margins count from each neighbour's own speed
+      // (braking_reach), so agents near slow ones still get room: they come most of the way (from
+      // 1.5 off the line on average; with full-speed margins every agent braked where it started). One
+      // not on the line is held, reported, or still on its way.
+      double off_line = 0.0, mean_off = 0.0;
       for (const auto& a : agents) {
-        off_line = std::max(off_line, std::abs(a.position().x()));
-        if (latency > 35 * kMs && std::abs(a.position().x()) > 0.05) CHECK(a.safety().blocked);
+        const double off = std::abs(a.position().x());
+        off_line = std::max(off_line, off);
+        mean_off += off / static_cast<double>(agents.size());
+        if (off > 0.05) CHECK((a.safety().blocked || a.velocity().norm() > 1e-6));
       }
       if (latency <= 35 * kMs && loss <= 0.3) CHECK(off_line < 0.05);
+      if (latency > 35 * kMs) CHECK(mean_off < 0.5);
     }
   // (safety_test.cpp shows that cells of positions alone let such vehicles' momentum carry them closer.)
 }

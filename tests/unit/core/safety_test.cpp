@@ -693,6 +693,48 @@ TEST_CASE("braking: the displacement changes at most braking_lipschitz times the
   CHECK(worst > 0.5);  // the bound is not loose by more than a factor of 2
 }
 
+TEST_CASE("braking: braking_reach bounds how far a segment's ends move, and is small for a slow vehicle",
+          "[safety][braking]") {
+  std::mt19937_64 rng(33);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  double worst = 0.0;
+  for (const double a : {0.0, 0.05, 0.5})
+    for (const double h : {0.1, 1.0})
+      for (int trial = 0; trial < 3000; ++trial) {
+        VehicleParams vp;
+        vp.model = VehicleModel::DoubleIntegrator;
+        vp.max_speed = 0.5;
+        vp.max_accel = a;
+        VehicleState s = vehicle_start(Vec2(1, 2), 0.0);
+        const double s0 = vp.max_speed * u(rng) * u(rng);  // many slow starts
+        s.velocity = random_vec(rng, 1.0);
+        if (s.velocity.norm() > 0.0) s.velocity *= s0 / s.velocity.norm();
+        const Vec2 x0 = s.x, end0 = s.x + braking_displacement(s.velocity, a, h);
+        const int steps = 1 + trial % 8;
+        // Pushed hard in one direction (the far reach) or any way (turns and brakes).
+        const Vec2 push = random_vec(rng, 1.0).normalized();
+        for (int k = 1; k <= steps; ++k) {
+          const Vec2 want = trial % 3 ? Vec2(push * vp.max_speed * 2.0) : random_vec(rng, 2.0 * vp.max_speed);
+          drive(vp, s, {s.x + h * want, want, false}, h, 1e6);
+          const double reach = braking_reach(s0, k, vp.max_speed, a, h);
+          CAPTURE(a, h, trial, k, s0, reach);
+          const double moved = std::max((s.x - x0).norm(), (s.x + braking_displacement(s.velocity, a, h) - end0).norm());
+          CHECK(moved <= reach * (1.0 + 1e-9) + 1e-12);
+          if (reach > 0.0) worst = std::max(worst, moved / reach);
+          // From full speed it is the bound for a neighbour of unknown speed, or less.
+          CHECK(braking_reach(vp.max_speed, k, vp.max_speed, a, h) <=
+                k * (2.0 * vp.max_speed + 0.5 * a * h) * h * (1.0 + 1e-12));
+        }
+      }
+  CHECK(worst > 0.5);  // not loose by more than a factor of 2
+  // Linear between whole steps; a vehicle at rest with a small acceleration limit barely moves.
+  const double r1 = braking_reach(0.1, 1.0, 0.5, 0.05, 1.0), r2 = braking_reach(0.1, 2.0, 0.5, 0.05, 1.0);
+  CHECK(braking_reach(0.1, 1.5, 0.5, 0.05, 1.0) == Approx(0.5 * (r1 + r2)));
+  CHECK(braking_reach(0.0, 2.0, 0.5, 0.05, 1.0) < 0.2 * braking_reach(0.5, 2.0, 0.5, 0.05, 1.0));
+  CHECK(braking_reach(0.0, 0.0, 0.5, 0.05, 1.0) == 0.0);
+  CHECK(std::isinf(braking_reach(0.1, 1.0, std::numeric_limits<double>::infinity(), 0.0, 1.0)));
+}
+
 namespace {
 /// A small robot as a point mass: 0.5 m/s, 0.5 m/s^2.
 VehicleParams point_mass() {
