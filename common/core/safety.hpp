@@ -42,8 +42,8 @@
 /// one more step (whose segment is a part of B_i) always keeps the cell: the programme always has a
 /// solution, and two agents at least d apart as segments stay so, positions and the whole motion of the
 /// step included (the step's path is a parabola inside the triangle x, x + h v0 / 2, x1, all in the cell).
-/// Stale or blurred neighbours (margin r = max_speed * age + blur, max_speed here the speed of the
-/// segment's ends): the new segment stays within (D - r - d) / 2 of B_i (`grow`), which with the
+/// Stale or blurred neighbours (margin r = max_speed * age + blur, max_speed here the mean speed of the
+/// segment's ends over the age, braking_reach): the new segment stays within (D - r - d) / 2 of B_i (`grow`), which with the
 /// neighbour doing the same keeps d whatever their views (the segment analogue of the disc above); none
 /// is left (a stale neighbour too near) and the agent brakes, or, with exactly one such neighbour, backs
 /// away from it (SafetyOutcome::away) as the integrator does. Zones and the fence are kept the same way
@@ -78,8 +78,8 @@ struct SafetyNeighbour {
   double max_speed = 0.0;  ///< bound on its speed, shape units per s: its margin is max_speed * age_s
   /// Double integrators (SafetyParams::braking): its braking displacement (braking_displacement) at x,
   /// shape units, so that it is known as the segment [x, x + brake]; max_speed then bounds how fast
-  /// that segment's ends move, and blur how far its true segment may lie from this one at the sample's
-  /// time (a velocity known only as the mean of its last step).
+  /// that segment's ends move on average over age_s (braking_reach / age_s), and blur how far its true
+  /// segment may lie from this one at the sample's time (a velocity known only as the mean of its last step).
   Vec2 brake = Vec2::Zero();
   double blur = 0.0;
 };
