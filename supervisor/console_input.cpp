@@ -210,10 +210,10 @@ int ConsoleInput::take_interrupts() {
   return n;
 }
 
-void ConsoleInput::push_line(std::string line) {
-  strip_cr(line);
+void ConsoleInput::push_lines(std::vector<std::string> lines) {
+  for (std::string& line : lines) strip_cr(line);
   const std::lock_guard<std::mutex> lock(mutex_);
-  lines_.push_back(std::move(line));
+  for (std::string& line : lines) lines_.push_back(std::move(line));
 }
 
 bool ConsoleInput::ended() const {
@@ -250,15 +250,19 @@ void ConsoleInput::run_plain() {
     }
     if (n == 0) break;  // end of input
     partial.append(buf, static_cast<std::size_t>(n));
+    // The lines of one read go to the loop together: lines written at once ("shape ...\nwait converged")
+    // run one after the other as a script's would, with no DDS event between them.
+    std::vector<std::string> lines;
     std::size_t start = 0;
     for (std::size_t nl = partial.find('\n'); nl != std::string::npos;
          nl = partial.find('\n', start)) {
-      push_line(partial.substr(start, nl - start));
+      lines.push_back(partial.substr(start, nl - start));
       start = nl + 1;
     }
     partial.erase(0, start);
+    push_lines(std::move(lines));
   }
-  if (!partial.empty()) push_line(std::move(partial));  // last line without a newline
+  if (!partial.empty()) push_lines({std::move(partial)});  // last line without a newline
 }
 
 void ConsoleInput::write_term(std::string_view text) {
@@ -501,7 +505,7 @@ void ConsoleInput::read_key(short revents) {
   HistEvent ev;
   if (!blank) history(history_of(hist_), &ev, H_ENTER, text.c_str());
   new_line();  // libedit has moved to the next row already
-  push_line(std::move(text));
+  push_lines({std::move(text)});
 }
 
 // ---------------------------------------------------------------------------------------------

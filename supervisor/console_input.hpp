@@ -85,7 +85,8 @@ class ConsoleInput : public LineSource {
   int take_interrupts();
 
   /// Called on the reader thread; public only for the C callbacks.
-  void push_line(std::string line);
+  /// Queues lines for the loop at once (it never sees some of them without the others).
+  void push_lines(std::vector<std::string> lines);
   void set_ended();
   unsigned char on_tab();
 

@@ -100,14 +100,15 @@ class AuthorityTest(harness.SwarmTestCase):
         # A wait on a command that another supervisor then replaces ends at once, not met; the other
         # supervisor's wait on its own command is met.
         mark = loser.mark()
-        loser.send("shape circle r=4")
-        loser.send("wait converged timeout=60")
+        # One write: the two lines reach the loop together, so the wait is on the loser's own command
+        # (sent apart, the winner's command could come between them and the wait would measure it).
+        loser.send("shape circle r=4\nwait converged timeout=60")
         mine = loser.wait_event("epoch", 10, mark)
         mark_w = winner.mark()
         theirs = winner.command("shape square a=5")
         self.assertGreater(theirs, mine["epoch"])
         wait = loser.wait_event("wait", 10, mark, what="%s's wait to end" % loser.name)
-        self.assertEqual((wait["ok"], wait.get("superseded"), wait["epoch"]), (False, True, theirs))
+        self.assertEqual((wait["ok"], wait.get("superseded"), wait.get("epoch")), (False, True, theirs), wait)
         winner.send("wait converged timeout=60")
         self.assertTrue(winner.wait_event("wait", 70, mark_w, what="the winner's wait")["ok"],
                         "the winner's command converges")
