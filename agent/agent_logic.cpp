@@ -390,18 +390,17 @@ core::StepResult AgentLogic::filtered(const core::StepResult& r, std::optional<c
   // as the mean of its last step ((x - prev x) / dt), within max_accel h / 2 of its true one, so its
   // speed is at most that much above the mean's and its segment is blurred by that much times
   // braking_lipschitz at that speed; over its age the segment's ends move at most braking_reach from
-  // that speed (2 vmax + max_accel h / 2 per step from full speed, far less from a slow one: agents
+  // that speed (at most 2 vmax + max_accel h / 2 per step from full speed, far less from a slow one: agents
   // held near each other are slow, and a bound of full speed would leave them no room). One whose
   // velocity is not known is a disc of the longest braking distance, its ends moving at full speed.
   const bool braking = safety_params_.braking;
-  const double spm = vehicle_.seconds_per_model_time;
-  const double h = cmd_.dt * spm;
+  const double h = cmd_.dt * vehicle_.seconds_per_model_time;
   const double accel = vehicle_.max_accel;
   const double vmax = vehicle_.max_speed > 0.0 ? vehicle_.max_speed : std::numeric_limits<double>::infinity();
   const double unsure = accel > 0.0 ? std::min(0.5 * accel * h, vmax) : vmax;  // |true - mean velocity|
   double unknown = 0.0;
   if (braking) {
-    max_speed = (2.0 * vmax + (accel > 0.0 ? 0.5 * accel * h : 0.0)) * spm;
+    max_speed = core::braking_reach(vmax, 1.0, vmax, accel, h) / cmd_.dt;  // per step from full speed
     unknown = core::braking_distance(vmax, accel, h);
   }
   const auto age = [&](std::int64_t seen_ns) {

@@ -402,32 +402,27 @@ class AgentLogic {
 /// the id. Pure: the caller passes every foreign sample of a hosted id and the clock.
 class IdentityGuard {
  public:
-  /// own: this process's participant; grace_end_ns: the steady time its grace period ends.
-  IdentityGuard(const dds::SourceId& own, std::int64_t grace_end_ns) : own_{own}, grace_end_ns_(grace_end_ns) {}
-  /// This process's participant after it was recreated (dds::Node::rebuild gives it a new GUID
-  /// prefix): samples of the old one and of the new one are all ours.
-  void rebuilt(const dds::SourceId& now_own) {
-    if (now_own.known()) own_.push_back(now_own);
-  }
+  /// own: this process's identity (dds::Node::source, kept across participant rebuilds); grace_end_ns:
+  /// the steady time its grace period ends.
+  IdentityGuard(const dds::SourceId& own, std::int64_t grace_end_ns) : own_(own), grace_end_ns_(grace_end_ns) {}
 
   enum class Action {
     None,   ///< nothing new: this (id, participant) pair was handled already, or we are yielding
     Keep,   ///< a duplicate that must yield to us: report it, keep running
     Yield,  ///< we must give the id up: report it, stop without disposing, exit 2
   };
-  /// A sample of hosted agent `id` from participant `other`. Samples from ourselves (any participant
-  /// this process had) or from an unknown participant are not duplicates (None).
+  /// A sample of hosted agent `id` from participant `other`. Samples from ourselves or from an unknown
+  /// participant are not duplicates (None).
   Action on_sample(std::int32_t id, const dds::SourceId& other);
   /// Whether the grace period is over and we did not yield: the agents may step and publish.
   bool may_publish(std::int64_t now_ns) const { return !yielding_ && (published_ || now_ns >= grace_end_ns_); }
   void published() { published_ = true; }
   bool yielding() const { return yielding_; }
-  /// The participant this process publishes from now.
-  const dds::SourceId& own() const { return own_.back(); }
-  bool ours(const dds::SourceId& s) const { return std::find(own_.begin(), own_.end(), s) != own_.end(); }
+  const dds::SourceId& own() const { return own_; }
+  bool ours(const dds::SourceId& s) const { return s == own_; }
 
  private:
-  std::vector<dds::SourceId> own_;  ///< every participant this process had, the current one last
+  dds::SourceId own_;
   std::int64_t grace_end_ns_;
   bool published_ = false;
   bool yielding_ = false;

@@ -404,12 +404,16 @@ void AgentNode::recover_from_stall() {
     if (opt_.json)
       emit({{"event", "refused"}, {"participant", dds::to_string(refused)}, {"by", dds::to_string(node_.source())}});
   }
-  const auto stall_s = node_.recover_if_stalled(1.0 / cfg_.agent.rate_hz);
-  if (!stall_s) return;
-  identity_.rebuilt(node_.source());  // a new GUID prefix: our samples carry both
+  const auto recovered = node_.recover(1.0 / cfg_.agent.rate_hz);
+  if (!recovered) return;
   // The new re-offer writer starts empty: offer the command followed again.
   if (!relayed_.none()) relay_command();
-  if (opt_.json) emit({{"event", "recovered"}, {"stall_s", *stall_s}});
+  if (opt_.json) {
+    nlohmann::json e = app::recovered_json(recovered->cause == dds::Node::Recovery::Cause::Split, recovered->seconds,
+                                           dds::to_string(recovered->peer));
+    e["event"] = "recovered";
+    emit(e);
+  }
 }
 
 void AgentNode::drain_commands() {

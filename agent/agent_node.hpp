@@ -10,8 +10,8 @@ namespace shapeform::agent {
 struct AgentOptions {
   /// Machine output on stdout, one JSON object per line with an "event" key: "status" once per status
   /// period per hosted agent (the AgentStatus numbers and its position x, y), "command" when a command is adopted,
-  /// "rejected" when a sample is refused (throttled like the log), "recovered" (with "stall_s") when the
-  /// process recreated its participant after a stall (dds::Node::recover_if_stalled), "duplicate" when
+  /// "rejected" when a sample is refused (throttled like the log), "recovered" (app::recovered_json: its
+  /// cause, stall or split) when the process recreated its participant (dds::Node::recover), "duplicate" when
   /// another participant publishes a hosted id ({id, source: this participant, other, action:
   /// exit|keep}). Logs stay on stderr.
   bool json = false;

@@ -11,6 +11,11 @@ the arc law: arc_circle):
   loss       random loss of PCT % of UDP datagrams in and out of every host (each of --losses), from
              the `start` of a fresh swarm until it converged
   partition  one agent host cut off for 10 s, then healed
+  cut        one agent host cut off for a duration of each class (--classes): just under the lease
+             (1.0-1.9 s), just past it (2.05-2.6 s), long (5-60 s), spread over the runs; measured:
+             how long after the heal everyone hears everyone again
+  stop       one process (an agent, every 4th run the supervisor) stopped (SIGSTOP) for a duration of
+             each class, then resumed; measured: how long after it everyone hears everyone again
   kill       kill -9 of 3 agents on 3 different hosts
   pause      one agent paused (SIGSTOP) for 5 s, then resumed
   supervisor the supervisor killed (kill -9) and started again at once on another host
@@ -23,7 +28,8 @@ goes between its markers in --out (default docs/RELIABILITY.md; with --quick onl
 with the command line, the date, the git commit and the load average at the start; every run in
 WORK/runs.json (WORK default runs/<UTC time>-reliability). Progress on stderr. --quick: a smoke run
 (the arc law, losses 0 and 20 %, stalls of 5 s). --dry-run: print the plan and an estimate of its
-duration, start nothing. Run it alone on the machine if the numbers are to be published (they are
+duration, start nothing. --load N: N busy loops share the machine with the swarm for the whole run (a
+loaded host; recorded with the tables). Run it alone on the machine if the numbers are to be published (they are
 timings); the load average is recorded either way. Exit status: 0 ok (whatever was measured), 1
 failure to run, 2 bad arguments.
 """
@@ -45,7 +51,14 @@ import shapeform_procs as procs  # noqa: E402
 
 DOC = REPO / "docs" / "RELIABILITY.md"
 GOAL_S = 3.0  # the recovery the swarm must achieve after a stall, s
-LAN_FAULTS = ("partition", "kill", "pause", "supervisor", "loss")
+LAN_FAULTS = ("partition", "kill", "pause", "supervisor", "loss", "cut", "stop")
+HEAL_FAULTS = ("cut", "stop")  # rows per duration class; measured: everyone heard again
+CLASSES = {  # duration classes of cut and stop, s (the lan profile's lease is 2 s, its announcements 0.5 s)
+    "under": (1.0, 1.9),   # just under the lease
+    "past": (2.05, 2.6),   # just past it
+    "long": (5.0, 60.0),   # long: spread geometrically
+}
+HEARD_HOLD_S = 1.0  # everyone hears everyone once that has held this long
 FAULTS = LAN_FAULTS + ("stall",)
 LAWS = {"paper": "circle", "arc": "arc_circle"}  # law -> scenario
 LAN_DOMAIN = 230   # outside the tests' (101..149, 150..229) and the launcher's (10..100) domains
@@ -55,7 +68,15 @@ PARTITION_S, PAUSE_S = 10.0, 5.0
 HOLD_S = 2.0       # a recovery counts once it has held this long
 STATUS_HZ = 4.0    # agents' status events: a neighbour count is seen within 0.25 s
 POLL_S = 0.1       # the driver reads every output this often
-RUN_S = {"loss": 25, "partition": 25, "kill": 25, "pause": 15, "supervisor": 12}  # rough, for --dry-run
+RUN_S = {"loss": 25, "partition": 25, "kill": 25, "pause": 15, "supervisor": 12, "cut": 12, "stop": 12}  # rough,
+# for --dry-run, plus the duration of cut and stop
+
+
+def class_duration(cls, k, runs):
+    """The duration of run k of `runs` in class cls: spread evenly over its range (long: geometrically)."""
+    lo, hi = CLASSES[cls]
+    f = k / (runs - 1) if runs > 1 else 0.5
+    return lo * (hi / lo) ** f if cls == "long" else lo + (hi - lo) * f
 
 
 def log(msg):
@@ -322,13 +343,19 @@ class Watch:
         return (self.alive == set(ids) and self.converged and
                 all(self.heard.get(i) == len(ids) - 1 for i in ids))
 
-    def until_whole(self, ids, t_from, timeout, hold=HOLD_S):
-        """The first moment from t_from on after which the swarm of `ids` stays whole for `hold` seconds
-        (seconds after t_from), or None when that does not happen within timeout seconds."""
+    def heard(self, ids):
+        """Everyone hears everyone: the supervisor reports exactly `ids` alive and each reports hearing all
+        the others."""
+        return self.alive == set(ids) and all(self.heard.get(i) == len(ids) - 1 for i in ids)
+
+    def until_whole(self, ids, t_from, timeout, hold=HOLD_S, test=None):
+        """The first moment from t_from on after which the swarm of `ids` stays whole (or test(ids) holds)
+        for `hold` seconds (seconds after t_from), or None when that does not happen within timeout seconds."""
+        test = test or self.whole
         since = None
         while True:
             now = self.poll(len(ids))
-            if self.whole(ids):
+            if test(ids):
                 since = now if since is None else since
                 if now - since >= hold:
                     return since - t_from
@@ -422,7 +449,8 @@ class LanRow:
     def up(self):
         import lanswarm
         self.n_swarms += 1
-        run_dir = self.work / ("%s_%s_loss%g_%d" % (self.fault, self.law, self.loss, self.n_swarms))
+        level = self.loss if self.fault in HEAL_FAULTS else "loss%g" % self.loss
+        run_dir = self.work / ("%s_%s_%s_%d" % (self.fault, self.law, level, self.n_swarms))
         run_dir.mkdir(parents=True, exist_ok=True)
         sets = ["agent.status_rate_hz=%g" % STATUS_HZ]
         self.swarm = lanswarm.LanSwarm(self.lab, self.bins, self.config, LAN_DOMAIN, run_dir, sets)
@@ -514,6 +542,27 @@ class LanRow:
                 sw.agents[i].signal(signal.SIGKILL)
             survivors = [i for i in ids if i not in victims]
             r["victim"] = victims
+        elif self.fault in HEAL_FAULTS:
+            # The duration from the moment the fault is in place (netlab.sh returned, SIGSTOP sent) to the
+            # call that ends it; the time that call took is kept as end_call_s.
+            d = class_duration(self.loss, k, self.args.runs)
+            marks = {p: p.mark() for p in sw.procs if p.running()}
+            victim = ("h%d" % (1 + k % 3) if self.fault == "cut" else
+                      sw.sup if k % 4 == 3 else sw.agents[(5 * k + 1) % N_AGENTS])
+            if self.fault == "cut":
+                self.lab.fault(victim, "partition")
+            else:
+                victim.signal(signal.SIGSTOP)
+            t_fault = time.monotonic()
+            w.sleep(d, N_AGENTS)
+            t_call = time.monotonic()
+            if self.fault == "cut":
+                self.lab.fault(victim, "heal")
+            else:
+                victim.signal(signal.SIGCONT)
+            t_end = time.monotonic()
+            r.update({"class": self.loss, "duration_s": t_call - t_fault, "end_call_s": t_end - t_call,
+                      "victim": victim if self.fault == "cut" else victim.name})
         elif self.fault == "pause":
             victim = sw.agents[(5 * k + 1) % N_AGENTS]
             t_fault = time.monotonic()
@@ -533,7 +582,7 @@ class LanRow:
             sw.start_supervisor(host)
             w.new_supervisor()
             r["victim"] = "%s -> %s" % (old.host, host)
-        if self.fault != "supervisor":
+        if self.fault not in ("supervisor",) + HEAL_FAULTS:
             # Detect: the first agent dropped (the supervisor's "lost"/"left", or an agent hearing fewer).
             # A partitioned host's agents hear the others stop as soon as netlab.sh has put its first rule
             # (packets in) in place, before the partition is complete: only the other side's view counts.
@@ -545,6 +594,13 @@ class LanRow:
             r["detect_s"] = (min(found) - t_fault) if found else None
         w.forget_statuses()
         timeout = self.args.timeout
+        if self.fault in HEAL_FAULTS:
+            # Everyone hears everyone again (statuses printed after the end of the fault), then the rest.
+            r["heard_s"] = w.until_whole(survivors, t_end, timeout, HEARD_HOLD_S, w.heard)
+            time.sleep(0.3)  # the events of the last tick
+            rebuilt = [e.get("cause") for p, m in marks.items() for e in p.events("recovered", m)]
+            r["recreated"] = len(rebuilt)
+            r["recreated_causes"] = sorted(set(rebuilt))
         # Under loss too every agent must hear all the others: loss alone must not drop a neighbour
         # (agent.neighbour_timeout_periods, 40 by default, is far beyond the losses measured here).
         rec = w.until_whole(survivors, t_end, timeout)
@@ -580,6 +636,7 @@ def run_lan(args, bins, work, plan, publish):
     with netlab.NetLab("rel", hosts=4, subnet=LAN_SUBNET) as lab:
         for fault, law, loss in plan:
             row = LanRow(lab, bins, fault, law, loss, args, work)
+            level = " %s" % loss if fault in HEAL_FAULTS else " %g %%" % loss if fault == "loss" else ""
             try:
                 for k in range(args.runs):
                     try:
@@ -588,10 +645,13 @@ def run_lan(args, bins, work, plan, publish):
                         r = {"fault": fault, "law": law, "loss": loss, "run": k + 1, "error": str(e),
                              "aborted": row.close()}
                     runs.append(r)
-                    log("[%4.0f s] fault %s%s, law %s, run %d/%d: detected %s s, recovered %s s, samples lost %s %%, "
+                    heard = (", %.2f s: everyone heard %s s after, %d participant(s) recreated" % (
+                        r.get("duration_s", 0), fmt_s(r.get("heard_s")), r.get("recreated", 0))
+                        if fault in HEAL_FAULTS else "")
+                    log("[%4.0f s] fault %s%s, law %s, run %d/%d%s: detected %s s, recovered %s s, samples lost %s %%, "
                         "aborted %s, recording %s%s" % (
-                            time.monotonic() - t_start, fault, " %g %%" % loss if fault == "loss" else "", law, k + 1,
-                            args.runs, fmt_s(r.get("detect_s")), fmt_s(r.get("recover_s")), fmt_pct(r.get("lost_pct")),
+                            time.monotonic() - t_start, fault, level, law, k + 1, args.runs, heard,
+                            fmt_s(r.get("detect_s")), fmt_s(r.get("recover_s")), fmt_pct(r.get("lost_pct")),
                             len(r.get("aborted", [])), {True: "complete", False: "INCOMPLETE", None: "-"}[r.get("recording")],
                             "; " + r["error"] if "error" in r else ""))
             finally:
@@ -620,7 +680,34 @@ def swarm_aborted(r):
     return [a for a in r.get("aborted", []) if not a.startswith(TOOL)]
 
 
+def heal_table(runs, fault):
+    """cut and stop: per law and duration class, how long after the fault ended everyone heard everyone."""
+    lines = ["| law | duration class | durations (s) | runs | everyone heard everyone after the end (s), median / "
+             "worst | within %g s | participants recreated (causes) | processes aborted | recovered (converged) |"
+             % GOAL_S, "|---|---|---|---|---|---|---|---|---|"]
+    keys = []
+    for r in runs:
+        if r["fault"] == fault and (r["law"], r["loss"]) not in keys:
+            keys.append((r["law"], r["loss"]))
+    for law, cls in keys:
+        rows = [r for r in runs if r["fault"] == fault and r["law"] == law and r["loss"] == cls]
+        durations = [r["duration_s"] for r in rows if "duration_s" in r]
+        heard = [r.get("heard_s") for r in rows]
+        causes = sorted({c for r in rows for c in r.get("recreated_causes", [])})
+        lines.append("| %s | %s | %s | %d | %s | %d of %d | %d (%s) | %d | %d |" % (
+            law, cls, "%.2f-%.2f" % (min(durations), max(durations)) if durations else "-", len(rows),
+            med_worst(heard, fmt_s), sum(1 for v in heard if v is not None and v <= GOAL_S), len(rows),
+            sum(r.get("recreated", 0) for r in rows), ", ".join(causes) or "none",
+            sum(len(swarm_aborted(r)) for r in rows), sum(1 for r in rows if r.get("recover_s") is not None)))
+    errors = [r["error"] for r in runs if r["fault"] == fault and "error" in r]
+    if errors:
+        lines.append("\nRuns that failed: %s." % "; ".join(errors))
+    return "\n".join(lines) + "\n"
+
+
 def lan_table(runs, fault):
+    if fault in HEAL_FAULTS:
+        return heal_table(runs, fault)
     head = ("| law | loss (%) | runs | detected after (s) | recovered | recovered after (s) | samples lost (%) | "
             "agents dropped | processes aborted | recording complete |")
     if fault == "supervisor":
@@ -709,6 +796,9 @@ def parse(argv):
     ap.add_argument("--timeout", type=float, default=40.0, help="a run that has not recovered by then failed, s "
                     "(default 40)")
     ap.add_argument("--dry-run", action="store_true", help="print the plan and its estimated duration; start nothing")
+    ap.add_argument("--classes", default=",".join(CLASSES), help="duration classes of cut and stop (default %s)" %
+                    ",".join(CLASSES))
+    ap.add_argument("--load", type=int, default=0, help="busy loops beside the swarm for the whole run (default 0)")
     ap.add_argument("--tables-from", action="append", default=[], metavar="RUNS_JSON",
                     help="write the tables of the faults in a runs.json of an earlier run (repeatable; later files "
                          "win per fault) into --out, with that run's provenance; start nothing")
@@ -750,6 +840,11 @@ def parse(argv):
     if any(t not in ("agent", "supervisor") for t in args.targets):
         ap.error("--targets: expected agent and/or supervisor")
     args.trials = args.runs
+    args.classes = args.classes.split(",")
+    if any(c not in CLASSES for c in args.classes):
+        ap.error("--classes: expected some of %s, got '%s'" % (", ".join(CLASSES), ",".join(args.classes)[:40]))
+    if not 0 <= args.load <= 64:
+        ap.error("--load: expected 0..64 busy loops, got %d" % args.load)
     if args.out is None and not args.quick:
         args.out = str(DOC)
     return args
@@ -757,11 +852,13 @@ def parse(argv):
 
 def lan_plan(args):
     return [(f, law, loss) for f in LAN_FAULTS if f in args.only for law in args.laws
-            for loss in (args.losses if f == "loss" else [0.0])]
+            for loss in (args.losses if f == "loss" else args.classes if f in HEAL_FAULTS else [0.0])]
 
 
 def estimate_s(args, plan):
-    lan = sum(args.runs * (RUN_S[f] + (20 if f == "loss" else 0)) + 25 for f, _, _ in plan)
+    lan = sum(args.runs * (RUN_S[f] + (20 if f == "loss" else 0)) + 25 +
+              (sum(class_duration(c, k, args.runs) for k in range(args.runs)) if f in HEAL_FAULTS else 0)
+              for f, _, c in plan)
     stall = (len(args.stalls) * len(args.targets) * (args.runs * (sum(args.stalls) / len(args.stalls) + 8) + 20)
              if "stall" in args.only else 0)
     return lan + stall
@@ -795,7 +892,8 @@ def main(argv):
         return rerender(args)
     if args.dry_run:
         for f, law, loss in plan:
-            print("%s, %s law, loss %g %%: %d runs" % (f, law, loss, args.runs))
+            print("%s, %s law, %s: %d runs" % (f, law, ("class %s" % loss) if f in HEAL_FAULTS else "loss %g %%" % loss,
+                                               args.runs))
         if "stall" in args.only:
             print("stall (loopback): %s stalled %s s, %d trials each" % (
                 " and ".join(args.targets), ", ".join("%g" % s for s in args.stalls), args.runs))
@@ -840,8 +938,15 @@ def main(argv):
                 doc = replace_block(doc, f, (stamp if f != "stall" else "") + text)
             out.write_text(doc)
 
-    runs = run_lan(args, bins, work, plan, publish) if plan else []
-    trials = run_stalls(args, bins, work) if "stall" in args.only else []
+    # A loaded host: busy loops for the whole run, stopped however it ends.
+    burners = [subprocess.Popen(["/bin/sh", "-c", "while :; do :; done"]) for _ in range(args.load)]
+    try:
+        runs = run_lan(args, bins, work, plan, publish) if plan else []
+        trials = run_stalls(args, bins, work) if "stall" in args.only else []
+    finally:
+        for b in burners:
+            b.kill()
+            b.wait()
     publish(runs, trials, final=True)
     if args.out:
         log("tables written into %s" % args.out)

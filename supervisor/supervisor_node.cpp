@@ -284,12 +284,13 @@ void SupervisorNode::recover_from_stall() {
   for (const dds::SourceId& refused : node_->take_refused())
     out_.event("refused",
                {{"participant", dds::to_string(refused)}, {"by", dds::to_string(node_->source())}});
-  const auto stall_s = node_->recover_if_stalled(1.0 / cfg_.supervisor.target_rate_hz);
-  if (!stall_s) return;
+  const auto recovered = node_->recover(1.0 / cfg_.supervisor.target_rate_hz);
+  if (!recovered) return;
   // The new command writer starts empty: offer this supervisor's command in force (same id) to later
   // joiners again (the agents re-offer it too).
   authority_.republish();
-  out_.event("recovered", {{"stall_s", *stall_s}});
+  out_.event("recovered", app::recovered_json(recovered->cause == dds::Node::Recovery::Cause::Split,
+                                              recovered->seconds, dds::to_string(recovered->peer)));
 }
 
 void SupervisorNode::drain_commands(std::int64_t now) {

@@ -75,7 +75,7 @@ class VehicleNode {
 
  private:
   void tick() {
-    if (node_.recover_if_stalled(period_s_)) util::log_warn("participant recreated after a stall");
+    node_.recover(period_s_);  // it logs why
     const std::int64_t now = util::steady_ns();
     for (std::size_t k = 0; k < robots_.size(); ++k) {
       drivers_[k].drain(commands_);

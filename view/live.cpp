@@ -110,7 +110,7 @@ std::vector<dds::TopicId> LiveFeed::topics() {
 
 void LiveFeed::drain(Scene& scene, double now_s, double period_s) {
   Impl& m = *impl_;
-  m.node.recover_if_stalled(period_s);
+  m.node.recover(period_s);
   std::string why;
   m.states.drain(m.state_buf);
   forward(m.sink, m.states.last_states());

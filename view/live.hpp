@@ -31,7 +31,7 @@ class LiveFeed {
   LiveFeed& operator=(const LiveFeed&) = delete;
 
   /// Drains every reader into scene (now_s: the viewer's clock); rebuilds the participant after a
-  /// stall (dds::Node::recover_if_stalled, period_s: the loop's period).
+  /// stall or a split (dds::Node::recover, period_s: the loop's period).
   void drain(Scene& scene, double now_s, double period_s);
 
   /// Every valid sample drained from now on also goes to sink (nullptr: none). The sink must outlive

@@ -74,4 +74,9 @@ nlohmann::json config_json(const config::Config& c) { return table_json(config::
 
 nlohmann::json command_json(const core::Command& c) { return table_json(core::params::command_table(), c); }
 
+nlohmann::json recovered_json(bool split, double seconds, const std::string& peer) {
+  if (!split) return {{"cause", "stall"}, {"stall_s", seconds}};
+  return {{"cause", "split"}, {"peer", peer}, {"unheard_s", seconds}};
+}
+
 }  // namespace shapeform::app

@@ -22,4 +22,8 @@ nlohmann::json config_json(const config::Config& c);
 /// "dynamics": {...}, "integration": {...}}), every key of the command table.
 nlohmann::json command_json(const core::Command& c);
 
+/// The "recovered" event of a process that recreated its participant (dds::Node::recover): after a
+/// stall {"cause": "stall", "stall_s": s}; after a split {"cause": "split", "peer": prefix, "unheard_s": s}.
+nlohmann::json recovered_json(bool split, double seconds, const std::string& peer);
+
 }  // namespace shapeform::app

@@ -231,7 +231,11 @@ std::size_t Reader<Msg>::drain(std::vector<Received<Msg>>& out) {
     out.clear();
     return 0;
   }
-  return mailbox_->drain(out);
+  const std::size_t n = mailbox_->drain(out);
+  // Samples of a peer's rebuilt participant are its process's (its first participant's prefix).
+  if (const auto e = entities_.lock(); e && e->watch && e->watch->any_alias())
+    for (Received<Msg>& r : out) r.source = e->watch->identity(r.source);
+  return n;
 }
 
 template <class Msg>

@@ -45,26 +45,85 @@ void delete_reader(Entities& e, fdds::DataReader* r) noexcept {
 bool is_ok(const ReturnCode_t& rc) { return rc == ReturnCode_t::RETCODE_OK; }
 
 SourceId source_of(const fdds::InstanceHandle_t& writer) {
-  const auto guid = eprosima::fastrtps::rtps::iHandle2GUID(writer);
+  return prefix_of(eprosima::fastrtps::rtps::iHandle2GUID(writer).guidPrefix);
+}
+
+SourceId prefix_of(const eprosima::fastrtps::rtps::GuidPrefix_t& p) {
   SourceId s;
-  std::copy(std::begin(guid.guidPrefix.value), std::end(guid.guidPrefix.value), s.prefix.begin());
+  std::copy(std::begin(p.value), std::end(p.value), s.prefix.begin());
   return s;
 }
 
-void RefusedWatch::onParticipantAuthentication(fdds::DomainParticipant* /*participant*/,
-                                               eprosima::fastrtps::rtps::ParticipantAuthenticationInfo&& info) {
+ParticipantWatch::ParticipantWatch(const TransportConfig& cfg)
+    : split_(SplitWatch::window_for(cfg), SplitWatch::kGraceS) {}
+
+void ParticipantWatch::onParticipantAuthentication(fdds::DomainParticipant* /*participant*/,
+                                                   eprosima::fastrtps::rtps::ParticipantAuthenticationInfo&& info) {
   if (info.status != eprosima::fastrtps::rtps::ParticipantAuthenticationInfo::UNAUTHORIZED_PARTICIPANT) return;
-  SourceId s;
-  std::copy(std::begin(info.guid.guidPrefix.value), std::end(info.guid.guidPrefix.value), s.prefix.begin());
   std::lock_guard<std::mutex> lock(mutex_);
-  if (pending_.size() < kRefusedRemembered) pending_.push_back(s);  // Node::take_refused reports each once
+  if (refused_.size() < kRefusedRemembered) refused_.push_back(prefix_of(info.guid.guidPrefix));  // reported once
 }
 
-std::vector<SourceId> RefusedWatch::take() {
+void ParticipantWatch::on_participant_discovery(fdds::DomainParticipant* participant,
+                                                eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) {
+  using Status = eprosima::fastrtps::rtps::ParticipantDiscoveryInfo::DISCOVERY_STATUS;
+  const SourceId peer = prefix_of(info.info.m_guid.guidPrefix);
+  if (participant != nullptr && info.info.m_guid.guidPrefix == participant->guid().guidPrefix) return;
+  const std::int64_t now = boot_ns();
+  std::lock_guard<std::mutex> lock(mutex_);
+  switch (info.status) {
+    case Status::DISCOVERED_PARTICIPANT: {
+      split_.discovered(peer, now);
+      const auto& data = info.info.m_userData.data_vec();
+      const std::size_t tag = kIdentityTag.size();
+      if (data.size() == tag + 12 && std::equal(kIdentityTag.begin(), kIdentityTag.end(), data.begin())) {
+        SourceId identity;
+        std::copy(data.begin() + static_cast<std::ptrdiff_t>(tag), data.end(), identity.prefix.begin());
+        if (identity.known() && identity != peer) {
+          // Bounded: GUID prefixes are never reused, so a forgotten entry only costs a peer rebuilt
+          // long ago its identity in a late sample.
+          if (identity_of_.size() >= kRefusedRemembered) identity_of_.clear();
+          identity_of_[peer] = identity;
+          any_alias_.store(true, std::memory_order_release);
+        }
+      }
+      break;
+    }
+    case Status::DROPPED_PARTICIPANT:
+      split_.dropped(peer, now);
+      break;
+    case Status::REMOVED_PARTICIPANT:
+      split_.removed(peer);
+      break;
+    default:
+      break;
+  }
+}
+
+std::vector<SourceId> ParticipantWatch::take_refused() {
   std::lock_guard<std::mutex> lock(mutex_);
   std::vector<SourceId> out;
-  out.swap(pending_);
+  out.swap(refused_);
   return out;
+}
+
+std::optional<SplitWatch::Split> ParticipantWatch::split_due(std::int64_t now_ns) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return split_.due(now_ns);
+}
+
+void ParticipantWatch::rebuilt(const SourceId& now, const SourceId& identity) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  split_.clear();
+  if (!now.known() || now == identity) return;
+  identity_of_[now] = identity;  // our own samples, as our readers hear them
+  any_alias_.store(true, std::memory_order_release);
+}
+
+SourceId ParticipantWatch::identity(const SourceId& participant) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto it = identity_of_.find(participant);
+  return it == identity_of_.end() ? participant : it->second;
 }
 
 }  // namespace detail
@@ -99,14 +158,23 @@ Node::Node(const TransportConfig& cfg, const std::string& name)
   // Any throw below destroys entities_, which deletes whatever was created so far.
   entities_->name = name;
   entities_->transport = cfg;
-  if (cfg.security.enabled) entities_->refused = std::make_unique<detail::RefusedWatch>();
+  entities_->watch = std::make_unique<detail::ParticipantWatch>(cfg);
   open();
+  entities_->identity = detail::prefix_of(entities_->participant->guid().guidPrefix);
 }
 
 void Node::open() {
   detail::Entities& e = *entities_;
   const std::string& name = e.name;
-  e.participant = create_participant(e.transport, name, e.refused.get());
+  // A rebuilt participant announces the process's identity (its first participant's GUID prefix).
+  std::vector<unsigned char> user_data;
+  if (e.identity.known()) {
+    const std::string_view tag = detail::ParticipantWatch::kIdentityTag;
+    user_data.resize(tag.size() + e.identity.prefix.size());
+    const auto rest = std::copy(tag.begin(), tag.end(), user_data.begin());
+    std::copy(e.identity.prefix.begin(), e.identity.prefix.end(), rest);
+  }
+  e.participant = create_participant(e.transport, name, e.watch.get(), user_data);
 
   register_types(e.participant, name);
 
@@ -140,6 +208,7 @@ void Node::rebuild() {
   for (const auto& w : e.readers) w.lock()->reader = nullptr;
 
   open();
+  e.watch->rebuilt(detail::prefix_of(e.participant->guid().guidPrefix), e.identity);
   for (const auto& w : e.writers) {
     const auto slot = w.lock();
     slot->writer = detail::create_writer(e, slot->topic, slot->name);
@@ -150,39 +219,42 @@ void Node::rebuild() {
   }
 }
 
-std::optional<double> Node::recover_if_stalled(double period_s) {
-  const auto stall = stall_.check(boot_ns(), period_s, stall_threshold_s(entities_->transport));
-  if (!stall && !rebuild_pending_) return std::nullopt;
-  if (stall) pending_stall_s_ = *stall;
+std::optional<Node::Recovery> Node::recover(double period_s) {
+  if (!pending_) {
+    if (const auto stall = stall_.check(boot_ns(), period_s, stall_threshold_s(entities_->transport)))
+      pending_ = Recovery{Recovery::Cause::Stall, *stall, {}};
+    else if (const auto split = entities_->watch->split_due(boot_ns()))
+      pending_ = Recovery{Recovery::Cause::Split, split->unheard_s, split->peer};
+    else
+      return std::nullopt;
+  }
   try {
     rebuild();
   } catch (const std::exception& ex) {
-    rebuild_pending_ = true;
-    util::log_error("recreating the participant after a stall failed (retrying next tick): " +
-                    std::string(ex.what()));
+    util::log_error("recreating the participant failed (retrying next tick): " + std::string(ex.what()));
     return std::nullopt;
   }
-  rebuild_pending_ = false;
-  char text[160];
-  std::snprintf(text, sizeof text,
-                "stalled for %.2f s (longer than the lease allows, %.2f s): participant recreated, "
-                "rediscovering",
-                pending_stall_s_, stall_threshold_s(entities_->transport));
+  const Recovery done = *pending_;
+  pending_.reset();
+  char text[200];
+  if (done.cause == Recovery::Cause::Stall)
+    std::snprintf(text, sizeof text,
+                  "stalled for %.2f s (longer than the lease allows, %.2f s): participant recreated, rediscovering",
+                  done.seconds, stall_threshold_s(entities_->transport));
+  else
+    std::snprintf(text, sizeof text,
+                  "participant %s dropped for silence was heard again %.2f s later (it may not have dropped this "
+                  "one): participant recreated, rediscovering",
+                  to_string(done.peer).c_str(), done.seconds);
   util::log_warn(text);
-  return pending_stall_s_;
+  return done;
 }
 
-SourceId Node::source() const {
-  SourceId s;
-  if (entities_->participant == nullptr) return s;  // a failed rebuild: unknown until one succeeds
-  const auto& prefix = entities_->participant->guid().guidPrefix.value;
-  std::copy(std::begin(prefix), std::end(prefix), s.prefix.begin());
-  return s;
-}
+SourceId Node::source() const { return entities_->identity; }
 
 std::vector<SourceId> Node::take_refused() {
-  if (!entities_->refused) return {};
-  std::vector<SourceId> heard = entities_->refused->take();
+  if (!entities_->transport.security.enabled) return {};
+  std::vector<SourceId> heard = entities_->watch->take_refused();
   for (const SourceId& s : take_permission_refusals()) heard.push_back(s);
   std::vector<SourceId> refused;
   auto& reported = entities_->refused_reported;

@@ -11,7 +11,7 @@
 /// Lifetime: handles may be destroyed before or after their Node; after the Node is gone they do nothing
 /// (write() returns false, drain() returns what was already received).
 /// Rebuild: Node::rebuild() replaces the participant and every endpoint behind the handles, which keep
-/// working (same topic, QoS and mailbox) without being touched: see recover_if_stalled().
+/// working (same topic, QoS and mailbox) without being touched: see recover().
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -168,8 +168,8 @@ class Node {
 
   eprosima::fastdds::dds::DomainParticipant* participant() const;
   const std::string& name() const;
-  /// This participant's identity, as its samples carry it in Received::source. A rebuild changes it;
-  /// unknown while a rebuild has failed.
+  /// This process's identity, as its samples carry it in Received::source everywhere: the GUID prefix
+  /// of its first participant, kept across rebuilds (a rebuilt participant announces it).
   SourceId source() const;
   /// With DDS Security: the participants refused (authentication failed: the participant listener;
   /// permissions failed: Fast DDS's log, dds/library_log.hpp) since the last call, each once (up to
@@ -184,13 +184,24 @@ class Node {
   /// no participant (handles do nothing) until a later rebuild succeeds.
   void rebuild();
 
+  /// Why a Node was rebuilt (recover()).
+  struct Recovery {
+    enum class Cause {
+      Stall,  ///< this process's loop was late by `seconds` (stopped, debugged, suspended, starved)
+      Split,  ///< it dropped `peer` for silence and heard it again `seconds` later (a partition, a
+              ///< starved thread): the peer may not have dropped it in turn
+    } cause = Cause::Stall;
+    double seconds = 0.0;
+    SourceId peer;  ///< Split: the peer (its participant's GUID prefix)
+  };
   /// The self-healing step, called once per loop tick by every process (period_s: the loop's period).
-  /// When the last call was more than kStallMargin past its period ago (the process was stopped,
-  /// debugged, suspended or starved) for longer than the peers' lease allows (stall_threshold_s()),
-  /// its peers may have dropped it, and Fast DDS 2.9 may then never match it again (docs/RELIABILITY.md):
-  /// the Node is rebuilt, a warning logged, and the stall in seconds returned. nullopt otherwise.
-  /// A rebuild that throws is logged and retried on the next call.
-  std::optional<double> recover_if_stalled(double period_s);
+  /// Fast DDS 2.9 may never match again a pair where one side dropped the other for silence and the
+  /// other did not (docs/RELIABILITY.md, "Stalls, partitions and membership"), and one side of such a
+  /// pair always knows: the one whose loop stalled for longer than the peers' lease allows
+  /// (stall_threshold_s()), or the one that dropped a peer and heard it again soon after (SplitWatch).
+  /// That side recreates its participant: the Node is rebuilt, a warning logged, and the cause
+  /// returned; nullopt otherwise. A rebuild that throws is logged and retried on the next call.
+  std::optional<Recovery> recover(double period_s);
 
   /// Ends the process with `status` after deleting this participant's endpoints (peers unmatch them at
   /// once) but not the participant itself: no participant goodbye is sent, and each peer forgets the
@@ -208,8 +219,7 @@ class Node {
 
   std::shared_ptr<detail::Entities> entities_;
   StallWatch stall_;
-  bool rebuild_pending_ = false;  ///< the last rebuild failed: retry on the next recover_if_stalled()
-  double pending_stall_s_ = 0.0;
+  std::optional<Recovery> pending_;  ///< a rebuild that failed: retried on the next recover()
 };
 
 // Compiled once, in the dds library (dds/endpoints.cpp), for each topic's message type.

@@ -1,11 +1,14 @@
 #pragma once
 /// The Fast DDS entities behind a dds::Node and its handles (dds/node.hpp), for the dds library's own
 /// sources (node.cpp, endpoints.cpp) and the tests: processes never include this.
+#include <atomic>
 #include <map>
 #include <memory>
+#include <optional>
 #include <mutex>
 #include <set>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <fastdds/dds/domain/DomainParticipant.hpp>
@@ -17,6 +20,7 @@
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
 
+#include "dds/stall.hpp"
 #include "dds/topics.hpp"
 #include "protocol/samples.hpp"
 #include "protocol/transport.hpp"
@@ -39,18 +43,42 @@ struct ReaderSlot {
   eprosima::fastdds::dds::DataReader* reader = nullptr;
 };
 
-/// The participants that DDS Security refused (failed authentication or join access control), as
-/// the participant's listener hears them on Fast DDS's thread; the loop takes them.
-class RefusedWatch final : public eprosima::fastdds::dds::DomainParticipantListener {
+/// What the participant's listener hears on Fast DDS's threads, for the loop to take:
+/// - the participants DDS Security refused (failed authentication or join access control);
+/// - the participants this one dropped for silence and heard again soon after (dds::SplitWatch), when
+///   this process should recreate its participant;
+/// - each peer's process identity: a participant that a process recreated announces its first
+///   participant's GUID prefix in USER_DATA (kIdentityTag), and samples from it are attributed to that
+///   identity, so a process keeps one identity across rebuilds.
+class ParticipantWatch final : public eprosima::fastdds::dds::DomainParticipantListener {
  public:
+  explicit ParticipantWatch(const TransportConfig& cfg);
+
   void onParticipantAuthentication(eprosima::fastdds::dds::DomainParticipant* participant,
                                    eprosima::fastrtps::rtps::ParticipantAuthenticationInfo&& info) override;
+  void on_participant_discovery(eprosima::fastdds::dds::DomainParticipant* participant,
+                                eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override;
+
   /// The participants refused since the last call (at most kRefusedRemembered; repeats possible).
-  std::vector<SourceId> take();
+  std::vector<SourceId> take_refused();
+  /// A peer this process may be half-matched with (SplitWatch::due), nullopt if none.
+  std::optional<SplitWatch::Split> split_due(std::int64_t now_ns);
+  /// After a rebuild: no history with anyone, and samples of the new participant `now` are `identity`'s.
+  void rebuilt(const SourceId& now, const SourceId& identity);
+  /// The process identity behind a writer's participant (itself when it announced none).
+  SourceId identity(const SourceId& participant);
+  /// Whether any participant heard announced another identity (identity() is then worth calling).
+  bool any_alias() const { return any_alias_.load(std::memory_order_acquire); }
+
+  /// USER_DATA of a rebuilt participant: this tag, then the 12 bytes of its process identity.
+  static constexpr std::string_view kIdentityTag = "sfid";
 
  private:
   std::mutex mutex_;
-  std::vector<SourceId> pending_;
+  std::vector<SourceId> refused_;
+  SplitWatch split_;
+  std::map<SourceId, SourceId> identity_of_;  ///< participant -> process identity, where they differ
+  std::atomic<bool> any_alias_{false};
 };
 
 /// The DDS entities of a Node. Shared with handles through weak_ptr so they can tell whether the
@@ -62,9 +90,11 @@ struct Entities {
   std::map<std::string, eprosima::fastdds::dds::Topic*> topics;  ///< by name, created on first use
   std::string name;
   TransportConfig transport;  ///< the profile the participant was built from (reader locators)
-  /// Hears refused participants when security is enabled (set before the first participant, which
-  /// it outlives: members go after ~Entities() deleted the participant).
-  std::unique_ptr<RefusedWatch> refused;
+  /// The participant's listener (set before the first participant, which it outlives: members go after
+  /// ~Entities() deleted the participant).
+  std::unique_ptr<ParticipantWatch> watch;
+  /// This process's identity: its first participant's GUID prefix (unknown until it exists).
+  SourceId identity;
   /// The refused participants reported so far (each once: a refused peer retries its handshake for ever);
   /// at most kRefusedRemembered, then forgotten and reported again.
   std::set<SourceId> refused_reported;
@@ -82,6 +112,7 @@ struct Entities {
 void delete_writer(Entities& e, eprosima::fastdds::dds::DataWriter* w) noexcept;
 void delete_reader(Entities& e, eprosima::fastdds::dds::DataReader* r) noexcept;
 bool is_ok(const eprosima::fastrtps::types::ReturnCode_t& rc);
+SourceId prefix_of(const eprosima::fastrtps::rtps::GuidPrefix_t& prefix);
 /// The participant part of a writer's instance handle (a handle holds the writer's GUID).
 SourceId source_of(const eprosima::fastdds::dds::InstanceHandle_t& writer);
 

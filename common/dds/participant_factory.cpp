@@ -251,7 +251,8 @@ std::string static_edp_description(const TransportConfig& cfg) {
 }
 
 fdds::DomainParticipant* create_participant(const TransportConfig& cfg, const std::string& name,
-                                            fdds::DomainParticipantListener* listener) {
+                                            fdds::DomainParticipantListener* listener,
+                                            const std::vector<unsigned char>& user_data) {
   if (cfg.security.enabled) {
     if (cfg.security.identity.empty()) {
       throw SecurityError("security: " + quoted(name) + " has no security.identity (set it to an enclave of " +
@@ -260,7 +261,8 @@ fdds::DomainParticipant* create_participant(const TransportConfig& cfg, const st
     check_enclave(cfg.security);  // the files named in the error, before Fast DDS says less
   }
   route_library_log();  // before the first participant: Fast DDS would print its errors on stdout
-  const fdds::DomainParticipantQos pq = participant_qos(cfg, name);
+  fdds::DomainParticipantQos pq = participant_qos(cfg, name);
+  if (!user_data.empty()) pq.user_data().data_vec(std::vector<eprosima::fastrtps::rtps::octet>(user_data.begin(), user_data.end()));
   // Invariant of the project: never builtin transports (they open every interface and SHM).
   if (pq.transport().use_builtin_transports || pq.transport().user_transports.empty()) {
     fail("create_participant: refusing a participant with builtin transports");

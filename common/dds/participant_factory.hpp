@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantListener.hpp>
@@ -77,9 +78,11 @@ std::string static_edp_description(const TransportConfig& cfg);
 /// itself would create it deaf). Free it with delete_participant().
 /// `listener` (optional, outliving the participant) hears discovery and authentication from the first
 /// announcement on; it is installed with an empty status mask, so it never hears endpoint statuses.
+/// `user_data` (optional) is announced in the participant's USER_DATA (dds::Node: its process identity).
 eprosima::fastdds::dds::DomainParticipant* create_participant(
     const TransportConfig& cfg, const std::string& name,
-    eprosima::fastdds::dds::DomainParticipantListener* listener = nullptr);
+    eprosima::fastdds::dds::DomainParticipantListener* listener = nullptr,
+    const std::vector<unsigned char>& user_data = {});
 
 /// delete_contained_entities() then deletes the participant. Null is a no-op. Never throws.
 void delete_participant(eprosima::fastdds::dds::DomainParticipant* participant);

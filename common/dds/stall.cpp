@@ -2,6 +2,8 @@
 
 #include <time.h>
 
+#include <iterator>
+
 namespace shapeform::dds {
 
 double stall_threshold_s(const TransportConfig& cfg) { return cfg.lease_s - cfg.announce_s; }
@@ -19,6 +21,39 @@ std::optional<double> StallWatch::check(std::int64_t now_ns, double period_s, do
   const double late_s = static_cast<double>(now_ns - last) * 1e-9 - period_s;
   if (late_s > threshold_s) return late_s;
   return std::nullopt;
+}
+
+SplitWatch::SplitWatch(double window_s, double grace_s)
+    : window_ns_(static_cast<std::int64_t>(window_s * 1e9)), grace_ns_(static_cast<std::int64_t>(grace_s * 1e9)) {}
+
+void SplitWatch::dropped(const SourceId& peer, std::int64_t now_ns) {
+  // Bounded: drops older than the window can no longer make a return due.
+  for (auto it = dropped_.begin(); it != dropped_.end();) it = now_ns - it->second > window_ns_ ? dropped_.erase(it) : std::next(it);
+  dropped_[peer] = now_ns;
+  returned_.erase(peer);
+}
+
+void SplitWatch::discovered(const SourceId& peer, std::int64_t now_ns) {
+  const auto it = dropped_.find(peer);
+  if (it == dropped_.end()) return;
+  if (now_ns - it->second <= window_ns_) returned_[peer] = {now_ns, static_cast<double>(now_ns - it->second) * 1e-9};
+  dropped_.erase(it);
+}
+
+void SplitWatch::removed(const SourceId& peer) {
+  dropped_.erase(peer);
+  returned_.erase(peer);
+}
+
+std::optional<SplitWatch::Split> SplitWatch::due(std::int64_t now_ns) const {
+  for (const auto& [peer, back] : returned_)
+    if (now_ns - back.first >= grace_ns_) return Split{peer, back.second};
+  return std::nullopt;
+}
+
+void SplitWatch::clear() {
+  dropped_.clear();
+  returned_.clear();
 }
 
 }  // namespace shapeform::dds

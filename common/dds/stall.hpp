@@ -1,14 +1,18 @@
 #pragma once
-/// Detecting that this process stalled long enough for its peers to drop it (no Fast DDS here).
+/// Detecting that this process may be half-matched with a peer (no Fast DDS here).
 ///
 /// A participant that sends nothing for its lease (transport.lease_s) is dropped by every peer. When it
-/// resumes, Fast DDS 2.9 re-discovers it, but the endpoint discovery between it and a peer that it did
-/// not drop in turn can stay broken for good (docs/RELIABILITY.md, "Stalls and membership"). A process
-/// therefore watches its own loop: a stall longer than stall_threshold_s() makes it recreate its
-/// participant (dds::Node::recover_if_stalled), which everyone discovers afresh.
+/// is heard again, Fast DDS 2.9 re-discovers it, but the endpoint discovery between it and a peer that
+/// did not drop it in turn can stay broken for good (docs/RELIABILITY.md, "Stalls, partitions and
+/// membership"). One of the two sides always knows: the one that stalled (its own loop was late by
+/// more than stall_threshold_s(), StallWatch), or the one that dropped the other for silence and then
+/// heard it again soon after (a partition, a starved thread: SplitWatch). That side recreates its
+/// participant (dds::Node::recover), which everyone discovers afresh.
 #include <cstdint>
+#include <map>
 #include <optional>
 
+#include "protocol/samples.hpp"
 #include "protocol/transport.hpp"
 
 namespace shapeform::dds {
@@ -32,6 +36,43 @@ class StallWatch {
 
  private:
   std::int64_t last_ns_ = -1;
+};
+
+/// Peers this process dropped for silence (their lease ran out) and heard again soon after. After a
+/// silence of about a lease, the peer may not have dropped this process in turn (its lease of this
+/// process runs from another last message): the pair can be half-matched, and this side knows it.
+/// A peer heard again more than `window_s` after its drop has dropped this process too (announcements
+/// leave every announce_s, so the two drops are at most that far apart): both sides start afresh and
+/// nothing is due. A peer that stalled recreates its own participant on its first tick (its old one is
+/// then removed, with a goodbye): one removed within `grace_s` of coming back is not due either.
+/// Pure: the caller passes the events and the clock.
+class SplitWatch {
+ public:
+  SplitWatch(double window_s, double grace_s);
+
+  void dropped(const SourceId& peer, std::int64_t now_ns);     ///< its lease ran out
+  void discovered(const SourceId& peer, std::int64_t now_ns);  ///< its announcement, first or again
+  void removed(const SourceId& peer);                          ///< it said goodbye
+
+  struct Split {
+    SourceId peer;
+    double unheard_s = 0.0;  ///< from its drop to its return
+  };
+  /// The first peer that came back within window_s of its drop and was not removed within grace_s
+  /// since: this process should recreate its participant (then clear()).
+  std::optional<Split> due(std::int64_t now_ns) const;
+  /// Forgets everything: a new participant has no history with anyone.
+  void clear();
+
+  /// window_s for a transport profile: lease_s + announce_s.
+  static double window_for(const TransportConfig& cfg) { return cfg.lease_s + cfg.announce_s; }
+  static constexpr double kGraceS = 0.5;
+
+ private:
+  std::int64_t window_ns_;
+  std::int64_t grace_ns_;
+  std::map<SourceId, std::int64_t> dropped_;                      ///< peer -> when, forgotten after window_s
+  std::map<SourceId, std::pair<std::int64_t, double>> returned_;  ///< peer -> (came back at, unheard_s)
 };
 
 }  // namespace shapeform::dds

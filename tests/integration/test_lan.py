@@ -8,7 +8,10 @@ h3, the supervisor on h4.
   (so discovery, the command and the states all cross the lossy LAN): the circle still forms, evenly.
 - One host partitioned for 10 s: the others drop its agents and its agents drop the others; they keep
   following the command on their own; after the heal everyone hears everyone within 3 s and the
-  formation re-converges. No process takes the partition for a stall of its own loop.
+  formation re-converges. No process takes the partition for a stall of its own loop, nor recreates
+  its participant (both sides dropped each other long before the heal).
+- One host partitioned for 2.3 s, just past the lease: everyone hears everyone within 3 s of the heal;
+  a process that recreated its participant did so for the split, once, and kept its identity.
 - kill -9 of 3 agents on 3 hosts: every survivor drops them and the 9 re-space.
 - An agent paused 5 s (SIGSTOP, SIGCONT): dropped, admitted again, and its step across the pause is
   one step of the law (measured on its own status events, one per control period).
@@ -100,6 +103,23 @@ class LanTest(harness.LanSwarmTestCase):
     def assert_no_stall_rebuild(self, processes, marks):
         for p, m in zip(processes, marks):
             self.assertEqual(p.events("recovered", m), [], "%s took the fault for a stall of its loop" % p.name)
+
+    def heal_time(self, sup, agents):
+        """Called at a heal: seconds until every agent hears the 11 others and the supervisor holds all
+        12 alive, for at least 1 s (15 s at most, else the test fails)."""
+        t_heal = time.monotonic()
+        marks = [a.mark() for a in agents]
+        since = {}
+
+        def healed():
+            if not (self.hear(agents, marks, [AGENTS - 1] * AGENTS) and self.alive_ids(sup) == set(range(AGENTS))):
+                since.clear()
+                return False
+            since.setdefault("t", time.monotonic())
+            return time.monotonic() - since["t"] >= 1.0  # and it holds
+
+        poll(healed, 15, "everyone to hear everyone after the heal", 0.05)
+        return since["t"] - t_heal
 
     def respaced(self, sup, n):
         """Polls until the supervisor measures n agents converged and evenly spaced; returns the metrics."""
@@ -200,20 +220,8 @@ class LanTest(harness.LanSwarmTestCase):
             self.assertTrue(sup.running())
         finally:
             self.lab.fault(cut, "heal")
-        t_heal = time.monotonic()
-        marks = [a.mark() for a in agents]
         sup_mark = sup.mark()
-        since = {}
-
-        def healed():
-            if not (self.hear(agents, marks, [AGENTS - 1] * AGENTS) and self.alive_ids(sup) == set(range(AGENTS))):
-                since.clear()
-                return False
-            since.setdefault("t", time.monotonic())
-            return time.monotonic() - since["t"] >= 1.0  # and it holds
-
-        poll(healed, 15, "everyone to hear everyone after the heal", 0.05)
-        heal_s = since["t"] - t_heal
+        heal_s = self.heal_time(sup, agents)
         print("partition of %s: dropped within %.2f s; everyone heard everyone %.2f s after the heal"
               % (cut, detect_s, heal_s), flush=True)
         self.assertEqual(sorted(e["id"] for e in sup.events("agent", sup_mark) if e["change"] == "joined"), inside)
@@ -221,6 +229,34 @@ class LanTest(harness.LanSwarmTestCase):
         self.assert_no_stall_rebuild(everyone, quiet)
         m = self.respaced(sup, AGENTS)
         self.assertEqual(m["epoch"], 1)
+        self.assert_all_alive(everyone)
+
+    def test_partition_just_past_the_lease(self):
+        # A cut of 2.3 s, just past the 2 s lease: one side may drop the other while the other, whose
+        # lease runs from a later message, does not, and Fast DDS 2.9 can leave such a pair unmatched for
+        # good (2 of 11 cuts of 2.0 to 2.6 s before). The side that dropped a peer and hears it again
+        # within lease + announce recreates its participant (dds::SplitWatch) and keeps its identity.
+        sup, agents = self.converged_lan_swarm()
+        everyone = agents + [sup]
+        marks = [p.mark() for p in everyone]
+        try:
+            self.lab.fault("h2", "partition")
+            time.sleep(2.3)  # the fault itself
+        finally:
+            self.lab.fault("h2", "heal")
+        heal_s = self.heal_time(sup, agents)
+        rebuilt = {p.name: [e["cause"] for e in p.events("recovered", m)] for p, m in zip(everyone, marks)}
+        print("partition of h2 for 2.3 s: everyone heard everyone %.2f s after the heal; participants recreated: %s"
+              % (heal_s, {k: v for k, v in rebuilt.items() if v}), flush=True)
+        self.assertLessEqual(heal_s, HEAL_S, "everyone heard everyone within %g s of the heal" % HEAL_S)
+        for name, causes in rebuilt.items():
+            self.assertNotIn("stall", causes, "%s took the partition for a stall of its loop" % name)
+            self.assertLessEqual(len(causes), 1, "%s recreated its participant once at most" % name)
+        # One identity per process across its rebuild: nothing seen as a second participant of an agent id.
+        self.assertEqual(sup.events("duplicate", marks[-1]), [])
+        for a, m in zip(agents, marks):
+            self.assertEqual(a.events("duplicate", m), [], a.name)
+        self.respaced(sup, AGENTS)
         self.assert_all_alive(everyone)
 
     def test_kill_three_agents_on_three_hosts(self):

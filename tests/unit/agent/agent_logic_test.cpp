@@ -600,20 +600,6 @@ TEST_CASE("identity: after the grace period the higher GUID prefix yields, the l
   CHECK(low.on_sample(8, participant(5)) == agent::IdentityGuard::Action::Keep);  // another hosted id
 }
 
-TEST_CASE("identity: after its participant is recreated, samples of the old and the new one are ours",
-          "[agent][identity]") {
-  agent::IdentityGuard g(participant(5), 0);
-  g.published();
-  g.rebuilt(participant(1));  // a rebuild after a stall: a new GUID prefix, lower than the old one
-  CHECK(g.own() == participant(1));
-  CHECK(g.on_sample(3, participant(5)) == agent::IdentityGuard::Action::None);  // in flight from the old one
-  CHECK(g.on_sample(3, participant(1)) == agent::IdentityGuard::Action::None);
-  g.rebuilt(dds::SourceId{});  // a failed rebuild: no participant, nothing learned
-  CHECK(g.own() == participant(1));
-  // A real duplicate is still one, ordered against the participant in use now.
-  CHECK(g.on_sample(3, participant(3)) == agent::IdentityGuard::Action::Keep);
-}
-
 namespace {
 /// The paper's tracking experiment: a ring of radius 2 around a centre moving on the line path
 /// C(t) = (-10, -10) + t (0.1, 0.1), with feed-forward.

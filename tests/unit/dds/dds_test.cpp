@@ -1709,7 +1709,7 @@ TEST_CASE("node refuses a topic of another type and handles survive their node",
   CHECK(moved.matched() == -1);
 }
 
-TEST_CASE("a rebuilt node has a new participant and its handles carry on", "[dds][node]") {
+TEST_CASE("a rebuilt node has a new participant, keeps its identity, and its handles carry on", "[dds][node]") {
   const auto cfg = loopback(test_domain(2));
   dds::Node a(cfg, "test-rebuilt"), b(cfg, "test-peer");
   // Both publish and read the state topic: a is rebuilt, b is its peer.
@@ -1742,11 +1742,13 @@ TEST_CASE("a rebuilt node has a new participant and its handles carry on", "[dds
   };
   REQUIRE(exchange());
   const dds::SourceId before = a.source();
+  const auto guid_before = a.participant()->guid();
   a.rebuild();
-  CHECK(a.source() != before);  // a new GUID: peers discover it afresh
+  CHECK(a.participant()->guid() != guid_before);  // a new GUID: peers discover it afresh
+  CHECK(a.source() == before);                    // the same process: its samples keep its identity
   CHECK(a_writer.valid());
   CHECK(a_reader.valid());
-  REQUIRE(exchange());
+  REQUIRE(exchange());  // b attributes the new participant's samples to a.source()
   // The old reader left with its listener detached: the peer's agent was never handed out as gone.
   CHECK_FALSE(a_saw_b_leave);
 }
@@ -1767,6 +1769,42 @@ TEST_CASE("the stall watch reports a loop late by more than the threshold", "[dd
   CHECK_FALSE(slow.check(2000 * kMs, 2.0, 1.5));
   CHECK(slow.check(5600 * kMs, 2.0, 1.5));
   CHECK(dds::boot_ns() > 0);
+}
+
+TEST_CASE("the split watch: a peer dropped for silence and heard again within the window is due", "[dds]") {
+  constexpr std::int64_t kMs = 1'000'000;
+  dds::TransportConfig cfg;  // lease 2 s, announce 0.5 s
+  CHECK(dds::SplitWatch::window_for(cfg) == Approx(2.5));
+  dds::SplitWatch w(dds::SplitWatch::window_for(cfg), 0.5);
+  dds::SourceId a, b, c;
+  a.prefix[0] = 1;
+  b.prefix[0] = 2;
+  c.prefix[0] = 3;
+  w.discovered(a, 0);  // first discovery: nothing to do
+  CHECK_FALSE(w.due(10'000 * kMs));
+  // a partition of about a lease: dropped at 2.0 s, heard again at 2.6 s: due after the grace
+  w.dropped(a, 2000 * kMs);
+  w.discovered(a, 2600 * kMs);
+  CHECK_FALSE(w.due(3000 * kMs));  // within the grace: the peer may rebuild itself (it stalled)
+  const auto due = w.due(3100 * kMs);
+  REQUIRE(due);
+  CHECK(due->peer == a);
+  CHECK(due->unheard_s == Approx(0.6));
+  w.clear();  // rebuilt: no history
+  CHECK_FALSE(w.due(4000 * kMs));
+  // a long partition: dropped at 10 s, heard again at 20 s: it dropped this one too, nothing due
+  w.dropped(b, 10'000 * kMs);
+  w.discovered(b, 20'000 * kMs);
+  CHECK_FALSE(w.due(30'000 * kMs));
+  // a peer that stalled: heard again, then removed (its own rebuild says goodbye) within the grace
+  w.dropped(c, 40'000 * kMs);
+  w.discovered(c, 41'000 * kMs);
+  w.removed(c);
+  CHECK_FALSE(w.due(45'000 * kMs));
+  // a peer that left cleanly and another participant: no drop, nothing due
+  w.discovered(a, 50'000 * kMs);
+  w.removed(a);
+  CHECK_FALSE(w.due(60'000 * kMs));
 }
 
 TEST_CASE("a source id prints as Fast DDS prints a GUID prefix and orders bytewise", "[dds]") {
