@@ -100,6 +100,22 @@ void ParticipantWatch::on_participant_discovery(fdds::DomainParticipant* partici
   }
 }
 
+void ParticipantWatch::on_subscriber_discovery(fdds::DomainParticipant* /*participant*/,
+                                               eprosima::fastrtps::rtps::ReaderDiscoveryInfo&& info) {
+  if (info.status != eprosima::fastrtps::rtps::ReaderDiscoveryInfo::DISCOVERED_READER) return;
+  const SourceId peer = prefix_of(info.info.guid().guidPrefix);
+  std::lock_guard<std::mutex> lock(mutex_);
+  split_.endpoint(peer);
+}
+
+void ParticipantWatch::on_publisher_discovery(fdds::DomainParticipant* /*participant*/,
+                                              eprosima::fastrtps::rtps::WriterDiscoveryInfo&& info) {
+  if (info.status != eprosima::fastrtps::rtps::WriterDiscoveryInfo::DISCOVERED_WRITER) return;
+  const SourceId peer = prefix_of(info.info.guid().guidPrefix);
+  std::lock_guard<std::mutex> lock(mutex_);
+  split_.endpoint(peer);
+}
+
 std::vector<SourceId> ParticipantWatch::take_refused() {
   std::lock_guard<std::mutex> lock(mutex_);
   std::vector<SourceId> out;

@@ -58,6 +58,10 @@ class ParticipantWatch final : public eprosima::fastdds::dds::DomainParticipantL
                                    eprosima::fastrtps::rtps::ParticipantAuthenticationInfo&& info) override;
   void on_participant_discovery(eprosima::fastdds::dds::DomainParticipant* participant,
                                 eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override;
+  void on_subscriber_discovery(eprosima::fastdds::dds::DomainParticipant* participant,
+                               eprosima::fastrtps::rtps::ReaderDiscoveryInfo&& info) override;
+  void on_publisher_discovery(eprosima::fastdds::dds::DomainParticipant* participant,
+                              eprosima::fastrtps::rtps::WriterDiscoveryInfo&& info) override;
 
   /// The participants refused since the last call (at most kRefusedRemembered; repeats possible).
   std::vector<SourceId> take_refused();

@@ -45,6 +45,8 @@ void SplitWatch::removed(const SourceId& peer) {
   returned_.erase(peer);
 }
 
+void SplitWatch::endpoint(const SourceId& peer) { returned_.erase(peer); }
+
 std::optional<SplitWatch::Split> SplitWatch::due(std::int64_t now_ns) const {
   for (const auto& [peer, back] : returned_)
     if (now_ns - back.first >= grace_ns_) return Split{peer, back.second};

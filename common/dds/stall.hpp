@@ -40,12 +40,14 @@ class StallWatch {
 
 /// Peers this process dropped for silence (their lease ran out) and heard again soon after. After a
 /// silence of about a lease, the peer may not have dropped this process in turn (its lease of this
-/// process runs from another last message): the pair can be half-matched, and this side knows it.
-/// A peer heard again more than `window_s` after its drop has dropped this process too (announcements
-/// leave every announce_s, so the two drops are at most that far apart): both sides start afresh and
-/// nothing is due. A peer that stalled recreates its own participant on its first tick (its old one is
-/// then removed, with a goodbye): one removed within `grace_s` of coming back is not due either.
-/// Pure: the caller passes the events and the clock.
+/// process runs from another last message): the pair can then be half-matched, the peer's endpoint
+/// announcements never reaching this side again. A peer heard again more than `window_s` after its
+/// drop has dropped this process too (announcements leave every announce_s, so the two drops are at
+/// most that far apart): both sides start afresh and nothing is due. Nor is a peer whose endpoints
+/// this process hears announced within `grace_s` of its return (its endpoint discovery works, so it
+/// dropped this process too), or that is removed meanwhile (a peer that stalled recreates its own
+/// participant on its first tick, and its old one says goodbye). Pure: the caller passes the events
+/// and the clock.
 class SplitWatch {
  public:
   SplitWatch(double window_s, double grace_s);
@@ -53,20 +55,21 @@ class SplitWatch {
   void dropped(const SourceId& peer, std::int64_t now_ns);     ///< its lease ran out
   void discovered(const SourceId& peer, std::int64_t now_ns);  ///< its announcement, first or again
   void removed(const SourceId& peer);                          ///< it said goodbye
+  void endpoint(const SourceId& peer);  ///< one of its endpoints announced (to this participant)
 
   struct Split {
     SourceId peer;
     double unheard_s = 0.0;  ///< from its drop to its return
   };
-  /// The first peer that came back within window_s of its drop and was not removed within grace_s
-  /// since: this process should recreate its participant (then clear()).
+  /// The first peer that came back within window_s of its drop, and of which neither an endpoint nor a
+  /// goodbye came within grace_s since: this process should recreate its participant (then clear()).
   std::optional<Split> due(std::int64_t now_ns) const;
   /// Forgets everything: a new participant has no history with anyone.
   void clear();
 
   /// window_s for a transport profile: lease_s + announce_s.
   static double window_for(const TransportConfig& cfg) { return cfg.lease_s + cfg.announce_s; }
-  static constexpr double kGraceS = 0.5;
+  static constexpr double kGraceS = 1.0;
 
  private:
   std::int64_t window_ns_;

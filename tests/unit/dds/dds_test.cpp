@@ -1801,6 +1801,11 @@ TEST_CASE("the split watch: a peer dropped for silence and heard again within th
   w.discovered(c, 41'000 * kMs);
   w.removed(c);
   CHECK_FALSE(w.due(45'000 * kMs));
+  // a peer that dropped this one too: its endpoints are announced again within the grace
+  w.dropped(b, 46'000 * kMs);
+  w.discovered(b, 46'500 * kMs);
+  w.endpoint(b);
+  CHECK_FALSE(w.due(48'000 * kMs));
   // a peer that left cleanly and another participant: no drop, nothing due
   w.discovered(a, 50'000 * kMs);
   w.removed(a);
