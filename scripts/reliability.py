@@ -20,7 +20,7 @@ the arc law: arc_circle):
   pause      one agent paused (SIGSTOP) for 5 s, then resumed
   supervisor the supervisor killed (kill -9) and started again at once on another host
 and on loopback (no root needed):
-  stall      one agent, or the supervisor, stalled 3, 5 or 20 s (the table "Stalls and membership")
+  stall      one agent, or the supervisor, stalled 3, 5 or 20 s (the table "Stalls, partitions and membership")
 
 Per run: detect (s), recover (s), samples lost (%), processes aborted, recording complete; the
 definitions are in docs/RELIABILITY.md ("Faults on a LAN") and in measure_lan_run below. Every table

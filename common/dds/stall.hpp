@@ -69,7 +69,7 @@ class SplitWatch {
 
   /// window_s for a transport profile: lease_s + announce_s.
   static double window_for(const TransportConfig& cfg) { return cfg.lease_s + cfg.announce_s; }
-  static constexpr double kGraceS = 1.0;
+  static constexpr double kGraceS = 0.5;
 
  private:
   std::int64_t window_ns_;

@@ -2,7 +2,7 @@
 then resumed (SIGCONT) is heard by everyone, and hears everyone, again, and the formation re-converges.
 
 Before the fix, Fast DDS 2.9 left such a process partly unmatched for minutes (docs/RELIABILITY.md,
-"Stalls and membership"). Now the resumed process sees its own stall, recreates its participant and
+"Stalls, partitions and membership"). Now the resumed process sees its own stall, recreates its participant and
 says so with a "recovered" event.
 
 Timing: the goal is everyone hearing everyone within 3 s of the SIGCONT; scripts/reliability.py
