@@ -121,7 +121,7 @@ class AgentNode {
 
  private:
   void tick() {
-    recover_from_stall();
+    recover_participant();
     const std::int64_t now = util::steady_ns();
     phases_.start_at(util::thread_cpu_ns());
     drain_commands();
@@ -153,9 +153,9 @@ class AgentNode {
   std::int64_t loop_cpu0_ns_ = 0, process_cpu0_ns_ = 0, wall0_ns_ = 0;
   /// Logs the phases (tick times) and the CPU split since run() began.
   void log_profile();
-  /// After a stall longer than the peers' lease the participant is recreated (dds::Node); participants
-  /// DDS Security refused are reported ("refused" events).
-  void recover_from_stall();
+  /// After a stall longer than the peers' lease, or a split from a peer, the participant is recreated
+  /// (dds::Node::recover); participants DDS Security refused are reported ("refused" events).
+  void recover_participant();
   void drain_commands();
   /// Re-offers the command followed on command_relay_, if there is one.
   void relay_command();
@@ -399,7 +399,7 @@ void AgentNode::reject(const char* what, const std::string& log_line, const std:
   if (opt_.json && shown) emit({{"event", "rejected"}, {"what", what}, {"why", why}});
 }
 
-void AgentNode::recover_from_stall() {
+void AgentNode::recover_participant() {
   for (const dds::SourceId& refused : node_.take_refused()) {
     if (opt_.json)
       emit({{"event", "refused"}, {"participant", dds::to_string(refused)}, {"by", dds::to_string(node_.source())}});

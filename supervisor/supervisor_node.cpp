@@ -54,7 +54,7 @@ class SupervisorNode {
 
   /// One period of the loop.
   void tick(std::int64_t now, bool metrics_due, bool mirror_due) {
-    recover_from_stall();
+    recover_participant();
     drain(now);
     membership_.update(monitor_, now, out_);
     publish_target(now);
@@ -62,9 +62,9 @@ class SupervisorNode {
     if (mirror_due) mirror_tick(now);
     run_input(now);
   }
-  /// After a stall longer than the peers' lease the participant is recreated (dds::Node); participants
-  /// DDS Security refused are reported ("refused" events).
-  void recover_from_stall();
+  /// After a stall longer than the peers' lease, or a split from a peer, the participant is recreated
+  /// (dds::Node::recover); participants DDS Security refused are reported ("refused" events).
+  void recover_participant();
   void drain(std::int64_t now) {
     drain_commands(now);
     drain_states(now);
@@ -280,7 +280,7 @@ Summary SupervisorNode::summary(std::int64_t now) const {
 // ---------------------------------------------------------------------------------------------
 // Inputs: the participant, commands, states, statuses, the console
 
-void SupervisorNode::recover_from_stall() {
+void SupervisorNode::recover_participant() {
   for (const dds::SourceId& refused : node_->take_refused())
     out_.event("refused",
                {{"participant", dds::to_string(refused)}, {"by", dds::to_string(node_->source())}});
