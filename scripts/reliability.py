@@ -680,17 +680,21 @@ def swarm_aborted(r):
     return [a for a in r.get("aborted", []) if not a.startswith(TOOL)]
 
 
+def rows_of(runs, fault):
+    """The runs of `fault` grouped by (law, loss or class), in the order first measured."""
+    groups = {}
+    for r in runs:
+        if r["fault"] == fault:
+            groups.setdefault((r["law"], r["loss"]), []).append(r)
+    return list(groups.items())
+
+
 def heal_table(runs, fault):
     """cut and stop: per law and duration class, how long after the fault ended everyone heard everyone."""
     lines = ["| law | duration class | durations (s) | runs | everyone heard everyone after the end (s), median / "
              "worst | within %g s | participants recreated (causes) | processes aborted | recovered (converged) |"
              % GOAL_S, "|---|---|---|---|---|---|---|---|---|"]
-    keys = []
-    for r in runs:
-        if r["fault"] == fault and (r["law"], r["loss"]) not in keys:
-            keys.append((r["law"], r["loss"]))
-    for law, cls in keys:
-        rows = [r for r in runs if r["fault"] == fault and r["law"] == law and r["loss"] == cls]
+    for (law, cls), rows in rows_of(runs, fault):
         durations = [r["duration_s"] for r in rows if "duration_s" in r]
         heard = [r.get("heard_s") for r in rows]
         causes = sorted({c for r in rows for c in r.get("recreated_causes", [])})
@@ -713,12 +717,7 @@ def lan_table(runs, fault):
     if fault == "supervisor":
         head = head.replace("detected after (s)", "command learnt after (s)")
     lines = [head, "|---|---|---|---|---|---|---|---|---|---|"]
-    keys = []
-    for r in runs:
-        if r["fault"] == fault and (r["law"], r["loss"]) not in keys:
-            keys.append((r["law"], r["loss"]))
-    for law, loss in keys:
-        rows = [r for r in runs if r["fault"] == fault and r["law"] == law and r["loss"] == loss]
+    for (law, loss), rows in rows_of(runs, fault):
         rec = [r.get("recover_s") for r in rows]
         n_rec = sum(1 for v in rec if v is not None)
         rec_txt = med_worst(rec, fmt_s)

@@ -102,16 +102,16 @@ void ParticipantWatch::on_participant_discovery(fdds::DomainParticipant* partici
 
 void ParticipantWatch::on_subscriber_discovery(fdds::DomainParticipant* /*participant*/,
                                                eprosima::fastrtps::rtps::ReaderDiscoveryInfo&& info) {
-  if (info.status != eprosima::fastrtps::rtps::ReaderDiscoveryInfo::DISCOVERED_READER) return;
-  const SourceId peer = prefix_of(info.info.guid().guidPrefix);
-  std::lock_guard<std::mutex> lock(mutex_);
-  split_.endpoint(peer);
+  if (info.status == eprosima::fastrtps::rtps::ReaderDiscoveryInfo::DISCOVERED_READER) endpoint_of(info.info.guid());
 }
 
 void ParticipantWatch::on_publisher_discovery(fdds::DomainParticipant* /*participant*/,
                                               eprosima::fastrtps::rtps::WriterDiscoveryInfo&& info) {
-  if (info.status != eprosima::fastrtps::rtps::WriterDiscoveryInfo::DISCOVERED_WRITER) return;
-  const SourceId peer = prefix_of(info.info.guid().guidPrefix);
+  if (info.status == eprosima::fastrtps::rtps::WriterDiscoveryInfo::DISCOVERED_WRITER) endpoint_of(info.info.guid());
+}
+
+void ParticipantWatch::endpoint_of(const eprosima::fastrtps::rtps::GUID_t& endpoint) {
+  const SourceId peer = prefix_of(endpoint.guidPrefix);
   std::lock_guard<std::mutex> lock(mutex_);
   split_.endpoint(peer);
 }

@@ -78,6 +78,8 @@ class ParticipantWatch final : public eprosima::fastdds::dds::DomainParticipantL
   static constexpr std::string_view kIdentityTag = "sfid";
 
  private:
+  void endpoint_of(const eprosima::fastrtps::rtps::GUID_t& endpoint);  ///< a peer's endpoint announced
+
   std::mutex mutex_;
   std::vector<SourceId> refused_;
   SplitWatch split_;
