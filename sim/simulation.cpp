@@ -60,10 +60,8 @@ void record_step(record::Recorder& rec, double wall, long k, std::uint64_t epoch
 namespace {
 /// The smallest pairwise distance of x (infinity below two agents).
 double smallest_distance(const std::vector<core::Vec2>& x) {
-  double best = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < x.size(); ++i)
-    for (std::size_t j = i + 1; j < x.size(); ++j) best = std::min(best, (x[i] - x[j]).squaredNorm());
-  return std::sqrt(best);
+  const std::vector<double> nn = core::nearest_distances(x);
+  return nn.empty() ? std::numeric_limits<double>::infinity() : *std::min_element(nn.begin(), nn.end());
 }
 
 /// The run's safety figures into the metrics of a step (core::Metrics' run fields).

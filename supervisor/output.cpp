@@ -19,15 +19,20 @@ void Output::event(const char* name, nlohmann::json j) {
 
 void MembershipReport::update(const SwarmMonitor& monitor, std::int64_t now_ns, Output& out) {
   if (!out.wants_events()) return;
-  std::set<std::int32_t> alive;
-  for (const auto& [id, a] : monitor.agents())
-    if (monitor.alive(a, now_ns)) alive.insert(id);
-  for (const auto id : alive)
-    if (!alive_.count(id)) out.event("agent", {{"id", id}, {"change", "joined"}});
-  for (const auto id : alive_)
-    if (!alive.count(id))
-      out.event("agent", {{"id", id}, {"change", monitor.agents().at(id).departed ? "left" : "lost"}});
-  alive_.swap(alive);
+  now_.clear();
+  for (const auto& [id, a] : monitor.agents())  // ascending ids
+    if (monitor.alive(a, now_ns)) now_.push_back(id);
+  // One merge of the two ascending lists: joined are in now_ only, left or lost in alive_ only.
+  auto was = alive_.begin();
+  for (const auto id : now_) {
+    for (; was != alive_.end() && *was < id; ++was)
+      out.event("agent", {{"id", *was}, {"change", monitor.agents().at(*was).departed ? "left" : "lost"}});
+    if (was != alive_.end() && *was == id) ++was;
+    else out.event("agent", {{"id", id}, {"change", "joined"}});
+  }
+  for (; was != alive_.end(); ++was)
+    out.event("agent", {{"id", *was}, {"change", monitor.agents().at(*was).departed ? "left" : "lost"}});
+  alive_.swap(now_);
 }
 
 }  // namespace shapeform::supervisor

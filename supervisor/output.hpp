@@ -6,7 +6,7 @@
 #include <functional>
 #include <iosfwd>
 #include <nlohmann/json.hpp>
-#include <set>
+#include <vector>
 
 #include "swarm_monitor.hpp"
 #include "util/log.hpp"
@@ -48,7 +48,8 @@ class MembershipReport {
   void update(const SwarmMonitor& monitor, std::int64_t now_ns, Output& out);
 
  private:
-  std::set<std::int32_t> alive_;  ///< the agents reported alive
+  std::vector<std::int32_t> alive_;  ///< the agents reported alive, ascending
+  std::vector<std::int32_t> now_;    ///< this tick's, ascending (kept: no allocation per tick)
 };
 
 }  // namespace shapeform::supervisor

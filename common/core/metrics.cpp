@@ -63,9 +63,82 @@ std::vector<double> arc_gaps(const ShapeSpec& shape, const Curve& curve, const s
   return gaps;
 }
 
+namespace {
+/// Points binned on a uniform grid of square cells over their bounding box (a counting sort: the
+/// indices of cell c are order[start[c]] .. order[start[c + 1] - 1]). The cell side is chosen so that
+/// a spread-out swarm has about one point per cell, and never below `min_cell`.
+class Grid {
+ public:
+  Grid(const std::vector<Vec2>& x, double min_cell) {
+    Vec2 hi = x.front();
+    lo_ = hi;
+    for (const Vec2& v : x) {
+      lo_ = lo_.cwiseMin(v);
+      hi = hi.cwiseMax(v);
+    }
+    const Vec2 size = hi - lo_;
+    const double n = static_cast<double>(x.size());
+    // About one point per cell over the box's area, at most 4N cells a side (a flat box: agents on a
+    // line), so that the grid has at most about 9N cells.
+    cell_ = std::max({std::sqrt(size.x() * size.y() / n), size.x() / (4.0 * n), size.y() / (4.0 * n), min_cell, 1e-300});
+    cols_ = static_cast<int>(std::min(size.x() / cell_, 4.0 * n)) + 1;
+    rows_ = static_cast<int>(std::min(size.y() / cell_, 4.0 * n)) + 1;
+    start_.assign(static_cast<std::size_t>(cols_) * static_cast<std::size_t>(rows_) + 1, 0);
+    std::vector<int> cell_of(x.size());
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      cell_of[i] = index(col(x[i]), row(x[i]));
+      ++start_[static_cast<std::size_t>(cell_of[i]) + 1];
+    }
+    std::partial_sum(start_.begin(), start_.end(), start_.begin());
+    order_.resize(x.size());
+    std::vector<int> fill(start_.begin(), start_.end() - 1);
+    for (std::size_t i = 0; i < x.size(); ++i)
+      order_[static_cast<std::size_t>(fill[static_cast<std::size_t>(cell_of[i])]++)] = static_cast<int>(i);
+  }
+
+  double cell() const { return cell_; }
+  int col(const Vec2& v) const { return place(v.x() - lo_.x(), cols_); }
+  int row(const Vec2& v) const { return place(v.y() - lo_.y(), rows_); }
+  /// Whether the cells at Chebyshev distance r from cell (c, r0) reach into the grid.
+  bool ring_in_grid(int c, int r0, int r) const {
+    return c - r >= 0 || c + r < cols_ || r0 - r >= 0 || r0 + r < rows_;
+  }
+  /// f(j) for every point j in the cells at Chebyshev distance exactly r from cell (c, r0).
+  template <class F>
+  void for_each_on_ring(int c, int r0, int r, F&& f) const {
+    const auto visit = [&](int xc, int y) {
+      if (xc < 0 || xc >= cols_ || y < 0 || y >= rows_) return;
+      const auto k = static_cast<std::size_t>(index(xc, y));
+      for (int s = start_[k]; s < start_[k + 1]; ++s) f(order_[static_cast<std::size_t>(s)]);
+    };
+    if (r == 0) return visit(c, r0);
+    for (int xc = c - r; xc <= c + r; ++xc) {
+      visit(xc, r0 - r);
+      visit(xc, r0 + r);
+    }
+    for (int y = r0 - r + 1; y <= r0 + r - 1; ++y) {
+      visit(c - r, y);
+      visit(c + r, y);
+    }
+  }
+
+ private:
+  int index(int c, int r) const { return r * cols_ + c; }
+  int place(double offset, int cells) const {
+    return static_cast<int>(std::clamp(offset / cell_, 0.0, static_cast<double>(cells - 1)));
+  }
+
+  Vec2 lo_;
+  double cell_ = 1.0;
+  int cols_ = 1, rows_ = 1;
+  std::vector<int> start_, order_;
+};
+}  // namespace
+
 int count_clusters(const std::vector<Vec2>& x, double link) {
   const int n = static_cast<int>(x.size());
-  std::vector<int> parent(n);
+  if (n == 0) return 0;
+  std::vector<int> parent(static_cast<std::size_t>(n));
   std::iota(parent.begin(), parent.end(), 0);
   const auto find = [&](int i) {
     while (parent[i] != i) i = parent[i] = parent[parent[i]];
@@ -73,16 +146,83 @@ int count_clusters(const std::vector<Vec2>& x, double link) {
   };
   int clusters = n;
   const double link2 = link * link;
-  for (int i = 0; i < n; ++i)
-    for (int j = i + 1; j < n; ++j)
-      if ((x[i] - x[j]).squaredNorm() <= link2) {
+  // Every pair within `link` lies in neighbouring cells of a grid whose cells are at least `link` wide.
+  const Grid grid(x, link);
+  for (int i = 0; i < n; ++i) {
+    const int c = grid.col(x[i]), r = grid.row(x[i]);
+    for (int ring = 0; ring <= 1; ++ring)
+      grid.for_each_on_ring(c, r, ring, [&](int j) {
+        if (j <= i || (x[i] - x[j]).squaredNorm() > link2) return;
         const int a = find(i), b = find(j);
         if (a != b) {
           parent[a] = b;
           --clusters;
         }
-      }
+      });
+  }
   return clusters;
+}
+
+std::vector<double> nearest_distances(const std::vector<Vec2>& x) {
+  std::vector<double> nn(x.size(), std::numeric_limits<double>::infinity());
+  if (x.size() < 2) return nn;
+  const Grid grid(x, 0.0);
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const int c = grid.col(x[i]), r = grid.row(x[i]);
+    double best = std::numeric_limits<double>::infinity();
+    // A point in a cell beyond ring k is at least k cells away: once the best is within that (less a
+    // margin far above the rounding of the cell's index), stop.
+    for (int ring = 0; grid.ring_in_grid(c, r, ring); ++ring) {
+      grid.for_each_on_ring(c, r, ring, [&](int j) {
+        if (static_cast<std::size_t>(j) != i) best = std::min(best, (x[i] - x[static_cast<std::size_t>(j)]).squaredNorm());
+      });
+      const double reach = ring * grid.cell() * (1.0 - 1e-9);
+      if (best <= reach * reach) break;
+    }
+    nn[i] = std::sqrt(best);
+  }
+  return nn;
+}
+
+double largest_distance(const std::vector<Vec2>& x) {
+  if (x.size() < 2) return 0.0;
+  // The convex hull (Andrew's monotone chain, counter-clockwise, collinear points dropped).
+  std::vector<Vec2> p(x);
+  std::sort(p.begin(), p.end(), [](const Vec2& a, const Vec2& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
+  const auto cross = [](const Vec2& o, const Vec2& a, const Vec2& b) {
+    return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
+  };
+  std::vector<Vec2> h(2 * p.size());
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    while (k >= 2 && cross(h[k - 2], h[k - 1], p[i]) <= 0) --k;
+    h[k++] = p[i];
+  }
+  for (std::size_t i = p.size() - 1, lower = k + 1; i-- > 0;) {
+    while (k >= lower && cross(h[k - 2], h[k - 1], p[i]) <= 0) --k;
+    h[k++] = p[i];
+  }
+  h.resize(k - 1);  // the last point is the first
+  const std::size_t m = h.size();
+  if (m < 2) return 0.0;  // every agent on one point
+  double best = 0.0;
+  if (m <= 32) {
+    for (std::size_t i = 0; i < m; ++i)
+      for (std::size_t j = i + 1; j < m; ++j) best = std::max(best, (h[i] - h[j]).squaredNorm());
+    return std::sqrt(best);
+  }
+  // Rotating calipers: for each hull edge (i, i + 1) the vertex j farthest from its line, which moves
+  // forward as i does; the diameter is between an edge's end and such a vertex. Its neighbours are
+  // checked too, so that a tie decided by rounding cannot skip the farthest pair.
+  std::size_t j = 1;
+  for (std::size_t i = 0; i < m; ++i) {
+    const std::size_t ni = (i + 1) % m;
+    for (std::size_t steps = 0; steps < m && cross(h[i], h[ni], h[(j + 1) % m]) > cross(h[i], h[ni], h[j]); ++steps)
+      j = (j + 1) % m;
+    for (const std::size_t a : {i, ni})
+      for (const std::size_t b : {(j + m - 1) % m, j, (j + 1) % m}) best = std::max(best, (h[a] - h[b]).squaredNorm());
+  }
+  return std::sqrt(best);
 }
 
 Metrics compute_metrics(const CompiledCommand& cmd, const std::vector<Vec2>& x, double t, bool pairwise) {
@@ -126,19 +266,10 @@ Metrics compute_metrics(const CompiledCommand& cmd, const std::vector<Vec2>& x, 
   if (!pairwise) return m;
 
   m.clusters = count_clusters(x);
-  std::vector<double> nn(n, std::numeric_limits<double>::infinity());
-  double min_d = std::numeric_limits<double>::infinity(), max_d = 0.0;
-  for (std::size_t i = 0; i < n; ++i)
-    for (std::size_t j = i + 1; j < n; ++j) {
-      const double d = (x[i] - x[j]).norm();
-      nn[i] = std::min(nn[i], d);
-      nn[j] = std::min(nn[j], d);
-      min_d = std::min(min_d, d);
-      max_d = std::max(max_d, d);
-    }
+  const std::vector<double> nn = nearest_distances(x);
   m.nn_cv = coefficient_of_variation(nn);
-  m.min_separation = min_d;
-  m.extent = max_d;
+  m.min_separation = *std::min_element(nn.begin(), nn.end());
+  m.extent = largest_distance(x);
   return m;
 }
 

@@ -55,8 +55,17 @@ std::vector<double> arc_gaps(const ShapeSpec& shape, const Curve& curve, const s
 /// Number of single-linkage clusters at distance `link`.
 int count_clusters(const std::vector<Vec2>& x, double link = kClusterLink);
 
+/// Each agent's distance to its nearest other agent (infinity for a lone agent): the same values as
+/// comparing every pair, found on a uniform grid (about O(N) for a spread-out swarm).
+std::vector<double> nearest_distances(const std::vector<Vec2>& x);
+
+/// The largest pairwise distance (0 below two agents): the diameter of the convex hull, by rotating
+/// calipers (O(N log N)).
+double largest_distance(const std::vector<Vec2>& x);
+
 /// All metrics of positions x under the command at model time t. With pairwise = false only the
-/// O(N log N) ones (shape error, gap CV, tracking errors) are computed; the O(N^2) ones stay null.
+/// per-agent ones (shape error, gap CV, tracking errors) are computed; the pairwise ones (nearest
+/// neighbours, separation, clusters, extent) stay null.
 Metrics compute_metrics(const CompiledCommand& cmd, const std::vector<Vec2>& x, double t, bool pairwise = true);
 
 /// The uniformity measure convergence is judged by: the Euclidean gap CV for the paper's law (as the

@@ -1,5 +1,10 @@
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <limits>
+#include <numeric>
+#include <random>
+#include <string>
+#include <utility>
 
 #include "core/metrics.hpp"
 
@@ -138,6 +143,88 @@ TEST_CASE("cluster counting is single linkage at 0.05", "[metrics]") {
   // A chain with links of 0.04 is one cluster even though its ends are 0.12 apart.
   CHECK(count_clusters({Vec2(0, 0), Vec2(0.04, 0), Vec2(0.08, 0), Vec2(0.12, 0)}) == 1);
   CHECK(count_clusters({Vec2(0, 0), Vec2(0.06, 0)}) == 2);
+}
+
+namespace {
+/// The pairwise figures by comparing every pair, as compute_metrics did before its grid.
+struct Brute {
+  std::vector<double> nn;
+  double extent = 0.0;
+  int clusters = 0;
+};
+Brute brute(const std::vector<Vec2>& x) {
+  Brute b;
+  b.nn.assign(x.size(), std::numeric_limits<double>::infinity());
+  std::vector<int> parent(x.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  const auto find = [&](int i) {
+    while (parent[static_cast<std::size_t>(i)] != i) i = parent[static_cast<std::size_t>(i)];
+    return i;
+  };
+  b.clusters = static_cast<int>(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i)
+    for (std::size_t j = i + 1; j < x.size(); ++j) {
+      const double d = (x[i] - x[j]).norm();
+      b.nn[i] = std::min(b.nn[i], d);
+      b.nn[j] = std::min(b.nn[j], d);
+      b.extent = std::max(b.extent, d);
+      if (d <= kClusterLink) {
+        const int a = find(static_cast<int>(i)), c = find(static_cast<int>(j));
+        if (a != c) {
+          parent[static_cast<std::size_t>(a)] = c;
+          --b.clusters;
+        }
+      }
+    }
+  return b;
+}
+}  // namespace
+
+TEST_CASE("nearest distances, clusters and extent equal comparing every pair, to the bit", "[metrics][pairwise]") {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::normal_distribution<double> g(0.0, 1.0);
+  std::vector<std::pair<std::string, std::vector<Vec2>>> swarms;
+  for (const int n : {2, 3, 7, 64, 500}) {
+    std::vector<Vec2> x;
+    for (int i = 0; i < n; ++i) x.emplace_back(10 * u(rng), 10 * u(rng));
+    swarms.emplace_back("uniform " + std::to_string(n), x);
+  }
+  for (const int n : {12, 100, 1000, 1001}) swarms.emplace_back("ring " + std::to_string(n), ring(n, 4.0, Vec2(3, -2), 0.0));
+  {  // tight clumps far apart, chains just under and over the cluster link, duplicates, an outlier
+    std::vector<Vec2> x;
+    for (int c = 0; c < 6; ++c)
+      for (int i = 0; i < 40; ++i) x.emplace_back(100.0 * c + 0.02 * g(rng), -50.0 * c + 0.02 * g(rng));
+    for (int i = 0; i < 30; ++i) x.emplace_back(7.0 + 0.049 * i, 7.0);
+    for (int i = 0; i < 30; ++i) x.emplace_back(7.0 + 0.051 * i, 9.0);
+    for (int i = 0; i < 5; ++i) x.emplace_back(1.5, 1.5);
+    x.emplace_back(1e6, -1e6);
+    swarms.emplace_back("clumps, chains, duplicates, outlier", x);
+  }
+  {  // a line (the hull degenerates), and a line with one point off it
+    std::vector<Vec2> x;
+    for (int i = 0; i < 300; ++i) x.emplace_back(0.1 * i, 5.0 - 0.1 * i);
+    swarms.emplace_back("line", x);
+    x.emplace_back(3.0, 3.0);
+    swarms.emplace_back("line and one", x);
+  }
+  {  // a square's lattice: many equal distances, parallel hull edges
+    std::vector<Vec2> x;
+    for (int i = 0; i < 30; ++i)
+      for (int j = 0; j < 30; ++j) x.emplace_back(0.5 * i, 0.5 * j);
+    swarms.emplace_back("lattice", x);
+  }
+  for (const auto& [name, x] : swarms) {
+    INFO(name);
+    const Brute b = brute(x);
+    CHECK(nearest_distances(x) == b.nn);
+    CHECK(largest_distance(x) == b.extent);
+    CHECK(count_clusters(x) == b.clusters);
+  }
+  CHECK(largest_distance({}) == 0.0);
+  CHECK(largest_distance({Vec2(1, 1), Vec2(1, 1)}) == 0.0);
+  CHECK(nearest_distances({Vec2(1, 1)}) == std::vector<double>{std::numeric_limits<double>::infinity()});
+  CHECK(count_clusters({}) == 0);
 }
 
 TEST_CASE("settling: first step after which error stays on its plateau", "[metrics][settle]") {

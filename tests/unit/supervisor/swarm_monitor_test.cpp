@@ -1,7 +1,12 @@
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "monitor_fixtures.hpp"
+#include "output.hpp"
 #include "swarm_monitor.hpp"
 
 using namespace shapeform;
@@ -164,4 +169,33 @@ TEST_CASE("swarm monitor: a second participant publishing an id in use is a dupl
   CHECK(m.agents().at(3).source == b);
   m.on_departed(3);
   CHECK(m.claim(3, a, kS + 2) == SwarmMonitor::Claim::Owner);
+}
+
+TEST_CASE("membership events: joined, left and lost, each once, whatever the order of ids", "[supervisor][membership]") {
+  SwarmMonitor m(kS, {});
+  std::ostringstream human, events, errors;
+  supervisor::Output out(true, human, events, errors);
+  supervisor::MembershipReport report;
+  const auto take = [&] {
+    std::vector<std::string> lines;
+    std::istringstream in(events.str());
+    for (std::string line; std::getline(in, line);) {
+      const auto j = nlohmann::json::parse(line);
+      lines.push_back(std::to_string(j.at("id").get<int>()) + " " + j.at("change").get<std::string>());
+    }
+    events.str("");
+    std::sort(lines.begin(), lines.end());
+    return lines;
+  };
+  for (const int id : {5, 1, 9, 3}) m.on_state(id, Vec2(id, 0), Vec2(id, 0), 0, 0, 0);
+  report.update(m, 0, out);
+  CHECK(take() == std::vector<std::string>{"1 joined", "3 joined", "5 joined", "9 joined"});
+  report.update(m, kS / 2, out);
+  CHECK(take().empty());  // nothing changed: nothing said again
+  m.on_departed(3);
+  for (const int id : {0, 1, 7, 9}) m.on_state(id, Vec2(id, 0), Vec2(id, 0), 0, 0, kS);
+  report.update(m, kS + kS / 2, out);  // 5 unheard for 1.5 s: lost; 3 disposed: left; 0 and 7 new
+  CHECK(take() == std::vector<std::string>{"0 joined", "3 left", "5 lost", "7 joined"});
+  report.update(m, 5 * kS, out);  // everyone silent
+  CHECK(take() == std::vector<std::string>{"0 lost", "1 lost", "7 lost", "9 lost"});
 }
