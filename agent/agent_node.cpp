@@ -171,8 +171,11 @@ class AgentNode {
   void vehicle_health(std::size_t k, dds::VehicleHealth health, const std::string& why);
   void publish();
   void report();
-  /// Statuses of the hosted agents; with --json also their "status" events.
-  void publish_status(bool json = true);
+  /// The process-wide figures of the status period ending now (loop timing, data ages, CPU, memory).
+  void take_period_figures();
+  /// Statuses of the hosted agents k with k % every == phase, with the period's figures; with --json
+  /// also their "status" events.
+  void publish_status(bool json, std::uint64_t phase = 0, std::uint64_t every = 1);
   /// Says that agent l went `out` beyond the fence, and what it does (safety.breach_action).
   void report_breach(const AgentLogic& l, double out);
   /// Another participant publishes hosted agent `id`: report it; yield (stop, exit 2) if we must.
@@ -233,6 +236,8 @@ class AgentNode {
   util::ThrottledLog throttled_{5.0};
   util::CpuMeter cpu_;
   std::vector<double> ages_us_;  ///< data ages of this status period
+  dds::StatusSample period_;     ///< the last status period's process-wide figures
+  bool period_taken_ = false;    ///< period_ holds a whole period's
   std::vector<std::uint64_t> clamped_before_;  ///< reused by step()
   const std::uint64_t log_every_;     ///< ticks between "hearing" lines (~1 s)
   const std::uint64_t status_every_;  ///< ticks per status period
@@ -384,6 +389,7 @@ void AgentNode::on_duplicate(std::int32_t id, const dds::SourceId& other, std::i
 
 void AgentNode::farewell(std::int64_t now) {
   if (status_writer_.matched() > 0) {
+    take_period_figures();
     publish_status(false);
     ++farewell_sent_;
   }
@@ -690,14 +696,27 @@ void AgentNode::report() {
     util::log_info(std::string(group_ ? "every hosted agent hears at least " : "hearing ") + std::to_string(heard) +
                    " neighbours");
   }
-  if (++ticks_ % status_every_ == 0) publish_status();
+  // Each hosted agent's status once per status period, a group's agents spread over the period's ticks
+  // (agent k on the ticks where ticks % status_every == k % status_every): a group's statuses never
+  // leave in one burst, which a reader's socket buffer would have to hold at once.
+  const std::uint64_t phase = ++ticks_ % status_every_;
+  if (phase == 0) take_period_figures();
+  if (period_taken_) publish_status(true, phase, status_every_);
 }
 
-void AgentNode::publish_status(bool json) {
+void AgentNode::take_period_figures() {
   const double share = 1.0 / static_cast<double>(logics_.size());  // of the process figures, per agent
-  dds::StatusSample st =
-      dds::process_status(util::steady_ns(), loop_.stats(), ages_us_, cpu_.percent() * share, util::rss_mb() * share);
-  for (std::size_t i = 0; i < logics_.size(); ++i) {
+  period_ = dds::process_status(util::steady_ns(), loop_.stats(), ages_us_, cpu_.percent() * share,
+                                util::rss_mb() * share);
+  ages_us_.clear();
+  period_taken_ = true;
+}
+
+void AgentNode::publish_status(bool json, std::uint64_t phase, std::uint64_t every) {
+  if (phase >= logics_.size()) return;  // no hosted agent on this tick of the period
+  dds::StatusSample st = period_;
+  st.stamp_ns = util::steady_ns();  // the counters' time
+  for (std::size_t i = phase; i < logics_.size(); i += every) {
     const auto& l = logics_[i];
     const AgentCounters& k = l->counters();
     st.id = l->id();
@@ -751,7 +770,6 @@ void AgentNode::publish_status(bool json) {
             {"promises_broken", st.promises_broken}, {"blocked", st.blocked}, {"blocked_by", st.blocked_by},
             {"beyond_fence", st.beyond_fence}, {"fence_breaches", st.fence_breaches}});
   }
-  ages_us_.clear();
 }
 
 }  // namespace

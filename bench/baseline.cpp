@@ -77,10 +77,15 @@ class Ledger {
     if (id < 0 || static_cast<std::size_t>(id) >= kMaxIds) return;
     const auto slot = static_cast<std::size_t>(id);
     if (last_seq_[slot] != 0 && seq <= last_seq_[slot]) return;  // duplicate or reordered
-    if (last_seq_[slot] != 0) lost_[slot] += seq - last_seq_[slot] - 1;
+    if (last_seq_[slot] != 0) {
+      lost_[slot] += seq - last_seq_[slot] - 1;
+      all_.lost += seq - last_seq_[slot] - 1;
+    }
     last_seq_[slot] = seq;
     last_seen_ns_[slot] = now;
     ++received_[slot];
+    ++all_.received;
+    ids_seen_ = std::max(ids_seen_, slot + 1);
     if (!hosted_[slot] && ages_us_.size() < ages_us_.capacity())
       ages_us_.push_back(static_cast<double>(now - stamp_ns) * 1e-3);
   }
@@ -93,23 +98,21 @@ class Ledger {
     int heard = 0;               ///< agents heard within the timeout
   };
 
-  /// For each agent of `selves`: the counters now and the number of other agents heard within
-  /// timeout_ns (one pass over the ids, then each agent's own figures taken out).
-  std::vector<Snapshot> snapshot(const std::vector<std::int32_t>& selves, std::int64_t now, std::int64_t timeout_ns) {
-    Snapshot all;
+  /// For the agents selves[k], k = phase, phase + every, ...: the counters now and the number of other
+  /// agents heard within timeout_ns (one pass over the ids heard so far, then each agent's own figures
+  /// taken out), into out (cleared first).
+  void snapshot(const std::vector<std::int32_t>& selves, std::size_t phase, std::size_t every, std::int64_t now,
+                std::int64_t timeout_ns, std::vector<Snapshot>& out) {
+    out.clear();
     std::lock_guard<std::mutex> lock(mutex_);
     const auto fresh = [&](std::size_t i) { return last_seen_ns_[i] != 0 && now - last_seen_ns_[i] <= timeout_ns; };
-    for (std::size_t i = 0; i < kMaxIds; ++i) {
-      all.received += received_[i];
-      all.lost += lost_[i];
+    Snapshot all = all_;
+    for (std::size_t i = 0; i < ids_seen_; ++i)
       if (fresh(i)) ++all.heard;
-    }
-    std::vector<Snapshot> out;
-    for (const auto self : selves) {
-      const auto i = static_cast<std::size_t>(self);
+    for (std::size_t k = phase; k < selves.size(); k += every) {
+      const auto i = static_cast<std::size_t>(selves[k]);
       out.push_back({all.received - received_[i], all.lost - lost_[i], all.heard - (fresh(i) ? 1 : 0)});
     }
-    return out;
   }
 
   /// This status period's ages (swapped out).
@@ -128,6 +131,8 @@ class Ledger {
   std::array<std::int64_t, kMaxIds> last_seen_ns_{};
   std::array<std::uint64_t, kMaxIds> received_{};
   std::array<std::uint64_t, kMaxIds> lost_{};
+  Snapshot all_;              ///< received and lost, summed over every id
+  std::size_t ids_seen_ = 0;  ///< one past the largest id booked
 };
 
 /// Takes each sample of Msg (AgentState or AgentStateBatch) on the receive thread into the ledger.
@@ -218,6 +223,9 @@ int run(const std::vector<std::int32_t>& ids, bool batch, const config::Config& 
       }
     }
     std::uint64_t seq = 0, ticks = 0;
+    sdds::StatusSample period;  // the last status period's process-wide figures
+    bool period_taken = false;
+    std::vector<Ledger::Snapshot> snaps;
     while (loop.wait_next(util::stop_flag())) {
       ++seq;
       const std::int64_t stamp = util::steady_ns();
@@ -234,13 +242,20 @@ int run(const std::vector<std::int32_t>& ids, bool batch, const config::Config& 
         one.stamp_ns(stamp);
         state_writer->write(&one);
       }
-      if (++ticks % status_every == 0) {
-        const std::int64_t now = util::steady_ns();
+      // As shapeform_agent_group: each agent's status once per period, the agents spread over its ticks.
+      const std::uint64_t phase = ++ticks % status_every;
+      if (phase == 0) {
         ledger.take_ages(ages);
-        sdds::StatusSample st = sdds::process_status(now, loop.stats(), ages, cpu.percent() * share, util::rss_mb() * share);
-        const auto snaps = ledger.snapshot(ids, now, timeout_ns);
-        for (std::size_t k = 0; k < ids.size(); ++k) {
-          const auto& snap = snaps[k];
+        period = sdds::process_status(util::steady_ns(), loop.stats(), ages, cpu.percent() * share,
+                                      util::rss_mb() * share);
+        period_taken = true;
+      }
+      if (period_taken && phase < ids.size()) {
+        sdds::StatusSample st = period;
+        st.stamp_ns = util::steady_ns();
+        ledger.snapshot(ids, phase, status_every, st.stamp_ns, timeout_ns, snaps);
+        for (std::size_t k = phase, n = 0; k < ids.size(); k += status_every, ++n) {
+          const auto& snap = snaps[n];
           st.id = ids[k];
           st.neighbours_heard = snap.heard;
           st.samples_received = snap.received;

@@ -7,6 +7,8 @@
 - The group's states travel as one batch per tick (shapeform/state_batch: agents 0..5 in one sample,
   one sequence number), the single agents' as one sample each on shapeform/state, which carries none of
   the hosted agents.
+- The hosted agents' statuses leave spread over the status period (no two on one tick), each agent's once
+  a period.
 - SIGTERM to the group process disposes every hosted agent: the supervisor sees the 6 leave at once and
   the two single agents go on, hearing only each other.
 - With agent.batch_max_states below the hosted count, the states go in several samples per tick, each
@@ -52,6 +54,19 @@ class GroupTest(harness.SwarmTestCase):
         self.assertEqual(len({b["source"] for b in batches}), 1, "from the group's one participant")
         singles_ids = {s["data"]["id"] for s in self.echo("shapeform/state", 20)}
         self.assertEqual(singles_ids, set(range(HOSTED, N)), "shapeform/state carries the single agents only")
+
+        # The hosted agents' statuses are spread over the status period's ticks (agent k on the ticks
+        # where tick % ticks_per_period == k % ticks_per_period), each stamped when it leaves: no two
+        # share a tick, and each agent's come a period apart (1 s: agent.status_rate_hz).
+        statuses = [st["data"] for st in self.echo("shapeform/status", 3 * N) if st["event"] == "sample"]
+        hosted = [st for st in statuses if st["id"] < HOSTED]
+        self.assertGreaterEqual(len(hosted), HOSTED, statuses)
+        stamps = [st["stamp_ns"] for st in hosted]
+        self.assertEqual(len(set(stamps)), len(stamps), "a group's statuses leave on ticks of their own: %s" % [(st["id"], st["stamp_ns"]) for st in hosted])
+        for k in range(HOSTED):
+            mine = sorted(st["stamp_ns"] for st in hosted if st["id"] == k)
+            gaps = [b - a for a, b in zip(mine, mine[1:])]
+            self.assertTrue(all(g > 0.5e9 for g in gaps), "agent %d's statuses once a period: gaps %s ns" % (k, gaps))
 
         before = {a.name: a.mark() for a in singles}
         group.signal(signal.SIGTERM)
