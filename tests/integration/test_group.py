@@ -62,7 +62,8 @@ class GroupTest(harness.SwarmTestCase):
         hosted = [st for st in statuses if st["id"] < HOSTED]
         self.assertGreaterEqual(len(hosted), HOSTED, statuses)
         stamps = [st["stamp_ns"] for st in hosted]
-        self.assertEqual(len(set(stamps)), len(stamps), "a group's statuses leave on ticks of their own: %s" % [(st["id"], st["stamp_ns"]) for st in hosted])
+        self.assertEqual(len(set(stamps)), len(stamps), "a group's statuses leave on ticks of their own: %s"
+                         % [(st["id"], st["stamp_ns"]) for st in hosted])
         for k in range(HOSTED):
             mine = sorted(st["stamp_ns"] for st in hosted if st["id"] == k)
             gaps = [b - a for a, b in zip(mine, mine[1:])]
