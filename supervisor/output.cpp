@@ -22,16 +22,17 @@ void MembershipReport::update(const SwarmMonitor& monitor, std::int64_t now_ns, 
   now_.clear();
   for (const auto& [id, a] : monitor.agents())  // ascending ids
     if (monitor.alive(a, now_ns)) now_.push_back(id);
+  const auto gone = [&](std::int32_t id) {
+    out.event("agent", {{"id", id}, {"change", monitor.agents().at(id).departed ? "left" : "lost"}});
+  };
   // One merge of the two ascending lists: joined are in now_ only, left or lost in alive_ only.
   auto was = alive_.begin();
   for (const auto id : now_) {
-    for (; was != alive_.end() && *was < id; ++was)
-      out.event("agent", {{"id", *was}, {"change", monitor.agents().at(*was).departed ? "left" : "lost"}});
+    for (; was != alive_.end() && *was < id; ++was) gone(*was);
     if (was != alive_.end() && *was == id) ++was;
     else out.event("agent", {{"id", id}, {"change", "joined"}});
   }
-  for (; was != alive_.end(); ++was)
-    out.event("agent", {{"id", *was}, {"change", monitor.agents().at(*was).departed ? "left" : "lost"}});
+  for (; was != alive_.end(); ++was) gone(*was);
   alive_.swap(now_);
 }
 

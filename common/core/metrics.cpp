@@ -80,7 +80,8 @@ class Grid {
     const double n = static_cast<double>(x.size());
     // About one point per cell over the box's area, at most 4N cells a side (a flat box: agents on a
     // line), so that the grid has at most about 9N cells.
-    cell_ = std::max({std::sqrt(size.x() * size.y() / n), size.x() / (4.0 * n), size.y() / (4.0 * n), min_cell, 1e-300});
+    cell_ = std::max({std::sqrt(size.x() * size.y() / n), size.x() / (4.0 * n), size.y() / (4.0 * n), min_cell,
+                      1e-300});
     cols_ = static_cast<int>(std::min(size.x() / cell_, 4.0 * n)) + 1;
     rows_ = static_cast<int>(std::min(size.y() / cell_, 4.0 * n)) + 1;
     start_.assign(static_cast<std::size_t>(cols_) * static_cast<std::size_t>(rows_) + 1, 0);
@@ -174,7 +175,8 @@ std::vector<double> nearest_distances(const std::vector<Vec2>& x) {
     // margin far above the rounding of the cell's index), stop.
     for (int ring = 0; grid.ring_in_grid(c, r, ring); ++ring) {
       grid.for_each_on_ring(c, r, ring, [&](int j) {
-        if (static_cast<std::size_t>(j) != i) best = std::min(best, (x[i] - x[static_cast<std::size_t>(j)]).squaredNorm());
+        const auto other = static_cast<std::size_t>(j);
+        if (other != i) best = std::min(best, (x[i] - x[other]).squaredNorm());
       });
       const double reach = ring * grid.cell() * (1.0 - 1e-9);
       if (best <= reach * reach) break;
@@ -188,7 +190,8 @@ double largest_distance(const std::vector<Vec2>& x) {
   if (x.size() < 2) return 0.0;
   // The convex hull (Andrew's monotone chain, counter-clockwise, collinear points dropped).
   std::vector<Vec2> p(x);
-  std::sort(p.begin(), p.end(), [](const Vec2& a, const Vec2& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
+  std::sort(p.begin(), p.end(),
+            [](const Vec2& a, const Vec2& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
   const auto cross = [](const Vec2& o, const Vec2& a, const Vec2& b) {
     return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
   };
@@ -220,7 +223,8 @@ double largest_distance(const std::vector<Vec2>& x) {
     for (std::size_t steps = 0; steps < m && cross(h[i], h[ni], h[(j + 1) % m]) > cross(h[i], h[ni], h[j]); ++steps)
       j = (j + 1) % m;
     for (const std::size_t a : {i, ni})
-      for (const std::size_t b : {(j + m - 1) % m, j, (j + 1) % m}) best = std::max(best, (h[a] - h[b]).squaredNorm());
+      for (const std::size_t b : {(j + m - 1) % m, j, (j + 1) % m})
+        best = std::max(best, (h[a] - h[b]).squaredNorm());
   }
   return std::sqrt(best);
 }

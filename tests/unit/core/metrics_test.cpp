@@ -190,7 +190,8 @@ TEST_CASE("nearest distances, clusters and extent equal comparing every pair, to
     for (int i = 0; i < n; ++i) x.emplace_back(10 * u(rng), 10 * u(rng));
     swarms.emplace_back("uniform " + std::to_string(n), x);
   }
-  for (const int n : {12, 100, 1000, 1001}) swarms.emplace_back("ring " + std::to_string(n), ring(n, 4.0, Vec2(3, -2), 0.0));
+  for (const int n : {12, 100, 1000, 1001})
+    swarms.emplace_back("ring " + std::to_string(n), ring(n, 4.0, Vec2(3, -2), 0.0));
   {  // tight clumps far apart, chains just under and over the cluster link, duplicates, an outlier
     std::vector<Vec2> x;
     for (int c = 0; c < 6; ++c)

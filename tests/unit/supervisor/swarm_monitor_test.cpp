@@ -171,7 +171,8 @@ TEST_CASE("swarm monitor: a second participant publishing an id in use is a dupl
   CHECK(m.claim(3, a, kS + 2) == SwarmMonitor::Claim::Owner);
 }
 
-TEST_CASE("membership events: joined, left and lost, each once, whatever the order of ids", "[supervisor][membership]") {
+TEST_CASE("membership events: joined, left and lost, each once, whatever the order of ids",
+          "[supervisor][membership]") {
   SwarmMonitor m(kS, {});
   std::ostringstream human, events, errors;
   supervisor::Output out(true, human, events, errors);
