@@ -243,7 +243,6 @@ class AgentNode {
   const std::uint64_t status_every_;  ///< ticks per status period
   const std::uint64_t idle_every_;    ///< ticks per state publication before the first command
   std::uint64_t seq_ = 0, ticks_ = 0;
-  std::int64_t stamp_ns_ = 0;  ///< this tick's AgentState stamp
   int heard_logged_ = -1;
   IdentityGuard identity_;
   std::int64_t farewell_end_ns_ = 0;  ///< yielding: stop at the latest then
@@ -526,7 +525,6 @@ void AgentNode::drain_states() {  // states_: drained by tick()
 }
 
 void AgentNode::step(std::int64_t now) {
-  stamp_ns_ = util::steady_ns();  // the samples' publication stamp: their data age includes the stepping
   sharing_.clear();
   for (std::size_t k = 0; k < logics_.size(); ++k) {
     AgentLogic& l = *logics_[k];
@@ -592,13 +590,16 @@ void AgentNode::publish() {
   identity_.published();
   ++seq_;
   batch_states_.clear();
+  // The samples' stamp, taken as they are written (as DDS's source timestamp is): their data age is the
+  // time from the write to the reading, the transport's and the reader's share, as the baseline's is.
+  const std::int64_t stamp_ns = util::steady_ns();
   for (const auto& l : logics_) {
     // A robot whose pose is not known (none yet, or lost) is not in the swarm: the others space without it.
-    if (l->external() && !l->pose_fresh(stamp_ns_)) continue;
+    if (l->external() && !l->pose_fresh(stamp_ns)) continue;
     dds::StateSample s;
     s.id = l->id();
     s.seq = seq_;
-    s.stamp_ns = stamp_ns_;
+    s.stamp_ns = stamp_ns;
     s.command = l->command_id();
     s.model_time = l->model_time();
     s.x = l->position();

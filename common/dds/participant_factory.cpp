@@ -40,16 +40,18 @@ std::string str(const T& v) {
   return os.str();
 }
 
-/// The UDP ports this process has bound: socket inodes from /proc/self/fd matched against
-/// /proc/self/net/udp. nullopt where /proc cannot tell (not Linux).
-std::optional<std::set<std::uint32_t>> own_udp_ports() {
+/// The UDP ports bound in this network namespace (/proc/self/net/udp), or with `own` only those of this
+/// process (socket inodes from /proc/self/fd). nullopt where /proc cannot tell (not Linux).
+std::optional<std::set<std::uint32_t>> udp_ports(bool own) {
   namespace fs = std::filesystem;
   std::set<unsigned long> inodes;
   std::error_code ec;
-  for (fs::directory_iterator it("/proc/self/fd", ec), end; !ec && it != end; it.increment(ec)) {
-    std::error_code lec;
-    const std::string target = fs::read_symlink(it->path(), lec).string();
-    if (!lec && target.rfind("socket:[", 0) == 0) inodes.insert(std::strtoul(target.c_str() + 8, nullptr, 10));
+  if (own) {
+    for (fs::directory_iterator it("/proc/self/fd", ec), end; !ec && it != end; it.increment(ec)) {
+      std::error_code lec;
+      const std::string target = fs::read_symlink(it->path(), lec).string();
+      if (!lec && target.rfind("socket:[", 0) == 0) inodes.insert(std::strtoul(target.c_str() + 8, nullptr, 10));
+    }
   }
   std::ifstream udp("/proc/self/net/udp");
   if (ec || !udp) return std::nullopt;
@@ -63,7 +65,7 @@ std::optional<std::set<std::uint32_t>> own_udp_ports() {
     unsigned long inode = 0;
     if (!(fields >> sl >> local >> remote >> st >> queues >> timer >> retransmits >> uid >> timeout >> inode)) continue;
     const auto colon = local.find(':');
-    if (colon != std::string::npos && inodes.count(inode) != 0) {
+    if (colon != std::string::npos && (!own || inodes.count(inode) != 0)) {
       ports.insert(static_cast<std::uint32_t>(std::strtoul(local.c_str() + colon + 1, nullptr, 16)));
     }
   }
@@ -82,6 +84,32 @@ bool gained_unicast_ports(int domain, const std::set<std::uint32_t>& before, con
     ((p - port0) % 2 == 0 ? metatraffic : user) = true;
   }
   return metatraffic && user;
+}
+
+/// Gives the participant the unicast ports of the lowest participant slot no socket on this host holds,
+/// where its locators leave the port to Fast DDS (port 0). Fast DDS 2.9 numbers a process's participants
+/// 0, 1, 2, ... for good (a rebuilt one takes the next number: its GUID prefix is new) and binds the slot of
+/// that number or the next free one, so a process that had rebuilt its participant max_participants times
+/// would bind ports the peers' initial announcements never probe (slots 0..max_participants-1), and two
+/// such would never meet. A process that binds the slot first moves this one to the next (mutation), as
+/// before. Nothing changes where /proc cannot tell or every slot is taken.
+void place_in_free_slot(const TransportConfig& cfg, fdds::DomainParticipantQos& pq) {
+  frtps::LocatorList_t& meta = pq.wire_protocol().builtin.metatrafficUnicastLocatorList;
+  frtps::LocatorList_t& user = pq.wire_protocol().default_unicast_locator_list;
+  const auto port_unset = [](const frtps::LocatorList_t& list) {
+    return !list.empty() && std::all_of(list.begin(), list.end(), [](const frtps::Locator_t& l) { return l.port == 0; });
+  };
+  if (!port_unset(meta) || !port_unset(user)) return;
+  const auto bound = udp_ports(false);
+  if (!bound) return;
+  const std::uint32_t port0 = metatraffic_unicast_port0(cfg.domain);
+  for (std::uint32_t slot = 0; slot < static_cast<std::uint32_t>(cfg.max_participants); ++slot) {
+    const std::uint32_t meta_port = port0 + 2u * slot, user_port = meta_port + 1u;
+    if (bound->count(meta_port) != 0 || bound->count(user_port) != 0) continue;
+    for (frtps::Locator_t& l : meta) l.port = meta_port;
+    for (frtps::Locator_t& l : user) l.port = user_port;
+    return;
+  }
 }
 
 /// lan_address() of each address, each once, in their order.
@@ -262,6 +290,7 @@ fdds::DomainParticipant* create_participant(const TransportConfig& cfg, const st
   }
   route_library_log();  // before the first participant: Fast DDS would print its errors on stdout
   fdds::DomainParticipantQos pq = participant_qos(cfg, name);
+  place_in_free_slot(cfg, pq);
   if (!user_data.empty()) pq.user_data().data_vec(std::vector<eprosima::fastrtps::rtps::octet>(user_data.begin(), user_data.end()));
   // Invariant of the project: never builtin transports (they open every interface and SHM).
   if (pq.transport().use_builtin_transports || pq.transport().user_transports.empty()) {
@@ -269,7 +298,7 @@ fdds::DomainParticipant* create_participant(const TransportConfig& cfg, const st
   }
   auto* factory = fdds::DomainParticipantFactory::get_instance();
   if (factory == nullptr) fail("create_participant: DomainParticipantFactory unavailable");
-  const auto ports_before = own_udp_ports();
+  const auto ports_before = udp_ports(true);
   fdds::DomainParticipant* participant =
       // Mask none: the listener hears the participant-level callbacks (discovery, authentication), which
       // no mask gates; with data_on_readers in its mask it would take every sample from the readers'
@@ -286,7 +315,7 @@ fdds::DomainParticipant* create_participant(const TransportConfig& cfg, const st
     fail("create_participant failed for " + quoted(name) + " on " + describe(cfg) +
          " (see Fast DDS log above; ports in use or bad interface address?)");
   }
-  const auto ports_after = own_udp_ports();
+  const auto ports_after = udp_ports(true);
   if (ports_before && ports_after && !gained_unicast_ports(cfg.domain, *ports_before, *ports_after)) {
     factory->delete_participant(participant);
     fail("create_participant: " + quoted(name) + " found no free participant port on domain " + str(cfg.domain) +

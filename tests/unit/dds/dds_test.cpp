@@ -1753,6 +1753,26 @@ TEST_CASE("a rebuilt node has a new participant, keeps its identity, and its han
   CHECK_FALSE(a_saw_b_leave);
 }
 
+TEST_CASE("participants made after many in one process still take slots the peers probe", "[dds][node]") {
+  // Fast DDS numbers a process's participants for good (a rebuilt one takes the next number); its ports
+  // used to follow that number, so after max_participants participants a process bound slots no
+  // initial announcement probes, and two such participants never met.
+  auto cfg = loopback(test_domain(1));
+  cfg.max_participants = 4;
+  for (int k = 0; k < cfg.max_participants + 1; ++k) dds::Node(cfg, "test-spent-" + std::to_string(k));
+  dds::Node a(cfg, "test-late-a"), b(cfg, "test-late-b");
+  auto a_writer = a.writer<msg::AgentState>(dds::TopicId::State);
+  auto b_reader = b.reader<msg::AgentState>(dds::TopicId::State);
+  std::vector<dds::Received<msg::AgentState>> batch;
+  CHECK(wait_for([&] {
+    msg::AgentState s = good_state();
+    s.id(1);
+    a_writer.write(s);
+    b_reader.drain(batch);
+    return std::any_of(batch.begin(), batch.end(), [](const auto& r) { return r.valid_data && r.msg.id() == 1; });
+  }));
+}
+
 TEST_CASE("the stall watch reports a loop late by more than the threshold", "[dds]") {
   CHECK(dds::stall_threshold_s(dds::TransportConfig{}) == Approx(1.5));  // lease 2 s - announce 0.5 s
   constexpr std::int64_t kMs = 1'000'000;
