@@ -1,14 +1,16 @@
 #!/usr/bin/python3
 """How long a secured swarm takes to mesh on this host, and what it costs (docs/SECURITY.md, Cost).
 
-  scripts/secure_mesh.py -n N [--groups G] [--runs R] [--plain] [--stagger S] [--timeout S]
+  scripts/secure_mesh.py -n N [--groups G] [--runs R] [--plain] [--stagger S] [--gate S] [--timeout S]
                          [--domain D] [--keystore DIR] [--set key=value]... [--openssl-conf FILE]
                          [--pcap FILE] [--build DIR]
 
 Starts N agents (no supervisor) on loopback, domain D (default 70), secured with the keystore DIR
 (default: made once in /tmp/shapeform_mesh_keys by scripts/make_keystore.sh), as N agent processes
 or, with --groups G, as G shapeform_agent_group processes of N/G agents each. Process k starts
-k * S seconds after the first (--stagger, default 0: all at once). It reads each process's
+k * S seconds after the first (--stagger, default 0: all at once); with --gate S2, also not before
+process k-1 hears every agent started before it, or S2 seconds have passed (the "hearing" lines come
+once per status period: the gate is coarse to about 1 s). It reads each process's
 "hearing K neighbours" lines and reports, per run, one JSON line on stdout:
 
   {"n":N,"processes":P,"secured":true,"stagger_s":S,"mesh_s":T or null,"heard_min":K,
@@ -48,6 +50,9 @@ def parse_args():
     p.add_argument("--runs", type=int, default=1)
     p.add_argument("--plain", action="store_true", help="no security (the control)")
     p.add_argument("--stagger", type=float, default=0.0, help="seconds between process starts")
+    p.add_argument("--gate", type=float, default=0.0,
+                   help="start each process once the one before hears every agent started before it, "
+                        "waiting at most this many seconds (default 0: no gate)")
     p.add_argument("--timeout", type=float, default=None)
     p.add_argument("--domain", type=int, default=70)
     p.add_argument("--keystore", default="/tmp/shapeform_mesh_keys")
@@ -60,6 +65,8 @@ def parse_args():
         p.error("-n must be at least 2, got %d" % a.n)
     if a.groups < 0 or (a.groups and a.n % a.groups):
         p.error("--groups %d must divide -n %d" % (a.groups, a.n))
+    if a.stagger < 0 or a.gate < 0:
+        p.error("--stagger %g and --gate %g must be at least 0" % (a.stagger, a.gate))
     for s in a.sets:
         if "=" not in s:
             p.error("--set %r is not key=value" % s)
@@ -169,6 +176,7 @@ def run_once(a, run_dir):
                                     (base, base + 249)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         time.sleep(0.5)  # tcpdump opens its socket; only a capture's completeness depends on it
     members = []
+    starts = []
     load = os.getloadavg()[0]
     t0 = time.monotonic()
     mesh = None
@@ -176,6 +184,10 @@ def run_once(a, run_dir):
         for k in range(procs):
             while time.monotonic() < t0 + k * a.stagger:
                 time.sleep(0.02)
+            gate_end = time.monotonic() + a.gate
+            while k > 0 and members[-1].heard < k * per - 1 and time.monotonic() < gate_end:
+                time.sleep(0.02)
+            starts.append(round(time.monotonic() - t0, 2))
             ids = ["--ids", "%d-%d" % (k * per, k * per + per - 1)] if a.groups else ["--id", str(k)]
             cmd = [str(binary)] + ids + ["--seed", "1", "--domain", str(a.domain)]
             for s in sets:
@@ -212,7 +224,7 @@ def run_once(a, run_dir):
             tcpdump.send_signal(signal.SIGINT)
             tcpdump.wait()
     out = {"n": a.n, "processes": procs, "secured": not a.plain, "stagger_s": a.stagger,
-           "mesh_s": None if mesh is None else round(mesh, 2), "heard_min": heard_min,
+           "gate_s": a.gate, "starts_s": starts, "mesh_s": None if mesh is None else round(mesh, 2), "heard_min": heard_min,
            "cpu_pct_per_agent": round(cpu, 2), "rss_mb_per_agent": round(rss, 1), "load_1min": round(load, 2),
            "sets": a.sets, "openssl_conf": a.openssl_conf, "exited": exited}
     if a.pcap:

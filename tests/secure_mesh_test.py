@@ -70,7 +70,8 @@ if got["handshake_messages"] != 3:
 
 script = SOURCE / "scripts" / "secure_mesh.py"
 for args, needle in ((["-n", "1"], "-n must be at least 2"), (["-n", "10", "--groups", "3"], "must divide"),
-                     (["-n", "4", "--set", "lease"], "is not key=value")):
+                     (["-n", "4", "--set", "lease"], "is not key=value"),
+                     (["-n", "4", "--gate", "-1"], "--gate -1 must be at least 0")):
     r = subprocess.run([sys.executable, str(script)] + args, capture_output=True, text=True, timeout=60)
     if r.returncode != 2 or needle not in r.stderr:
         failures.append("%s: exit %d, stderr %r (expected 2 and %r)" % (" ".join(args), r.returncode,
