@@ -231,28 +231,38 @@ def _hearing(n: int, t0: int, by_id: dict, res: dict) -> None:
                            default=0)
 
 
+def covered(statuses: list[dict], w0: float, w1: float) -> tuple[float, float] | None:
+    """The part of the window [w0, w1] (ns) a process's statuses span, or None if they span none of it."""
+    if not statuses:
+        return None
+    a, b = max(w0, statuses[0]["stamp_ns"]), min(w1, statuses[-1]["stamp_ns"])
+    return (a, b) if b > a else None
+
+
 def _delivery(row: Row, w0: float, w1: float, by_id: dict, res: dict) -> None:
-    """Delivery over the window: each receiver's received count against the senders' publication rates."""
+    """Delivery over the window: each receiver's received count against what the others published in the
+    same time. A process whose statuses end before the window does (on a saturated host the last ones
+    can come seconds late, or not before the run ends) is measured over the part they span; one whose
+    statuses span none of the window received nothing in it."""
     n = row.n
     rates = {}
-    recv = {}
     for i, ss in by_id.items():
-        a, b = interp_counter(ss, "ticks", w0), interp_counter(ss, "ticks", w1)
-        if a is not None and b is not None:
-            rates[i] = (b - a) / ((w1 - w0) / 1e9)
-        ra, rb = interp_counter(ss, "samples_received", w0), interp_counter(ss, "samples_received", w1)
-        if ra is not None and rb is not None:
-            recv[i] = rb - ra
-    win = (w1 - w0) / 1e9
+        span = covered(ss, w0, w1)
+        if span is not None:
+            a, b = span
+            rates[i] = (interp_counter(ss, "ticks", b) - interp_counter(ss, "ticks", a)) / ((b - a) / 1e9)
     expected = 0.0
     got = 0.0
     for i in range(n):
-        exp_i = sum(r for j, r in rates.items() if j != i) * win
+        span = covered(by_id.get(i, []), w0, w1)
+        a, b = span if span is not None else (w0, w1)
         # A sender that never reported is still owed to everyone: assume the nominal rate.
-        exp_i += sum(row.rate for j in range(n) if j != i and j not in rates) * win
-        expected += exp_i
-        got += recv.get(i, 0.0)
+        owed = sum(r for j, r in rates.items() if j != i) + sum(row.rate for j in range(n) if j != i and j not in rates)
+        expected += owed * (b - a) / 1e9
+        if span is not None:
+            got += interp_counter(by_id[i], "samples_received", b) - interp_counter(by_id[i], "samples_received", a)
     res["delivery"] = got / expected if expected > 0 else None
+    win = (w1 - w0) / 1e9
     lost = [interp_counter(ss, "samples_lost", w1) - interp_counter(ss, "samples_lost", w0)
             for ss in by_id.values() if interp_counter(ss, "samples_lost", w0) is not None
             and interp_counter(ss, "samples_lost", w1) is not None]
