@@ -9,8 +9,8 @@ Starts N agents (no supervisor) on loopback, domain D (default 70), secured with
 (default: made once in /tmp/shapeform_mesh_keys by scripts/make_keystore.sh), as N agent processes
 or, with --groups G, as G shapeform_agent_group processes of N/G agents each. Process k starts
 k * S seconds after the first (--stagger, default 0: all at once); with --gate S2, also not before
-process k-1 hears every agent started before it, or S2 seconds have passed (the "hearing" lines come
-once per status period: the gate is coarse to about 1 s). It reads each process's
+process k-1 hears every agent started before it, or S2 seconds have passed (an agent prints its
+"hearing" line at most about once a second: the gate is coarse to about 1 s). It reads each process's
 "hearing K neighbours" lines and reports, per run, one JSON line on stdout:
 
   {"n":N,"processes":P,"secured":true,"stagger_s":S,"mesh_s":T or null,"heard_min":K,
