@@ -245,20 +245,21 @@ def _delivery(row: Row, w0: float, w1: float, by_id: dict, res: dict) -> None:
     can come seconds late, or not before the run ends) is measured over the part they span; one whose
     statuses span none of the window received nothing in it."""
     n = row.n
+    spans = {i: covered(ss, w0, w1) for i, ss in by_id.items()}
     rates = {}
-    for i, ss in by_id.items():
-        span = covered(ss, w0, w1)
+    for i, span in spans.items():
         if span is not None:
             a, b = span
-            rates[i] = (interp_counter(ss, "ticks", b) - interp_counter(ss, "ticks", a)) / ((b - a) / 1e9)
+            rates[i] = (interp_counter(by_id[i], "ticks", b) - interp_counter(by_id[i], "ticks", a)) / ((b - a) / 1e9)
+    # What everyone published per second; a sender that never reported is still owed to everyone: assume
+    # the nominal rate. Each receiver is owed all of it but its own.
+    published = sum(rates.values()) + row.rate * sum(1 for j in range(n) if j not in rates)
     expected = 0.0
     got = 0.0
     for i in range(n):
-        span = covered(by_id.get(i, []), w0, w1)
+        span = spans.get(i)
         a, b = span if span is not None else (w0, w1)
-        # A sender that never reported is still owed to everyone: assume the nominal rate.
-        owed = sum(r for j, r in rates.items() if j != i) + sum(row.rate for j in range(n) if j != i and j not in rates)
-        expected += owed * (b - a) / 1e9
+        expected += (published - rates.get(i, row.rate)) * (b - a) / 1e9
         if span is not None:
             got += interp_counter(by_id[i], "samples_received", b) - interp_counter(by_id[i], "samples_received", a)
     res["delivery"] = got / expected if expected > 0 else None
