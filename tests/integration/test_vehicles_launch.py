@@ -134,13 +134,23 @@ class VehiclesLaunchTest(harness.LauncherTestCase):
         for i, x in zip(summary["final_ids"], summary["final_positions"]):
             self.assertLessEqual(math.dist(x, (by_id[i][-1]["x"], by_id[i][-1]["y"])), 0.02, "robot %d" % i)
         self.assert_final_positions(summary, by_id, 0.02, 1.0)
-        # The view drew every agent's heading, its robot's: in the last frame (the swarm holding still)
-        # each within 0.05 rad of the robot's last recorded heading.
+        # The view drew every agent's heading, its robot's: the newest frame's headings are the robots' at one
+        # moment of their recording (10 rows a second, each robot's within a row of that moment), each within
+        # 0.05 rad. Not the robots' last headings: under load the newest frame can be seconds older than the
+        # end, and the robots still turn then.
         self.assertIsNotNone(last, "a frame of the view with the heading of every agent")
         for a in last["agents"]:
             self.assertEqual(a["state"], "alive")
-            self.assertLessEqual(angle_diff(a["heading"], by_id[a["id"]][-1]["heading"]), 0.05,
-                                 "agent %d's heading in the view and its robot's" % a["id"])
+        drawn = {a["id"]: a["heading"] for a in last["agents"]}
+        n_rows = min(len(rows) for rows in by_id.values())
+
+        def worst_at(k):
+            return max(min(angle_diff(drawn[i], by_id[i][j]["heading"]) for j in range(max(0, k - 1), min(n_rows, k + 2)))
+                       for i in drawn)
+        best = min(range(n_rows), key=worst_at)
+        self.assertLessEqual(worst_at(best), 0.05, "the newest frame's headings and the robots' at t = %g s: %s"
+                             % (by_id[0][best]["t_s"], {i: (round(drawn[i], 3), round(by_id[i][best]["heading"], 3))
+                                                         for i in sorted(drawn)}))
         # The robot simulator: one process for the 12, logs in the run folder, stopped cleanly with the run.
         out = harness.read_text(os.path.join(run, "vehicle.out"))
         self.assertEqual(harness.events(out, "start")[0]["ids"], list(range(AGENTS)))
