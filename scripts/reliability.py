@@ -666,6 +666,11 @@ def fmt_pct(v):
     return "-" if v is None else "%.1f" % v
 
 
+def fmt_count(v):
+    """A count, or a median of counts: 4, 4.5 (never 4.0)."""
+    return "%g" % v
+
+
 def med_worst(values, fmt, worst=max):
     vals = [v for v in values if v is not None]
     if not vals:
@@ -726,7 +731,7 @@ def lan_table(runs, fault):
         lines.append("| %s | %g | %d | %s | %d | %s | %s | %s | %d | %d |" % (
             law, loss, len(rows), med_worst([r.get("detect_s") for r in rows], fmt_s), n_rec, rec_txt,
             med_worst([r.get("lost_pct") for r in rows], fmt_pct),
-            med_worst([r.get("dropped") for r in rows], str), sum(len(swarm_aborted(r)) for r in rows),
+            med_worst([r.get("dropped") for r in rows], fmt_count), sum(len(swarm_aborted(r)) for r in rows),
             sum(1 for r in rows if r.get("recording"))))
     notes = sorted({a for r in runs if r["fault"] == fault for a in r.get("aborted", [])})
     tool = sum(1 for r in runs if r["fault"] == fault for a in r.get("aborted", []) if a.startswith(TOOL))
