@@ -19,11 +19,15 @@ process k-1 hears every agent started before it, or S2 seconds have passed (an a
 mesh_s: seconds from the first start until every agent hears all N-1 others (null: not within
 --timeout, default 20 + N); heard_min: the least any process heard at the end. CPU: the processes'
 CPU time over the 10 s after the mesh (or after the timeout), per agent, in % of one core. With
---pcap FILE, loopback traffic of the domain's ports is captured (tcpdump, needs root) and the
-RTPS DATA submessages of the handshake writer (ParticipantStatelessMessage, entity 0x000201c3)
-counted (handshake_data, handshake_bytes), and the distinct messages among them (handshake_messages:
-by sender and sequence number; Fast DDS 2.9.1 sends each to every matched participant). Every process started is stopped before
-the next run. Exit 0 when every run meshed, 3 otherwise, 2 on bad arguments.
+--pcap FILE, loopback traffic of the domain's ports is captured (tcpdump, needs root; the first 160
+bytes of each datagram, enough for the RTPS headers) and the RTPS DATA submessages of the handshake
+writer (ParticipantStatelessMessage, entity 0x000201c3) counted (handshake_data, handshake_bytes: the
+datagrams' full sizes), and the distinct messages among them (handshake_messages: by sender and
+sequence number; Fast DDS 2.9.1 sends each to every matched participant, and a resend is a new
+message). handshake_by_10s gives [datagrams, handshake_data, handshake_messages] per 10 s of the
+capture. A saturated host drops datagrams from the capture: capture_seen is what the kernel's filter
+passed, capture_kept what tcpdump wrote (the counts are of those). Every process started is stopped
+before the next run. Exit 0 when every run meshed, 3 otherwise, 2 on bad arguments.
 """
 import argparse
 import json
@@ -123,7 +127,7 @@ class Member:
 
 
 def count_handshakes(pcap):
-    """DATA submessages of the stateless (handshake) writer in a pcap of loopback: (all, per datagram)."""
+    """DATA submessages of the stateless (handshake) writer in a pcap of loopback: in all, and per 10 s."""
     data = Path(pcap).read_bytes()
     if len(data) < 24:
         return {"datagrams": 0, "handshake_data": 0}
@@ -132,32 +136,52 @@ def count_handshakes(pcap):
     linktype = struct.unpack(endian + "I", data[20:24])[0]
     l2 = 14 if linktype == 1 else (16 if linktype == 113 else 4)
     pos, datagrams, hs, hs_bytes, unique = 24, 0, 0, 0, set()
+    t0, buckets = None, {}
     while pos + 16 <= len(data):
-        incl = struct.unpack(endian + "I", data[pos + 8:pos + 12])[0]
+        ts, _, incl, orig = struct.unpack(endian + "IIII", data[pos:pos + 16])
         pkt = data[pos + 16:pos + 16 + incl]
         pos += 16 + incl
         ip = pkt[l2:]
         if len(ip) < 28 or ip[9] != 17:
             continue
-        udp = ip[(ip[0] & 0x0F) * 4:]
+        header = (ip[0] & 0x0F) * 4
+        udp = ip[header:]
         rtps = udp[8:]
         if rtps[:4] != b"RTPS":
             continue
+        t0 = ts if t0 is None else t0
+        bucket = buckets.setdefault((ts - t0) // 10, [0, 0, set()])
         datagrams += 1
+        bucket[0] += 1
         off = 20
         while off + 4 <= len(rtps):
             sid, flags = rtps[off], rtps[off + 1]
             length = struct.unpack(("<" if flags & 1 else ">") + "H", rtps[off + 2:off + 4])[0]
             body = rtps[off + 4:off + 4 + length] if length else rtps[off + 4:]
             if sid == 0x15 and body[8:12] == STATELESS_WRITER:
+                message = (rtps[8:20], body[12:20])  # sender's GUID prefix, sequence number
                 hs += 1
-                hs_bytes += len(rtps)
-                unique.add((rtps[8:20], body[12:20]))  # sender's GUID prefix, sequence number
+                hs_bytes += orig - l2 - header - 8  # the datagram's RTPS bytes, captured or not
+                unique.add(message)
+                bucket[1] += 1
+                bucket[2].add(message)
             if length == 0:
                 break
             off += 4 + length
+    last = max(buckets, default=-1)
+    by_10s = [[buckets[k][0], buckets[k][1], len(buckets[k][2])] if k in buckets else [0, 0, 0]
+              for k in range(last + 1)]
     return {"datagrams": datagrams, "handshake_data": hs, "handshake_messages": len(unique),
-            "handshake_bytes": hs_bytes}
+            "handshake_bytes": hs_bytes, "handshake_by_10s": by_10s}
+
+
+def capture_stats(text):
+    """tcpdump's closing counts: {"capture_kept", "capture_seen", "capture_dropped"} (what it printed)."""
+    names = {"captured": "capture_kept", "received by filter": "capture_seen", "dropped by kernel": "capture_dropped"}
+    out = {}
+    for number, what in re.findall(r"^(\d+) packets? (captured|received by filter|dropped by kernel)$", text, re.M):
+        out[names[what]] = int(number)
+    return out
 
 
 def run_once(a, run_dir):
@@ -172,8 +196,9 @@ def run_once(a, run_dir):
     tcpdump = None
     if a.pcap:
         base = 7400 + 250 * a.domain
-        tcpdump = subprocess.Popen(["tcpdump", "-i", "lo", "-w", a.pcap, "-U", "udp portrange %d-%d" %
-                                    (base, base + 249)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        tcpdump = subprocess.Popen(["tcpdump", "-i", "lo", "-s", "160", "-B", "65536", "-w", a.pcap, "-U",
+                                    "udp portrange %d-%d" % (base, base + 249)], stdout=subprocess.DEVNULL,
+                                   stderr=subprocess.PIPE, text=True)
         time.sleep(0.5)  # tcpdump opens its socket; only a capture's completeness depends on it
     members = []
     starts = []
@@ -220,14 +245,16 @@ def run_once(a, run_dir):
             m.proc.wait()
             m.thread.join(timeout=5)
             m.log.close()
+        capture = {}
         if tcpdump:
             tcpdump.send_signal(signal.SIGINT)
-            tcpdump.wait()
+            capture = capture_stats(tcpdump.communicate()[1])
     out = {"n": a.n, "processes": procs, "secured": not a.plain, "stagger_s": a.stagger,
            "gate_s": a.gate, "starts_s": starts, "mesh_s": None if mesh is None else round(mesh, 2), "heard_min": heard_min,
            "cpu_pct_per_agent": round(cpu, 2), "rss_mb_per_agent": round(rss, 1), "load_1min": round(load, 2),
            "sets": a.sets, "openssl_conf": a.openssl_conf, "exited": exited}
     if a.pcap:
+        out.update(capture)
         out.update(count_handshakes(a.pcap))
     return out
 

@@ -40,10 +40,11 @@ def frame(payload, dport=24910):
     return b"\0" * 12 + b"\x08\x00" + ip + udp  # an Ethernet header, as tcpdump -i lo writes
 
 
-def pcap(path, frames):
-    out = struct.pack("<IHHiIII", 0xA1B2C3D4, 2, 4, 0, 0, 65535, 1)
-    for f in frames:
-        out += struct.pack("<IIII", 0, 0, len(f), len(f)) + f
+def pcap(path, frames, times=None, snap=65535):
+    """A pcap of frames at times (s), each cut to snap bytes as tcpdump -s does (the record keeps its length)."""
+    out = struct.pack("<IHHiIII", 0xA1B2C3D4, 2, 4, 0, 0, snap, 1)
+    for f, t in zip(frames, times or [0] * len(frames)):
+        out += struct.pack("<IIII", t, 0, min(len(f), snap), len(f)) + f[:snap]
     path.write_bytes(out)
 
 
@@ -67,6 +68,25 @@ if got["handshake_data"] != 4:
     failures.append("handshake_data: %r, expected 4 DATA of writer 0x000201c3" % got["handshake_data"])
 if got["handshake_messages"] != 3:
     failures.append("handshake_messages: %r, expected 3 (A 1, A 2, B 1)" % got["handshake_messages"])
+rtps_bytes = sum(len(f) - 14 - 20 - 8 for f in frames[:4] if STATELESS in f)
+if got["handshake_bytes"] != rtps_bytes:
+    failures.append("handshake_bytes: %r, expected %d" % (got["handshake_bytes"], rtps_bytes))
+
+# Cut to 160 bytes (what --pcap keeps) and spread over 25 s: the same counts, the datagrams' full sizes,
+# and per 10 s [datagrams, handshake DATA, distinct messages].
+long_message = frame(rtps(a, info_ts, data(STATELESS, 3) + b"c" * 3000))
+cut = WORK / "cut.pcap"
+pcap(cut, frames[:4] + [long_message, long_message], times=[100, 101, 109, 110, 125, 125], snap=160)
+got_cut = mesh.count_handshakes(str(cut))
+want = {"datagrams": 6, "handshake_data": 6, "handshake_messages": 4,
+        "handshake_bytes": rtps_bytes + 2 * (len(long_message) - 42),
+        "handshake_by_10s": [[3, 3, 2], [1, 1, 1], [2, 2, 1]]}
+if got_cut != want:
+    failures.append("a capture cut to 160 bytes: %r, expected %r" % (got_cut, want))
+stats = mesh.capture_stats("tcpdump: listening on lo\n1230038 packets captured\n8058180 packets received by filter\n"
+                           "5545522 packets dropped by kernel\n")
+if stats != {"capture_kept": 1230038, "capture_seen": 8058180, "capture_dropped": 5545522}:
+    failures.append("tcpdump's counts: %r" % stats)
 
 script = SOURCE / "scripts" / "secure_mesh.py"
 for args, needle in ((["-n", "1"], "-n must be at least 2"), (["-n", "10", "--groups", "3"], "must divide"),
