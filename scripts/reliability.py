@@ -668,7 +668,7 @@ def fmt_pct(v):
 
 def fmt_count(v):
     """A count, or a median of counts: 4, 4.5 (never 4.0)."""
-    return "%g" % v
+    return "%d" % v if v == int(v) else "%.1f" % v
 
 
 def med_worst(values, fmt, worst=max):

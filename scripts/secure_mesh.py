@@ -130,13 +130,14 @@ def count_handshakes(pcap):
     """DATA submessages of the stateless (handshake) writer in a pcap of loopback: in all, and per 10 s."""
     data = Path(pcap).read_bytes()
     if len(data) < 24:
-        return {"datagrams": 0, "handshake_data": 0}
+        data = struct.pack("<IHHiIII", 0xA1B2C3D4, 2, 4, 0, 0, 65535, 1)  # no capture: no datagram
     magic = struct.unpack("<I", data[:4])[0]
     endian = "<" if magic in (0xA1B2C3D4, 0xA1B23C4D) else ">"
     linktype = struct.unpack(endian + "I", data[20:24])[0]
     l2 = 14 if linktype == 1 else (16 if linktype == 113 else 4)
-    pos, datagrams, hs, hs_bytes, unique = 24, 0, 0, 0, set()
-    t0, buckets = None, {}
+    # Per 10 s of the capture: [datagrams, handshake DATA, distinct messages]; the totals are their sums
+    # (the distinct messages: their union, a message's resends can fall in two periods).
+    pos, hs_bytes, t0, buckets = 24, 0, None, {}
     while pos + 16 <= len(data):
         ts, _, incl, orig = struct.unpack(endian + "IIII", data[pos:pos + 16])
         pkt = data[pos + 16:pos + 16 + incl]
@@ -151,7 +152,6 @@ def count_handshakes(pcap):
             continue
         t0 = ts if t0 is None else t0
         bucket = buckets.setdefault((ts - t0) // 10, [0, 0, set()])
-        datagrams += 1
         bucket[0] += 1
         off = 20
         while off + 4 <= len(rtps):
@@ -159,20 +159,16 @@ def count_handshakes(pcap):
             length = struct.unpack(("<" if flags & 1 else ">") + "H", rtps[off + 2:off + 4])[0]
             body = rtps[off + 4:off + 4 + length] if length else rtps[off + 4:]
             if sid == 0x15 and body[8:12] == STATELESS_WRITER:
-                message = (rtps[8:20], body[12:20])  # sender's GUID prefix, sequence number
-                hs += 1
-                hs_bytes += orig - l2 - header - 8  # the datagram's RTPS bytes, captured or not
-                unique.add(message)
                 bucket[1] += 1
-                bucket[2].add(message)
+                bucket[2].add((rtps[8:20], body[12:20]))  # sender's GUID prefix, sequence number
+                hs_bytes += orig - l2 - header - 8  # the datagram's RTPS bytes, captured or not
             if length == 0:
                 break
             off += 4 + length
-    last = max(buckets, default=-1)
-    by_10s = [[buckets[k][0], buckets[k][1], len(buckets[k][2])] if k in buckets else [0, 0, 0]
-              for k in range(last + 1)]
-    return {"datagrams": datagrams, "handshake_data": hs, "handshake_messages": len(unique),
-            "handshake_bytes": hs_bytes, "handshake_by_10s": by_10s}
+    by_10s = [buckets.get(k, [0, 0, set()]) for k in range(max(buckets, default=-1) + 1)]
+    return {"datagrams": sum(b[0] for b in by_10s), "handshake_data": sum(b[1] for b in by_10s),
+            "handshake_messages": len(set().union(*(b[2] for b in by_10s))), "handshake_bytes": hs_bytes,
+            "handshake_by_10s": [[b[0], b[1], len(b[2])] for b in by_10s]}
 
 
 def capture_stats(text):
