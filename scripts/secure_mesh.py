@@ -19,13 +19,16 @@ process k-1 hears every agent started before it, or S2 seconds have passed (an a
 mesh_s: seconds from the first start until every agent hears all N-1 others (null: not within
 --timeout, default 20 + N); heard_min: the least any process heard at the end. CPU: the processes'
 CPU time over the 10 s after the mesh (or after the timeout), per agent, in % of one core. With
---pcap FILE, loopback traffic of the domain's ports is captured (tcpdump, needs root; the first 160
-bytes of each datagram, enough for the RTPS headers) and the RTPS DATA submessages of the handshake
-writer (ParticipantStatelessMessage, entity 0x000201c3) counted (handshake_data, handshake_bytes: the
-datagrams' full sizes), and the distinct messages among them (handshake_messages: by sender and
-sequence number; Fast DDS 2.9.1 sends each to every matched participant, and a resend is a new
-message). handshake_by_10s gives [datagrams, handshake_data, handshake_messages] per 10 s of the
-capture. A saturated host drops datagrams from the capture: capture_seen is what the kernel's filter
+--pcap FILE, loopback traffic of the domain's ports is captured (tcpdump, needs root; the first 200
+bytes of each datagram, enough for the RTPS headers and a handshake's destination) and the RTPS DATA
+submessages of the handshake writer (ParticipantStatelessMessage, entity 0x000201c3) counted
+(handshake_data, handshake_bytes: the datagrams' full sizes), and the distinct messages among them
+(handshake_messages: by sender and sequence number; Fast DDS 2.9.1 sends each to every matched
+participant, and a resend is a new message), the requests among those (handshake_requests: the first
+message of a handshake; the others are replies and finals) and the pairs of participants they are
+between (handshake_pairs: a pair is counted once, whichever way its messages go). handshake_by_10s
+gives [datagrams, handshake_data, handshake_messages, handshake_requests, handshake_pairs] per 10 s of
+the capture. A saturated host drops datagrams from the capture: capture_seen is what the kernel's filter
 passed, capture_kept what tcpdump wrote (the counts are of those). Every process started is stopped
 before the next run. Exit 0 when every run meshed, 3 otherwise, 2 on bad arguments.
 """
@@ -126,6 +129,23 @@ class Member:
             os.killpg(self.proc.pid, signal.SIGKILL)
 
 
+def handshake_of(body, flags):
+    """A handshake DATA's (destination participant's GUID prefix, is a request) from its payload (a
+    ParticipantGenericMessage: message_identity, related_message_identity, destination_participant_key,
+    ...; a request relates to no message), or None when the capture cut it before the destination."""
+    e = "<" if flags & 1 else ">"
+    p = body[4 + struct.unpack(e + "H", body[2:4])[0]:]
+    while flags & 2 and len(p) >= 4:  # inline QoS: a parameter list up to PID_SENTINEL
+        pid, size = struct.unpack(e + "HH", p[:4])
+        p = p[4 + size:]
+        if pid == 1:
+            break
+    pl = p[4:]  # the encapsulation
+    if len(pl) < 60:
+        return None
+    return pl[48:60], pl[24:40] == bytes(16)
+
+
 def count_handshakes(pcap):
     """DATA submessages of the stateless (handshake) writer in a pcap of loopback: in all, and per 10 s."""
     data = Path(pcap).read_bytes()
@@ -135,8 +155,9 @@ def count_handshakes(pcap):
     endian = "<" if magic in (0xA1B2C3D4, 0xA1B23C4D) else ">"
     linktype = struct.unpack(endian + "I", data[20:24])[0]
     l2 = 14 if linktype == 1 else (16 if linktype == 113 else 4)
-    # Per 10 s of the capture: [datagrams, handshake DATA, distinct messages]; the totals are their sums
-    # (the distinct messages: their union, a message's resends can fall in two periods).
+    # Per 10 s of the capture: [datagrams, handshake DATA, distinct messages, requests among them, pairs of
+    # participants in a handshake]; the totals are their sums (sets: their unions, a message's resends and
+    # a pair's handshake can fall in two periods).
     pos, hs_bytes, t0, buckets = 24, 0, None, {}
     while pos + 16 <= len(data):
         ts, _, incl, orig = struct.unpack(endian + "IIII", data[pos:pos + 16])
@@ -151,7 +172,7 @@ def count_handshakes(pcap):
         if rtps[:4] != b"RTPS":
             continue
         t0 = ts if t0 is None else t0
-        bucket = buckets.setdefault((ts - t0) // 10, [0, 0, set()])
+        bucket = buckets.setdefault((ts - t0) // 10, [0, 0, set(), set(), set()])
         bucket[0] += 1
         off = 20
         while off + 4 <= len(rtps):
@@ -159,16 +180,24 @@ def count_handshakes(pcap):
             length = struct.unpack(("<" if flags & 1 else ">") + "H", rtps[off + 2:off + 4])[0]
             body = rtps[off + 4:off + 4 + length] if length else rtps[off + 4:]
             if sid == 0x15 and body[8:12] == STATELESS_WRITER:
+                message = (rtps[8:20], body[12:20])  # sender's GUID prefix, sequence number
                 bucket[1] += 1
-                bucket[2].add((rtps[8:20], body[12:20]))  # sender's GUID prefix, sequence number
+                bucket[2].add(message)
                 hs_bytes += orig - l2 - header - 8  # the datagram's RTPS bytes, captured or not
+                seen = handshake_of(body, flags)
+                if seen:
+                    if seen[1]:
+                        bucket[3].add(message)
+                    bucket[4].add(frozenset((rtps[8:20], seen[0])))
             if length == 0:
                 break
             off += 4 + length
-    by_10s = [buckets.get(k, [0, 0, set()]) for k in range(max(buckets, default=-1) + 1)]
+    by_10s = [buckets.get(k, [0, 0, set(), set(), set()]) for k in range(max(buckets, default=-1) + 1)]
+    union = lambda i: len(set().union(*(b[i] for b in by_10s)))
     return {"datagrams": sum(b[0] for b in by_10s), "handshake_data": sum(b[1] for b in by_10s),
-            "handshake_messages": len(set().union(*(b[2] for b in by_10s))), "handshake_bytes": hs_bytes,
-            "handshake_by_10s": [[b[0], b[1], len(b[2])] for b in by_10s]}
+            "handshake_messages": union(2), "handshake_requests": union(3), "handshake_pairs": union(4),
+            "handshake_bytes": hs_bytes,
+            "handshake_by_10s": [[b[0], b[1], len(b[2]), len(b[3]), len(b[4])] for b in by_10s]}
 
 
 def capture_stats(text):
@@ -192,7 +221,7 @@ def run_once(a, run_dir):
     tcpdump = None
     if a.pcap:
         base = 7400 + 250 * a.domain
-        tcpdump = subprocess.Popen(["tcpdump", "-i", "lo", "-s", "160", "-B", "65536", "-w", a.pcap, "-U",
+        tcpdump = subprocess.Popen(["tcpdump", "-i", "lo", "-s", "200", "-B", "65536", "-w", a.pcap, "-U",
                                     "udp portrange %d-%d" % (base, base + 249)], stdout=subprocess.DEVNULL,
                                    stderr=subprocess.PIPE, text=True)
         time.sleep(0.5)  # tcpdump opens its socket; only a capture's completeness depends on it

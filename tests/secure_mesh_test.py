@@ -23,10 +23,18 @@ def submessage(sid, body, little=True):
     return bytes([sid, 1 if little else 0]) + struct.pack("<H" if little else ">H", len(body)) + body
 
 
-def data(writer, sn, little=True):
-    # extraFlags, octetsToInlineQos, readerId, writerId, writerSN (high, low), then a payload
-    body = b"\0\0\x10\0" + b"\0\0\0\0" + writer + struct.pack("<iI" if little else ">iI", 0, sn) + b"x" * 40
-    return submessage(0x15, body, little)
+def data(writer, sn, little=True, dest=b"D" * 12, request=True, inline_qos=False):
+    """A DATA of writer; its payload a ParticipantGenericMessage's start: message_identity (GUID, sequence
+    number), related_message_identity (none for a request), destination_participant_key, more."""
+    e = "<" if little else ">"
+    # extraFlags, octetsToInlineQos, readerId, writerId, writerSN (high, low)
+    body = b"\0\0" + struct.pack(e + "H", 16) + b"\0\0\0\0" + writer + struct.pack(e + "iI", 0, sn)
+    if inline_qos:  # one parameter, then PID_SENTINEL
+        body += struct.pack(e + "HH", 0x70, 4) + b"qqqq" + struct.pack(e + "HH", 1, 0)
+    related = bytes(24) if request else b"R" * 24
+    body += b"\0\1\0\0" + b"M" * 24 + related + dest + b"\0\0\1\xc1" + b"x" * 40
+    return submessage(0x15, body, little) if not inline_qos else \
+        bytes([0x15, 3 if little else 2]) + struct.pack(e + "H", len(body)) + body
 
 
 def rtps(prefix, *subs):
@@ -49,13 +57,15 @@ def pcap(path, frames, times=None, snap=65535):
 
 
 WORK.mkdir(parents=True, exist_ok=True)
-a, b = b"A" * 12, b"B" * 12
+a, b, c, d = b"A" * 12, b"B" * 12, b"C" * 12, b"D" * 12
 info_ts = submessage(0x09, b"\0" * 8)
+announcement = submessage(0x15, b"\0\0\x10\0" + b"\0" * 4 + OTHER + struct.pack("<iI", 0, 7) + b"x" * 8)
 frames = [
-    frame(rtps(a, info_ts, data(STATELESS, 1))),  # A's message 1 to one peer ...
-    frame(rtps(a, info_ts, data(STATELESS, 1)), dport=24912),  # ... and to another
-    frame(rtps(b, data(STATELESS, 1, little=False))),  # B's message 1, big-endian
-    frame(rtps(a, data(OTHER, 7), data(STATELESS, 2))),  # an announcement, then A's message 2
+    frame(rtps(a, info_ts, data(STATELESS, 1, dest=c))),  # A's request to C, sent to one participant ...
+    frame(rtps(a, info_ts, data(STATELESS, 1, dest=c)), dport=24912),  # ... and to another
+    frame(rtps(b, data(STATELESS, 1, little=False, dest=a, request=False))),  # B's reply to A, big-endian
+    # an announcement, then A's final to B, with inline QoS
+    frame(rtps(a, announcement, data(STATELESS, 2, dest=b, request=False, inline_qos=True))),
     frame(b"not rtps at all"),
 ]
 cap = WORK / "handshakes.pcap"
@@ -68,21 +78,31 @@ if got["handshake_data"] != 4:
     failures.append("handshake_data: %r, expected 4 DATA of writer 0x000201c3" % got["handshake_data"])
 if got["handshake_messages"] != 3:
     failures.append("handshake_messages: %r, expected 3 (A 1, A 2, B 1)" % got["handshake_messages"])
+if got["handshake_requests"] != 1:
+    failures.append("handshake_requests: %r, expected 1 (A 1)" % got["handshake_requests"])
+if got["handshake_pairs"] != 2:
+    failures.append("handshake_pairs: %r, expected 2 (A and C, A and B)" % got["handshake_pairs"])
 rtps_bytes = sum(len(f) - 14 - 20 - 8 for f in frames[:4] if STATELESS in f)
 if got["handshake_bytes"] != rtps_bytes:
     failures.append("handshake_bytes: %r, expected %d" % (got["handshake_bytes"], rtps_bytes))
 
-# Cut to 160 bytes (what --pcap keeps) and spread over 25 s: the same counts, the datagrams' full sizes,
-# and per 10 s [datagrams, handshake DATA, distinct messages].
-long_message = frame(rtps(a, info_ts, data(STATELESS, 3) + b"c" * 3000))
+# Cut to 200 bytes (what --pcap keeps) and spread over 25 s: the same counts, the datagrams' full sizes,
+# and per 10 s [datagrams, handshake DATA, distinct messages, requests, pairs in a handshake].
+long_message = frame(rtps(a, info_ts, data(STATELESS, 3, dest=d) + b"c" * 3000))
 cut = WORK / "cut.pcap"
-pcap(cut, frames[:4] + [long_message, long_message], times=[100, 101, 109, 110, 125, 125], snap=160)
+pcap(cut, frames[:4] + [long_message, long_message], times=[100, 101, 109, 110, 125, 125], snap=200)
 got_cut = mesh.count_handshakes(str(cut))
-want = {"datagrams": 6, "handshake_data": 6, "handshake_messages": 4,
-        "handshake_bytes": rtps_bytes + 2 * (len(long_message) - 42),
-        "handshake_by_10s": [[3, 3, 2], [1, 1, 1], [2, 2, 1]]}
+want = {"datagrams": 6, "handshake_data": 6, "handshake_messages": 4, "handshake_requests": 2,
+        "handshake_pairs": 3, "handshake_bytes": rtps_bytes + 2 * (len(long_message) - 42),
+        "handshake_by_10s": [[3, 3, 2, 1, 2], [1, 1, 1, 0, 1], [2, 2, 1, 1, 1]]}
 if got_cut != want:
-    failures.append("a capture cut to 160 bytes: %r, expected %r" % (got_cut, want))
+    failures.append("a capture cut to 200 bytes: %r, expected %r" % (got_cut, want))
+# Cut before the destinations: the messages are still counted, their pairs are not.
+short = WORK / "short.pcap"
+pcap(short, frames[:4], snap=110)
+got_short = mesh.count_handshakes(str(short))
+if (got_short["handshake_messages"], got_short["handshake_pairs"], got_short["handshake_requests"]) != (3, 0, 0):
+    failures.append("a capture cut to 110 bytes: %r, expected 3 messages, no pair, no request" % got_short)
 stats = mesh.capture_stats("tcpdump: listening on lo\n1230038 packets captured\n8058180 packets received by filter\n"
                            "5545522 packets dropped by kernel\n")
 if stats != {"capture_kept": 1230038, "capture_seen": 8058180, "capture_dropped": 5545522}:
