@@ -84,16 +84,6 @@ def browser(work):
     return b
 
 
-def poll(fn, timeout, what):
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        v = fn()
-        if v:
-            return v
-        time.sleep(0.1)
-    raise SystemExit("bench_page: timed out waiting for " + what)
-
-
 def measure(args, b, n, work):
     rec = os.path.join(work, "rec%d" % n)
     shutil.rmtree(rec, ignore_errors=True)
@@ -109,7 +99,7 @@ def measure(args, b, n, work):
         state = lambda: b.execute_script(  # noqa: E731
             "const d = window.shapeformDrawn; return [window.__bench.received, window.__bench.chars,"
             " d ? d.frames : 0, d && d.agents ? d.agents.length : 0]")
-        poll(lambda: state()[3] == n, 60, "the page to draw %d agents" % n)
+        procs.poll(lambda: state()[3] == n, 60, "the page to draw %d agents" % n)
         r0, c0, d0, _ = state()
         u0, t0 = procs.cpu_s(view.pid), time.monotonic()
         time.sleep(args.seconds)  # the measurement window
@@ -159,6 +149,8 @@ def main():
             rows.append(measure(args, b, n, work))
             if args.json:
                 print(json.dumps(rows[-1]), flush=True)
+    except AssertionError as e:  # a wait that timed out
+        raise SystemExit("bench_page: %s" % e)
     finally:
         b.quit()
         if not args.work:
