@@ -11,7 +11,8 @@ or, with --groups G, as G shapeform_agent_group processes of N/G agents each. Pr
 k * S seconds after the first (--stagger, default 0: all at once); with --gate S2, also not before
 process k-1 hears every agent started before it, or S2 seconds have passed (an agent prints its
 "hearing" line at most about once a second: the gate is coarse to about 1 s). It reads each process's
-"hearing K neighbours" lines and reports, per run, one JSON line on stdout:
+"hearing K neighbours" lines (progress on stderr every 5 s) and reports, per run, one JSON line on
+stdout:
 
   {"n":N,"processes":P,"secured":true,"stagger_s":S,"mesh_s":T or null,"heard_min":K,
    "cpu_pct_per_agent":C,"rss_mb_per_agent":M,"load_1min":L,...}
@@ -230,13 +231,28 @@ def run_once(a, run_dir):
     load = os.getloadavg()[0]
     t0 = time.monotonic()
     mesh = None
+    shown = [t0]
+
+    def progress(final=""):
+        """At most every 5 s (and at the end), on stderr: how far the run is."""
+        now = time.monotonic()
+        if not final and now < shown[0] + 5.0:
+            return
+        shown[0] = now
+        heard = [m.heard for m in members] or [0]
+        print("secure_mesh: %s%.0f s: %d of %d processes started, each hearing %d to %d of the %d others%s"
+              % (a.label, now - t0, len(members), procs, min(heard), max(heard), a.n - 1, final),
+              file=sys.stderr, flush=True)
+
     try:
         for k in range(procs):
             while time.monotonic() < t0 + k * a.stagger:
                 time.sleep(0.02)
+                progress()
             gate_end = time.monotonic() + a.gate
             while k > 0 and members[-1].heard < k * per - 1 and time.monotonic() < gate_end:
                 time.sleep(0.02)
+                progress()
             starts.append(round(time.monotonic() - t0, 2))
             ids = ["--ids", "%d-%d" % (k * per, k * per + per - 1)] if a.groups else ["--id", str(k)]
             cmd = [str(binary)] + ids + ["--seed", "1", "--domain", str(a.domain)]
@@ -251,6 +267,8 @@ def run_once(a, run_dir):
             if dead:
                 break
             time.sleep(0.05)
+            progress()
+        progress(": meshed" if mesh is not None else ": not meshed; the CPU over the next 10 s")
         c0 = sum(cpu_ticks(m.proc.pid) for m in members)
         w0 = time.monotonic()
         time.sleep(10.0)
@@ -299,6 +317,7 @@ def main():
     for r in range(a.runs):
         run_dir = work / ("run_%d" % r)
         run_dir.mkdir(parents=True, exist_ok=True)
+        a.label = "run %d of %d, " % (r + 1, a.runs) if a.runs > 1 else ""
         res = run_once(a, run_dir)
         res["run"] = r
         res["logs"] = str(run_dir)
