@@ -55,13 +55,16 @@ SourceId prefix_of(const eprosima::fastrtps::rtps::GuidPrefix_t& p) {
 }
 
 ParticipantWatch::ParticipantWatch(const TransportConfig& cfg)
-    : split_(SplitWatch::window_for(cfg), SplitWatch::kGraceS) {}
+    : split_(SplitWatch::window_for(cfg), SplitWatch::kGraceS, cfg.security.enabled) {}
 
 void ParticipantWatch::onParticipantAuthentication(fdds::DomainParticipant* /*participant*/,
                                                    eprosima::fastrtps::rtps::ParticipantAuthenticationInfo&& info) {
-  if (info.status != eprosima::fastrtps::rtps::ParticipantAuthenticationInfo::UNAUTHORIZED_PARTICIPANT) return;
+  using Status = eprosima::fastrtps::rtps::ParticipantAuthenticationInfo::AUTHENTICATION_STATUS;
+  const SourceId peer = prefix_of(info.guid.guidPrefix);
+  const std::int64_t now = boot_ns();
   std::lock_guard<std::mutex> lock(mutex_);
-  if (refused_.size() < kRefusedRemembered) refused_.push_back(prefix_of(info.guid.guidPrefix));  // reported once
+  if (info.status == Status::AUTHORIZED_PARTICIPANT) split_.authenticated(peer, now);
+  else if (refused_.size() < kRefusedRemembered) refused_.push_back(peer);  // reported once
 }
 
 void ParticipantWatch::on_participant_discovery(fdds::DomainParticipant* participant,

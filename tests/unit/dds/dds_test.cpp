@@ -1832,6 +1832,57 @@ TEST_CASE("the split watch: a peer dropped for silence and heard again within th
   CHECK_FALSE(w.due(60'000 * kMs));
 }
 
+TEST_CASE("the split watch, secured: the grace runs from the returned peer's authentication", "[dds]") {
+  constexpr std::int64_t kMs = 1'000'000;
+  dds::TransportConfig cfg;  // lease 2 s, announce 0.5 s: window 2.5 s
+  dds::SplitWatch w(dds::SplitWatch::window_for(cfg), 0.5, true);
+  dds::SourceId a, b, c, d;
+  a.prefix[0] = 1;
+  b.prefix[0] = 2;
+  c.prefix[0] = 3;
+  d.prefix[0] = 4;
+  // both sides dropped each other: the peer authenticates again 1.4 s after its return (longer than
+  // the grace), then its endpoints come
+  w.dropped(a, 2000 * kMs);
+  w.discovered(a, 2600 * kMs);
+  CHECK_FALSE(w.due(3200 * kMs));  // past the grace from its return, but still authenticating
+  w.authenticated(a, 4000 * kMs);
+  CHECK_FALSE(w.due(4400 * kMs));
+  w.endpoint(a);
+  CHECK_FALSE(w.due(10'000 * kMs));
+  // authenticated again, but no endpoint within the grace after it: due, its silence as before
+  w.dropped(b, 20'000 * kMs);
+  w.discovered(b, 20'500 * kMs);
+  w.authenticated(b, 22'000 * kMs);
+  CHECK_FALSE(w.due(22'400 * kMs));
+  auto due = w.due(22'500 * kMs);
+  REQUIRE(due);
+  CHECK(due->peer == b);
+  CHECK(due->unheard_s == Approx(0.5));
+  w.clear();
+  // half-matched: the peer never authenticates again (it kept this process authenticated and discards
+  // the new handshake): due kAuthBoundS after its return
+  w.dropped(c, 30'000 * kMs);
+  w.discovered(c, 30'500 * kMs);
+  CHECK_FALSE(w.due(30'500 * kMs + static_cast<std::int64_t>(dds::SplitWatch::kAuthBoundS * 1e9) - kMs));
+  due = w.due(30'500 * kMs + static_cast<std::int64_t>(dds::SplitWatch::kAuthBoundS * 1e9));
+  REQUIRE(due);
+  CHECK(due->peer == c);
+  w.clear();
+  // a first authentication (no drop before) and a second one are no return
+  w.discovered(d, 40'000 * kMs);
+  w.authenticated(d, 41'000 * kMs);
+  w.authenticated(d, 42'000 * kMs);
+  CHECK_FALSE(w.due(50'000 * kMs));
+
+  // Plain, an authentication changes nothing: due 0.5 s after the return
+  dds::SplitWatch plain(dds::SplitWatch::window_for(cfg), 0.5);
+  plain.dropped(a, 2000 * kMs);
+  plain.discovered(a, 2600 * kMs);
+  plain.authenticated(a, 2900 * kMs);
+  CHECK(plain.due(3100 * kMs));
+}
+
 TEST_CASE("a source id prints as Fast DDS prints a GUID prefix and orders bytewise", "[dds]") {
   dds::SourceId a, b;
   CHECK_FALSE(a.known());
