@@ -61,9 +61,8 @@ void ParticipantWatch::onParticipantAuthentication(fdds::DomainParticipant* /*pa
                                                    eprosima::fastrtps::rtps::ParticipantAuthenticationInfo&& info) {
   using Status = eprosima::fastrtps::rtps::ParticipantAuthenticationInfo::AUTHENTICATION_STATUS;
   const SourceId peer = prefix_of(info.guid.guidPrefix);
-  const std::int64_t now = boot_ns();
   std::lock_guard<std::mutex> lock(mutex_);
-  if (info.status == Status::AUTHORIZED_PARTICIPANT) split_.authenticated(peer, now);
+  if (info.status == Status::AUTHORIZED_PARTICIPANT) split_.authenticated(peer);
   else if (refused_.size() < kRefusedRemembered) refused_.push_back(peer);  // reported once
 }
 

@@ -25,7 +25,7 @@ std::optional<double> StallWatch::check(std::int64_t now_ns, double period_s, do
 
 SplitWatch::SplitWatch(double window_s, double grace_s, bool secured)
     : window_ns_(static_cast<std::int64_t>(window_s * 1e9)),
-      grace_ns_(static_cast<std::int64_t>(grace_s * 1e9)),
+      grace_ns_(static_cast<std::int64_t>((secured ? kAuthBoundS : grace_s) * 1e9)),
       secured_(secured) {}
 
 void SplitWatch::dropped(const SourceId& peer, std::int64_t now_ns) {
@@ -38,16 +38,12 @@ void SplitWatch::dropped(const SourceId& peer, std::int64_t now_ns) {
 void SplitWatch::discovered(const SourceId& peer, std::int64_t now_ns) {
   const auto it = dropped_.find(peer);
   if (it == dropped_.end()) return;
-  if (now_ns - it->second <= window_ns_)
-    returned_[peer] = {now_ns, static_cast<double>(now_ns - it->second) * 1e-9, secured_};
+  if (now_ns - it->second <= window_ns_) returned_[peer] = {now_ns, static_cast<double>(now_ns - it->second) * 1e-9};
   dropped_.erase(it);
 }
 
-void SplitWatch::authenticated(const SourceId& peer, std::int64_t now_ns) {
-  const auto it = returned_.find(peer);
-  if (it == returned_.end() || !it->second.authenticating) return;
-  it->second.since_ns = now_ns;
-  it->second.authenticating = false;
+void SplitWatch::authenticated(const SourceId& peer) {
+  if (secured_) returned_.erase(peer);
 }
 
 void SplitWatch::removed(const SourceId& peer) {
@@ -58,9 +54,8 @@ void SplitWatch::removed(const SourceId& peer) {
 void SplitWatch::endpoint(const SourceId& peer) { returned_.erase(peer); }
 
 std::optional<SplitWatch::Split> SplitWatch::due(std::int64_t now_ns) const {
-  static constexpr auto kAuthBound_ns = static_cast<std::int64_t>(kAuthBoundS * 1e9);
   for (const auto& [peer, back] : returned_)
-    if (now_ns - back.since_ns >= (back.authenticating ? kAuthBound_ns : grace_ns_)) return Split{peer, back.unheard_s};
+    if (now_ns - back.first >= grace_ns_) return Split{peer, back.second};
   return std::nullopt;
 }
 

@@ -47,19 +47,21 @@ class StallWatch {
 /// this process hears announced within `grace_s` of its return (its endpoint discovery works, so it
 /// dropped this process too), or that is removed meanwhile (a peer that stalled recreates its own
 /// participant on its first tick, and its old one says goodbye).
-/// Secured (DDS Security), a returned peer's endpoints are announced only once it has authenticated
-/// again, which takes a handshake (Fast DDS 2.9.1 reports the discovery before it): the grace then runs
-/// from the peer's authentication. A half-matched pair cannot authenticate again (the side that kept
-/// its peer discards the new handshake: docs/SECURITY.md, "Leases"), so a peer not authenticated within
-/// kAuthBoundS of its return is due. Pure: the caller passes the events and the clock.
+/// Secured (DDS Security), a returned peer must authenticate again before anything else (Fast DDS 2.9.1
+/// reports its discovery before the handshake), and a half-matched pair cannot: the side that kept its
+/// peer authenticated discards the new handshake (docs/SECURITY.md, "Leases"). So a returned peer that
+/// authenticates again (or announces an endpoint, which comes after) dropped this process too and both
+/// start afresh: nothing is due, however long its endpoints then take (the key exchange and the secured
+/// endpoint discovery follow the handshake). One not authenticated within kAuthBoundS of its return is
+/// due. Pure: the caller passes the events and the clock.
 class SplitWatch {
  public:
   SplitWatch(double window_s, double grace_s, bool secured = false);
 
-  void dropped(const SourceId& peer, std::int64_t now_ns);        ///< its lease ran out
-  void discovered(const SourceId& peer, std::int64_t now_ns);     ///< its announcement, first or again
-  void authenticated(const SourceId& peer, std::int64_t now_ns);  ///< secured: its handshake ended
-  void removed(const SourceId& peer);                             ///< it said goodbye
+  void dropped(const SourceId& peer, std::int64_t now_ns);     ///< its lease ran out
+  void discovered(const SourceId& peer, std::int64_t now_ns);  ///< its announcement, first or again
+  void authenticated(const SourceId& peer);                     ///< secured: its handshake ended
+  void removed(const SourceId& peer);                          ///< it said goodbye
   void endpoint(const SourceId& peer);  ///< one of its endpoints announced (to this participant)
 
   struct Split {
@@ -67,8 +69,8 @@ class SplitWatch {
     double unheard_s = 0.0;  ///< from its drop to its return
   };
   /// The first peer that came back within window_s of its drop, and of which neither an endpoint nor a
-  /// goodbye came within grace_s since (secured: since its authentication, or it did not authenticate
-  /// within kAuthBoundS): this process should recreate its participant (then clear()).
+  /// goodbye came within grace_s since (secured: that did not authenticate again within kAuthBoundS):
+  /// this process should recreate its participant (then clear()).
   std::optional<Split> due(std::int64_t now_ns) const;
   /// Forgets everything: a new participant has no history with anyone.
   void clear();
@@ -76,22 +78,17 @@ class SplitWatch {
   /// window_s for a transport profile: lease_s + announce_s.
   static double window_for(const TransportConfig& cfg) { return cfg.lease_s + cfg.announce_s; }
   static constexpr double kGraceS = 0.5;
-  /// Secured: how long a returned peer may take to authenticate again. Fast DDS 2.9.1 resends an
-  /// unanswered handshake message every second, so a handshake that loses each of its three messages
-  /// once still ends within about 4 s.
+  /// Secured: how long a returned peer may take to authenticate again (instead of grace_s). Fast DDS
+  /// 2.9.1 resends an unanswered handshake message every second, so a handshake that loses each of its
+  /// three messages once still ends within about 4 s.
   static constexpr double kAuthBoundS = 5.0;
 
  private:
-  struct Returned {
-    std::int64_t since_ns;  ///< its return, or (secured) its authentication after it
-    double unheard_s;       ///< from its drop to its return
-    bool authenticating;    ///< secured, not yet authenticated again
-  };
   std::int64_t window_ns_;
-  std::int64_t grace_ns_;
+  std::int64_t grace_ns_;  ///< secured: kAuthBoundS
   bool secured_;
-  std::map<SourceId, std::int64_t> dropped_;  ///< peer -> when, forgotten after window_s
-  std::map<SourceId, Returned> returned_;
+  std::map<SourceId, std::int64_t> dropped_;                      ///< peer -> when, forgotten after window_s
+  std::map<SourceId, std::pair<std::int64_t, double>> returned_;  ///< peer -> (came back at, unheard_s)
 };
 
 }  // namespace shapeform::dds
