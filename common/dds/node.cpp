@@ -62,8 +62,12 @@ void ParticipantWatch::onParticipantAuthentication(fdds::DomainParticipant* /*pa
   using Status = eprosima::fastrtps::rtps::ParticipantAuthenticationInfo::AUTHENTICATION_STATUS;
   const SourceId peer = prefix_of(info.guid.guidPrefix);
   std::lock_guard<std::mutex> lock(mutex_);
-  if (info.status == Status::AUTHORIZED_PARTICIPANT) split_.authenticated(peer);
-  else if (refused_.size() < kRefusedRemembered) refused_.push_back(peer);  // reported once
+  if (info.status == Status::AUTHORIZED_PARTICIPANT) {
+    split_.authenticated(peer);
+    return;
+  }
+  split_.removed(peer);  // refused: never a peer to be half-matched with
+  if (refused_.size() < kRefusedRemembered) refused_.push_back(peer);  // reported once
 }
 
 void ParticipantWatch::on_participant_discovery(fdds::DomainParticipant* participant,
