@@ -210,7 +210,8 @@ def capture_stats(text):
     return out
 
 
-def run_once(a, run_dir):
+def run_once(a, run_dir, label=""):
+    """One run; `label` starts its progress lines."""
     binary = Path(a.build) / "bin" / ("shapeform_agent_group" if a.groups else "shapeform_agent")
     procs = a.groups or a.n
     per = a.n // procs
@@ -241,7 +242,7 @@ def run_once(a, run_dir):
         shown[0] = now
         heard = [m.heard for m in members] or [0]
         print("secure_mesh: %s%.0f s: %d of %d processes started, each hearing %d to %d of the %d others%s"
-              % (a.label, now - t0, len(members), procs, min(heard), max(heard), a.n - 1, final),
+              % (label, now - t0, len(members), procs, min(heard), max(heard), a.n - 1, final),
               file=sys.stderr, flush=True)
 
     try:
@@ -317,8 +318,7 @@ def main():
     for r in range(a.runs):
         run_dir = work / ("run_%d" % r)
         run_dir.mkdir(parents=True, exist_ok=True)
-        a.label = "run %d of %d, " % (r + 1, a.runs) if a.runs > 1 else ""
-        res = run_once(a, run_dir)
+        res = run_once(a, run_dir, "run %d of %d, " % (r + 1, a.runs) if a.runs > 1 else "")
         res["run"] = r
         res["logs"] = str(run_dir)
         print(json.dumps(res), flush=True)
