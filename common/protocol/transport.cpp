@@ -264,6 +264,19 @@ std::vector<TransportProblem> transport_problems(const TransportConfig& cfg) {
                    "discovery server: use loopback or lan, docs/SECURITY.md)",
                    "true", "transport.profile"});
   }
+  if (cfg.security.enabled && cfg.profile == kLan && cfg.peers.empty()) {
+    // Read in 2.9.1 and seen on the lab's hosts (docs/SECURITY.md, Deploying on real hosts): with
+    // multicast discovery a participant hears announcements on two receive threads (the group's and its
+    // unicast port's), and SecurityManager::match_builtin_endpoints fills one shared temporary proxy
+    // without a lock, so two participants discovered at once can leave one's handshake endpoints
+    // unmatched: that pair never authenticates. Fixed upstream in 2.9.2 (eProsima/Fast-DDS#3373).
+    out.push_back({"security.enabled",
+                   "cannot be used with multicast discovery (transport.profile lan without transport.peers): "
+                   "Fast DDS 2.9.1 can leave pairs of secured participants that discover each other at the "
+                   "same moment unable to authenticate; list every host's address in transport.peers "
+                   "(docs/SECURITY.md, Deploying on real hosts)",
+                   "true", "transport.peers"});
+  }
   if (!cfg.security.identity.empty() && !valid_identity(cfg.security.identity)) {
     out.push_back({"security.identity", "must be empty or an enclave name (letters, digits, _ - .)",
                    quoted(cfg.security.identity), ""});

@@ -139,9 +139,11 @@ class FleetTest(harness.LauncherTestCase):
                 self.assert_nothing_left(p)
 
     def test_ctrl_c_with_an_ssh_host(self):
-        # Two test hosts, unicast discovery: h1 a namespace running agents 0..2; h2 an ssh host (the
-        # stand-in) running agents 3..5 and the supervisor. DDS Security (--keystore): the command reaches
-        # every agent across the hosts encrypted. Ctrl-C to the launcher alone, mid-run.
+        # Two test hosts: h1 a namespace running agents 0..2; h2 an ssh host (the stand-in) running agents
+        # 3..5 and the supervisor. DDS Security (--keystore): the command reaches every agent across the
+        # hosts encrypted. The fleet file leaves discovery at multicast, which security refuses: the
+        # launcher gives every process the fleet's hosts as unicast peers. Ctrl-C to the launcher alone,
+        # mid-run.
         lab = "d%d" % self.domain
         self.use_lab(lab)
         subnet = "10.200.%d" % (2 * self.domain)
@@ -156,8 +158,7 @@ class FleetTest(harness.LauncherTestCase):
             "hosts:",
             "  - {name: h1, address: %s.1, run: netns sf-%s-h1, agents: 0-2}" % (subnet, lab),
             "  - {name: h2, address: %s.2, run: ssh root@h2, agents: [3, 4-5]}" % subnet,
-            "supervisor: h2",
-            "transport: {discovery: unicast}", ""]))
+            "supervisor: h2", ""]))
         env = dict(os.environ, PATH=bindir + os.pathsep + os.environ.get("PATH", ""))
         # A keystore at one path for both hosts (an ssh host needs it there: the launcher refuses --secure alone).
         keystore = os.path.join(self.run_dir, "keystore")
@@ -186,6 +187,7 @@ class FleetTest(harness.LauncherTestCase):
         self.assertTrue(harness.read_csv(os.path.join(run, "record", "metrics.csv")),
                         "the recording copied back from the ssh host")
         self.assertIn("interrupted", p.log())
+        self.assertIn("secured: discovery by unicast to the fleet's hosts", p.log())
         # The remote processes were stopped there: each ssh client then ended by itself, with status 0
         # (a client the launcher had to stop would be reported, and its remote process left to the lab's
         # removal).
