@@ -123,7 +123,7 @@ std::vector<P> build_table() {
       "authority), access-controlled (signed permissions per identity: only the supervisor commands) and its "
       "discovery and data encrypted (AES-GCM); participants without valid keys are refused. A bad or missing key "
       "file stops the program with exit 2 (docs/SECURITY.md)",
-      "not with multicast discovery (`lan` without `transport.peers`) nor `discovery-server`",
+      "; not with multicast discovery (`lan` without `transport.peers`) nor `discovery-server`",
       [](auto& c) -> auto& { return c.security.enabled; }));
   t.push_back(param<std::string>(
       Type::Text, "security.keystore", "", {},
