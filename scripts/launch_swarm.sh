@@ -303,6 +303,12 @@ if [ -z "$fleet" ] && [ "$n" -ge "$large_min" ]; then
   sets=("${large[@]}" "${sets[@]+"${sets[@]}"}")
   say "$n agents: the large-swarm settings of config/large_swarm.sets (${large[*]})"
 fi
+# The paper's gains were chosen for its 12 agents: from about 20 its law rests off the shape
+# (docs/RESULTS.md), and a run waiting for convergence waits in vain.
+[ "$(yaml_key dynamics law)" != paper ] || [ "$n" -lt 20 ] ||
+  say "note: $n agents with the paper's law: its gains (dynamics.k1, k2, sigma, beta, r) are the paper's" \
+    "for 12 agents, and 20 agents on its circle rest inside the shape (shape error about 0.65, docs/RESULTS.md)," \
+    "so the run may not converge; the arc law (dynamics.law=arc, e.g. --scenario arc_circle) spaces any N on the shape"
 # Every process sees the swarm size, so seeded starts match shapeform_sim --agents N --seed S.
 sets+=("swarm.agents=$n")
 setargs=()

@@ -270,6 +270,20 @@ class LauncherTest(harness.SwarmTestCase):
          r"^launch_swarm: -n 119: 119 agents, the supervisor and the vehicle process need 121 participants"),
     ]
 
+    def test_paper_law_past_its_gains_is_noted(self):
+        # 20 agents or more with the paper's law get a note once the arguments are checked; the arc law
+        # and 12 agents do not. Each launch then stops at its run folder (--runs names a file, exit 2):
+        # no swarm is needed.
+        not_a_folder = self.write("not_a_folder", "")
+        for scenario, n, noted in (("circle", 20, True), ("arc_circle", 20, False), ("circle", 12, False)):
+            with self.subTest(scenario=scenario, n=n):
+                p = self.start("note_%s_%d" % (scenario, n),
+                               ["bash", launcher(), "--build", build_dir(), "--runs", not_a_folder,
+                                "--domain", str(self.domain), "--scenario", scenario, "-n", str(n)])
+                self.assertEqual(p.wait(60), 2, p.log())
+                self.assertIn("--runs: cannot write into the folder", p.log())
+                self.assertEqual("note: %d agents with the paper's law" % n in p.log(), noted, p.log())
+
     def test_bad_arguments_exit_2(self):
         runs = os.path.join(self.run_dir, "runs")
         csv_path = self.write("three.csv", "0,0\n1,1\n2,2\n")
