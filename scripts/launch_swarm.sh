@@ -184,7 +184,7 @@ name=$(basename "$config" .yaml)
 # --fleet every process runs here, on the host "" (plain commands, the configuration's own transport).
 
 declare -A host_addr=() host_kind=() host_target=()
-hosts=() agent_host=() sup_host="" fleet_name="" fleet_peers="" lab=() lab_made=""
+hosts=() agent_host=() sup_host="" fleet_name="" fleet_peers="" lab=() lab_made="" peers_for_security=0
 if [ -n "$fleet" ]; then
   [ -f "$fleet" ] && [ -r "$fleet" ] || die "--fleet: cannot read '${fleet:0:200}'"
   fleet=$(cd "$(dirname "$fleet")" && pwd)/$(basename "$fleet")
@@ -209,16 +209,16 @@ if [ -n "$fleet" ]; then
       die "--fleet: host $h: no network namespace ${host_target[$h]} on this machine"
   done
   [ ${#lab[@]} -eq 0 ] || [ "$(id -u)" -eq 0 ] || die "--fleet: lab: making test hosts needs root"
+  if [ ${#lab[@]} -gt 0 ] && [ -e "/run/shapeform-netlab/${lab[0]}" ]; then
+    die "--fleet: lab.name: the test hosts '${lab[0]}' exist already (made by another run?): scripts/netlab.sh down ${lab[0]}"
+  fi
   if [ $secure -eq 1 ] && [ -z "$fleet_peers" ]; then
     # Security refuses multicast discovery (Fast DDS 2.9.1 can leave pairs that discover each other at
     # the same moment unable to authenticate: docs/SECURITY.md, Deploying on real hosts); the fleet file
     # names every host, so a secured fleet discovers by unicast to them.
+    # (Said with the other security notes, once the arguments are checked.)
     for h in "${hosts[@]}"; do fleet_peers+=${fleet_peers:+,}${host_addr[$h]}; done
-    say "secured: discovery by unicast to the fleet's hosts ($fleet_peers) instead of the fleet file's" \
-      "multicast (docs/SECURITY.md, Deploying on real hosts)"
-  fi
-  if [ ${#lab[@]} -gt 0 ] && [ -e "/run/shapeform-netlab/${lab[0]}" ]; then
-    die "--fleet: lab.name: the test hosts '${lab[0]}' exist already (made by another run?): scripts/netlab.sh down ${lab[0]}"
+    peers_for_security=1
   fi
 fi
 on_ssh() { [ -n "$1" ] && [ "${host_kind[$1]}" = ssh ]; }
@@ -388,6 +388,8 @@ if [ $secure -eq 1 ]; then
     "handshake message to every participant; on a 2-core host 25 processes meshed in 17-19 s and 50 did" \
     "not within 70 s (docs/SECURITY.md, Cost); host several agents per process (shapeform_agent_group:" \
     "1000 agents in 20 secured processes meshed in 8 s) or spread them over hosts (--fleet)"
+  [ $peers_for_security -eq 0 ] || say "secured: discovery by unicast to the fleet's hosts ($fleet_peers)" \
+    "instead of the fleet file's multicast (docs/SECURITY.md, Deploying on real hosts)"
 fi
 
 agents_timeout=$((30 + n / 2))
