@@ -123,7 +123,8 @@ std::vector<P> build_table() {
       "authority), access-controlled (signed permissions per identity: only the supervisor commands) and its "
       "discovery and data encrypted (AES-GCM); participants without valid keys are refused. A bad or missing key "
       "file stops the program with exit 2 (docs/SECURITY.md)",
-      "; not with multicast discovery (`lan` without `transport.peers`) nor `discovery-server`",
+      "; not with multicast discovery (`lan` without `transport.peers`), two or more `transport.interfaces`, "
+      "nor `discovery-server`",
       [](auto& c) -> auto& { return c.security.enabled; }));
   t.push_back(param<std::string>(
       Type::Text, "security.keystore", "", {},
@@ -277,6 +278,15 @@ std::vector<TransportProblem> transport_problems(const TransportConfig& cfg) {
                    "same moment unable to authenticate; list every host's address in transport.peers "
                    "(docs/SECURITY.md, Deploying on real hosts)",
                    "true", "transport.peers"});
+  } else if (cfg.security.enabled && cfg.profile == kLan && cfg.interfaces.size() > 1) {
+    // The same race with unicast discovery: each address of the list is its own socket and receive
+    // thread for the participant's port (seen with `ss` in a lab namespace; no list: one socket on all).
+    out.push_back({"security.enabled",
+                   "cannot be used with more than one address in transport.interfaces (each is a receive "
+                   "thread of its own, and Fast DDS 2.9.1 can leave pairs of secured participants discovered "
+                   "on two threads at once unable to authenticate); list one address, or none for all "
+                   "interfaces (docs/SECURITY.md, Deploying on real hosts)",
+                   "true", "transport.interfaces"});
   }
   if (!cfg.security.identity.empty() && !valid_identity(cfg.security.identity)) {
     out.push_back({"security.identity", "must be empty or an enclave name (letters, digits, _ - .)",

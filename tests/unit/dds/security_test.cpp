@@ -182,6 +182,15 @@ TEST_CASE("security keys: validated, identity derived from the role", "[dds][sec
                         Catch::Contains("list every host's address in transport.peers"));
   CHECK_NOTHROW(config::load("", {"security.enabled=true", "security.keystore=/k", "transport.profile=lan",
                                   "transport.peers=[10.1.2.3]"}));
+  // Each address of transport.interfaces is a receive thread: one (or none: all, one socket) only.
+  CHECK_THROWS_WITH(config::load("", {"security.enabled=true", "security.keystore=/k", "transport.profile=lan",
+                                      "transport.peers=[10.1.2.3]", "transport.interfaces=[10.1.2.3,10.1.3.3]"}),
+                    Catch::Contains("security.enabled: cannot be used with more than one address in "
+                                    "transport.interfaces"));
+  CHECK_NOTHROW(config::load("", {"security.enabled=true", "security.keystore=/k", "transport.profile=lan",
+                                  "transport.peers=[10.1.2.3]", "transport.interfaces=[10.1.2.3]"}));
+  CHECK_NOTHROW(config::load("", {"transport.profile=lan", "transport.peers=[10.1.2.3]",
+                                  "transport.interfaces=[10.1.2.3,10.1.3.3]"}));
   CHECK_NOTHROW(config::load("", {"transport.profile=lan"}));
   CHECK_THROWS_WITH(config::load("", {"security.identity=../etc"}),
                     Catch::Contains("security.identity: must be empty or an enclave name"));
