@@ -184,7 +184,8 @@ name=$(basename "$config" .yaml)
 # --fleet every process runs here, on the host "" (plain commands, the configuration's own transport).
 
 declare -A host_addr=() host_kind=() host_target=()
-hosts=() agent_host=() sup_host="" fleet_name="" fleet_peers="" lab=() lab_made="" peers_for_security=0
+hosts=() agent_host=() sup_host="" fleet_name="" fleet_peers="" lab=() lab_made=""
+fleet_discovery="" fleet_addresses=""
 if [ -n "$fleet" ]; then
   [ -f "$fleet" ] && [ -r "$fleet" ] || die "--fleet: cannot read '${fleet:0:200}'"
   fleet=$(cd "$(dirname "$fleet")" && pwd)/$(basename "$fleet")
@@ -195,7 +196,7 @@ if [ -n "$fleet" ]; then
     case "$what" in
       fleet) fleet_name=$a; n=$b ;;
       lab) lab=("$a" "$b" "$c") ;;
-      peers) fleet_peers=$a ;;
+      discovery) fleet_discovery=$a; fleet_addresses=$b ;;
       host) hosts+=("$a"); host_addr[$a]=$b; host_kind[$a]=$c; host_target[$a]=$d ;;
       agent) agent_host[$a]=$b ;;
       supervisor) sup_host=$a ;;
@@ -212,14 +213,10 @@ if [ -n "$fleet" ]; then
   if [ ${#lab[@]} -gt 0 ] && [ -e "/run/shapeform-netlab/${lab[0]}" ]; then
     die "--fleet: lab.name: the test hosts '${lab[0]}' exist already (made by another run?): scripts/netlab.sh down ${lab[0]}"
   fi
-  if [ $secure -eq 1 ] && [ -z "$fleet_peers" ]; then
-    # Security refuses multicast discovery (Fast DDS 2.9.1 can leave pairs that discover each other at
-    # the same moment unable to authenticate: docs/SECURITY.md, Deploying on real hosts); the fleet file
-    # names every host, so a secured fleet discovers by unicast to them.
-    # (Said with the other security notes, once the arguments are checked.)
-    for h in "${hosts[@]}"; do fleet_peers+=${fleet_peers:+,}${host_addr[$h]}; done
-    peers_for_security=1
-  fi
+  # Unicast discovery to every host when the file asks for it, and always when secured: security
+  # refuses multicast discovery (Fast DDS 2.9.1 can leave pairs that discover each other at the same
+  # moment unable to authenticate: docs/SECURITY.md, Deploying on real hosts).
+  if [ "$fleet_discovery" = unicast ] || [ $secure -eq 1 ]; then fleet_peers=$fleet_addresses; fi
 fi
 on_ssh() { [ -n "$1" ] && [ "${host_kind[$1]}" = ssh ]; }
 # The --set flags of a process on host $1 (the lan profile bound to the host's address), in hsets.
@@ -388,8 +385,8 @@ if [ $secure -eq 1 ]; then
     "handshake message to every participant; on a 2-core host 25 processes meshed in 17-19 s and 50 did" \
     "not within 70 s (docs/SECURITY.md, Cost); host several agents per process (shapeform_agent_group:" \
     "1000 agents in 20 secured processes meshed in 8 s) or spread them over hosts (--fleet)"
-  [ $peers_for_security -eq 0 ] || say "secured: discovery by unicast to the fleet's hosts ($fleet_peers)" \
-    "instead of the fleet file's multicast (docs/SECURITY.md, Deploying on real hosts)"
+  [ -z "$fleet" ] || [ "$fleet_discovery" = unicast ] || say "secured: discovery by unicast to the fleet's" \
+    "hosts ($fleet_peers) instead of the fleet file's multicast (docs/SECURITY.md, Deploying on real hosts)"
 fi
 
 agents_timeout=$((30 + n / 2))

@@ -9,7 +9,8 @@ Prints one line per fact, fields separated by single spaces (no field holds a sp
 
     fleet NAME AGENTS                   the file's base name, the number of agents (ids 0..AGENTS-1)
     lab NAME HOSTS SUBNET               only when the fleet asks the launcher to make test hosts
-    peers A,B,...                       only with unicast discovery: every host's address
+    discovery KIND A,B,...              the file's discovery (multicast or unicast) and every host's
+                                        address: the peers of unicast discovery
     host NAME ADDRESS KIND TARGET       KIND netns (TARGET the namespace), ssh (TARGET [user@]host) or
                                         local (TARGET -)
     agent ID HOST                       one line per agent id, in order
@@ -216,8 +217,7 @@ def plan_lines(name, plan):
     lines = ["fleet %s %d" % (name, plan["agents"])]
     if plan["lab"]:
         lines.append("lab %(name)s %(hosts)d %(subnet)s" % plan["lab"])
-    if plan["discovery"] == "unicast":
-        lines.append("peers " + ",".join(h["address"] for h in plan["hosts"]))
+    lines.append("discovery %s %s" % (plan["discovery"], ",".join(h["address"] for h in plan["hosts"])))
     lines += ["host %(name)s %(address)s %(kind)s %(target)s" % h for h in plan["hosts"]]
     lines += ["agent %d %s" % (i, plan["owner"][i]) for i in range(plan["agents"])]
     lines.append("supervisor " + plan["supervisor"])
