@@ -18,6 +18,7 @@
 #include <fastrtps/utils/IPLocator.h>
 #include <unistd.h>
 
+#include "dds/handshake_filter.hpp"
 #include "dds/library_log.hpp"
 #include "dds/locators.hpp"
 #include "dds/topic_qos.hpp"
@@ -208,7 +209,12 @@ fdds::DomainParticipantQos participant_qos(const TransportConfig& cfg, const std
     builtin.discovery_config.m_DiscoveryServers.push_back(remote);
   }
 
-  pq.transport().user_transports.push_back(udp);
+  // Secured: the authentication handshakes go to the participant they name only (dds/handshake_filter.hpp).
+  if (cfg.security.enabled) {
+    pq.transport().user_transports.push_back(with_directed_handshakes(udp));
+  } else {
+    pq.transport().user_transports.push_back(udp);
+  }
 
   if (cfg.static_edp) {
     // validate() refused it with a discovery server (whose clients keep simple EDP) and with security.

@@ -51,7 +51,8 @@ inline constexpr const char* kPidProperty = "shapeform.pid";
 /// multicast_data (loopback, lan without peers) changes no participant setting: see
 /// data_multicast_locator(). static_edp replaces simple endpoint discovery by STATIC EDP with
 /// static_edp_description(cfg), given inline ("data://"). security.enabled adds the DDS Security plugin properties of the enclave
-/// (protocol/security.hpp: security_properties).
+/// (protocol/security.hpp: security_properties) and wraps the UDPv4 descriptor so that each authentication
+/// handshake is sent to the participant it names only (dds/handshake_filter.hpp: with_directed_handshakes).
 /// Pure: creates nothing.
 /// Throws std::runtime_error naming the offending field (validate(): "transport.domain: must be in 0..232,
 /// got 300").

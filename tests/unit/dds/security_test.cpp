@@ -5,15 +5,21 @@
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
+#include <array>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
+#include <memory>
+#include <set>
 #include <fstream>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include <fastrtps/xmlparser/XMLProfileManager.h>
+
 #include "config/config.hpp"
+#include "dds/handshake_filter.hpp"
 #include "dds/library_log.hpp"
 #include "dds/node.hpp"
 #include "dds/participant_factory.hpp"
@@ -255,6 +261,170 @@ TEST_CASE("secured nodes: a bad enclave is refused, never run unsecured; permiss
   }
   REQUIRE_FALSE(got.empty());
   CHECK(got.front().msg.x() == 1.25);
+}
+
+namespace {
+
+/// An RTPS datagram as Fast DDS 2.9.1's participant stateless writer sends a handshake: the header, an
+/// INFO_DST naming the participant the datagram goes to, an INFO_TS, then a DATA of `writer` whose
+/// payload is a ParticipantGenericMessage for `destination` (the fields after it left out: the filter
+/// reads no further). Submessages in the given byte order; `inline_qos` adds a parameter list.
+std::vector<std::uint8_t> handshake_datagram(std::uint8_t info_dst, std::uint8_t destination,
+                                             std::array<std::uint8_t, 4> writer = {0x00, 0x02, 0x01, 0xc3},
+                                             bool little_endian = true, bool inline_qos = false) {
+  std::vector<std::uint8_t> d = {'R', 'T', 'P', 'S', 2, 3, 1, 15};
+  for (int i = 0; i < 12; ++i) d.push_back(0xa0);  // the sender's prefix
+  const auto u16 = [&](std::vector<std::uint8_t>& v, std::uint16_t x) {
+    if (little_endian) {
+      v.push_back(static_cast<std::uint8_t>(x & 0xff));
+      v.push_back(static_cast<std::uint8_t>(x >> 8));
+    } else {
+      v.push_back(static_cast<std::uint8_t>(x >> 8));
+      v.push_back(static_cast<std::uint8_t>(x & 0xff));
+    }
+  };
+  const std::uint8_t e = little_endian ? 1 : 0;
+  d.insert(d.end(), {0x0e, e});
+  u16(d, 12);
+  for (int i = 0; i < 12; ++i) d.push_back(info_dst);
+  d.insert(d.end(), {0x09, e});
+  u16(d, 8);
+  for (int i = 0; i < 8; ++i) d.push_back(0x11);
+  std::vector<std::uint8_t> body;
+  u16(body, 0);   // extraFlags
+  u16(body, 16);  // octetsToInlineQos
+  body.insert(body.end(), {0x00, 0x02, 0x01, 0xc4});  // reader: the stateless reader
+  body.insert(body.end(), writer.begin(), writer.end());
+  for (int i = 0; i < 8; ++i) body.push_back(0);  // writer sequence number
+  if (inline_qos) {
+    u16(body, 0x0070);  // PID_KEY_HASH
+    u16(body, 16);
+    for (int i = 0; i < 16; ++i) body.push_back(0x33);
+    u16(body, 0x0001);  // PID_SENTINEL
+    u16(body, 0);
+  }
+  body.insert(body.end(), {0x00, 0x01, 0x00, 0x00});  // encapsulation CDR_LE
+  for (int i = 0; i < 48; ++i) body.push_back(0x22);  // message_identity, related_message_identity
+  for (int i = 0; i < 12; ++i) body.push_back(destination);
+  for (int i = 0; i < 4; ++i) body.push_back(0x00);
+  for (int i = 0; i < 100; ++i) body.push_back(0x44);  // the rest of the message
+  const std::uint8_t flags = static_cast<std::uint8_t>(e | 0x04 | (inline_qos ? 0x02 : 0x00));
+  d.insert(d.end(), {0x15, flags});
+  u16(d, static_cast<std::uint16_t>(body.size()));
+  d.insert(d.end(), body.begin(), body.end());
+  return d;
+}
+
+bool misdirected(const std::vector<std::uint8_t>& d) { return dds::is_misdirected_handshake(d.data(), d.size()); }
+
+}  // namespace
+
+TEST_CASE("a handshake datagram for another participant than it goes to is misdirected; nothing else is",
+          "[dds][security][handshake_filter]") {
+  // Going to participant 0x07 with a handshake for 0x09: every other participant's datagram of it.
+  CHECK(misdirected(handshake_datagram(0x07, 0x09)));
+  CHECK(misdirected(handshake_datagram(0x07, 0x09, {0x00, 0x02, 0x01, 0xc3}, false)));
+  CHECK(misdirected(handshake_datagram(0x07, 0x09, {0x00, 0x02, 0x01, 0xc3}, true, true)));
+  // The one for the participant it goes to.
+  CHECK_FALSE(misdirected(handshake_datagram(0x09, 0x09)));
+  CHECK_FALSE(misdirected(handshake_datagram(0x09, 0x09, {0x00, 0x02, 0x01, 0xc3}, false, true)));
+  // No destination named, or no INFO_DST: for everyone.
+  CHECK_FALSE(misdirected(handshake_datagram(0x07, 0x00)));
+  CHECK_FALSE(misdirected(handshake_datagram(0x00, 0x09)));
+  // Another writer (the secure volatile writer 0xff0202c3, a user writer): never touched.
+  CHECK_FALSE(misdirected(handshake_datagram(0x07, 0x09, {0xff, 0x02, 0x02, 0xc3})));
+  CHECK_FALSE(misdirected(handshake_datagram(0x07, 0x09, {0x00, 0x00, 0x01, 0x03})));
+
+  auto d = handshake_datagram(0x07, 0x09);
+  SECTION("two misdirected handshakes in one datagram") {
+    auto second = handshake_datagram(0x07, 0x0a);
+    d.insert(d.end(), second.begin() + 20 + 16 + 12, second.end());  // its DATA only
+    CHECK(misdirected(d));
+  }
+  SECTION("a handshake for the destination beside a misdirected one keeps the datagram") {
+    auto second = handshake_datagram(0x07, 0x07);
+    d.insert(d.end(), second.begin() + 20 + 16 + 12, second.end());
+    CHECK_FALSE(misdirected(d));
+  }
+  SECTION("a vendor-specific submessage after it (Debian's Fast DDS appends one of 56 bytes)") {
+    d.insert(d.end(), {0x80, 0x01, 56, 0});
+    d.insert(d.end(), 56, 0x55);
+    CHECK(misdirected(d));
+  }
+  SECTION("any other submessage keeps it (HEARTBEAT, a protected SEC_PREFIX)") {
+    for (std::uint8_t id : {std::uint8_t{0x07}, std::uint8_t{0x31}}) {
+      auto with = d;
+      with.insert(with.end(), {id, 0x01, 4, 0, 0, 0, 0, 0});
+      CHECK_FALSE(misdirected(with));
+    }
+  }
+  SECTION("truncated anywhere, or not RTPS: kept") {
+    for (std::size_t n = 0; n < d.size() - 100; ++n) {
+      INFO("cut to " << n << " bytes");
+      CHECK_FALSE(dds::is_misdirected_handshake(d.data(), n));
+    }
+    d[0] = 'X';
+    CHECK_FALSE(misdirected(d));
+    CHECK_FALSE(dds::is_misdirected_handshake(nullptr, 0));
+  }
+  SECTION("a DATA without payload (no D flag) or a DATA_FRAG: kept") {
+    auto no_data = d;
+    no_data[20 + 16 + 12 + 1] &= static_cast<std::uint8_t>(~0x04);
+    CHECK_FALSE(misdirected(no_data));
+    auto frag = d;
+    frag[20 + 16 + 12] = 0x16;
+    CHECK_FALSE(misdirected(frag));
+  }
+}
+
+TEST_CASE("secured participants send each handshake only to the participant it names, and authenticate",
+          "[dds][security][handshake_filter][node]") {
+  TempDir tmp;
+  const std::string ks = make_keystore(tmp.path / "ks", "--agents 3");
+  dds::TransportConfig cfg;
+  cfg.domain = 150 + 5 * static_cast<int>(::getpid() % 16) + 2;
+  // One process: switch Fast DDS's intraprocess delivery off, so the handshakes go through the transport.
+  eprosima::fastrtps::LibrarySettingsAttributes settings;
+  settings.intraprocess_delivery = eprosima::fastrtps::INTRAPROCESS_OFF;
+  eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings(settings);
+  const auto before = dds::handshake_filter_counts();
+
+  // Four participants in one process (three agents and the supervisor): each handshake message would
+  // go to the three others without the filter.
+  std::vector<std::unique_ptr<dds::Node>> agents;
+  std::vector<dds::Writer<msg::AgentState>> writers;
+  for (int i = 0; i < 3; ++i) {
+    dds::TransportConfig c = cfg;
+    c.security = secured(ks, "agent_" + std::to_string(i));
+    agents.push_back(std::make_unique<dds::Node>(c, "agent_" + std::to_string(i)));
+    writers.push_back(agents.back()->writer<msg::AgentState>(dds::TopicId::State));
+  }
+  dds::TransportConfig sup_cfg = cfg;
+  sup_cfg.security = secured(ks, "supervisor");
+  dds::Node supervisor(sup_cfg, "supervisor");
+  auto reader = supervisor.reader<msg::AgentState>(dds::TopicId::State);
+
+  // The supervisor hears all three through the encrypted topic: every pair authenticated.
+  std::set<std::uint32_t> heard;
+  std::vector<dds::Received<msg::AgentState>> got;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (heard.size() < 3 && std::chrono::steady_clock::now() < deadline) {
+    for (std::uint32_t i = 0; i < 3; ++i) {
+      msg::AgentState m;
+      m.id(i);
+      writers[i].write(m);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    got.clear();
+    reader.drain(got);
+    for (const auto& r : got) heard.insert(r.msg.id());
+  }
+  CHECK(heard.size() == 3);
+  const auto after = dds::handshake_filter_counts();
+  // Misdirected copies were held back (each message would also have gone to the participants already
+  // discovered that it does not name), and none arrived.
+  CHECK(after.dropped > before.dropped);
+  CHECK(after.misdirected_received == before.misdirected_received);
 }
 
 }  // namespace shapeform
