@@ -292,8 +292,8 @@ elif [ -n "$max_participants" ] && [ $((n + 1 + nveh)) -gt "$max_participants" ]
 fi
 # A large swarm on this host: the settings of config/large_swarm.sets first, so the user's --set win.
 large_min=$(sed -n 's/^min_agents=//p' "$root/config/large_swarm.sets")
-# A secured swarm needs them earlier: Fast DDS 2.9.1 sends every handshake and key-exchange message to
-# every matched participant (docs/SECURITY.md, Cost).
+# A secured swarm needs them earlier: Fast DDS 2.9.1 sends every key-exchange message to every
+# authenticated participant (docs/SECURITY.md, Cost).
 [ $secure -eq 1 ] && large_min=$(sed -n 's/^min_secured_agents=//p' "$root/config/large_swarm.sets")
 if [ -z "$fleet" ] && [ "$n" -ge "$large_min" ]; then
   mapfile -t large < <(grep -E '^[a-z_]+\.[a-z_.]+=' "$root/config/large_swarm.sets")
@@ -378,11 +378,11 @@ if [ $secure -eq 1 ]; then
   done
   setargs+=(--set security.enabled=true --set "security.keystore=$keystore")
   # Measured (docs/SECURITY.md, Cost, scripts/secure_mesh.py; with the large-swarm settings and the 0.5 s
-  # pacing, which a secured swarm gets from min_secured_agents on): 25 processes meshed in 17-19 s,
-  # 50 not within 70 s (every handshake message goes to every participant: N^3), while 1000 agents in
-  # 20 group processes meshed in 8 s.
+  # pacing, which a secured swarm gets from min_secured_agents on): 25 processes meshed in 17-32 s,
+  # 50 not within 70 s (key exchange N^3, announcements to every slot at each discovery), while 1000
+  # agents in 20 group processes meshed in 8 s.
   [ "$n" -le 25 ] || say "warning: $n secured agent processes: with DDS Security, Fast DDS 2.9.1 sends every" \
-    "handshake message to every participant; on a 2-core host 25 processes meshed in 17-19 s and 50 did" \
+    "key-exchange message to every participant; on a 2-core host 25 processes meshed in 17-32 s and 50 did" \
     "not within 70 s (docs/SECURITY.md, Cost); host several agents per process (shapeform_agent_group:" \
     "1000 agents in 20 secured processes meshed in 8 s) or spread them over hosts (--fleet)"
   [ -z "$fleet" ] || [ "$fleet_discovery" = unicast ] || say "secured: discovery by unicast to the fleet's" \
@@ -391,7 +391,7 @@ fi
 
 agents_timeout=$((30 + n / 2))
 # Agents start this many seconds apart. A secured swarm from min_secured_agents on: 0.5 s, so that each
-# newcomer's handshakes (sent to every participant) end before the next one's begin; measured with
+# newcomer's handshakes and key exchange end before the next one's begin; measured with
 # scripts/secure_mesh.py, 25 processes meshed in 17-19 s paced against 43-44 s at once (docs/SECURITY.md).
 agent_interval=0.02
 [ $secure -eq 1 ] && [ -z "$fleet" ] && [ "$n" -ge "$large_min" ] && agent_interval=0.5

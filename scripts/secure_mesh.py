@@ -25,7 +25,8 @@ bytes of each datagram, enough for the RTPS headers and a handshake's destinatio
 submessages of the handshake writer (ParticipantStatelessMessage, entity 0x000201c3) counted
 (handshake_data, handshake_bytes: the datagrams' full sizes), and the distinct messages among them
 (handshake_messages: by sender and sequence number; Fast DDS 2.9.1 sends each to every matched
-participant, and a resend is a new message), the requests among those (handshake_requests: the first
+participant, the project's transport only to its destination (common/dds/handshake_filter.hpp), and
+a resend is a new message), the requests among those (handshake_requests: the first
 message of a handshake; the others are replies and finals) and the pairs of participants they are
 between (handshake_pairs: a pair is counted once, whichever way its messages go). handshake_by_10s
 gives [datagrams, handshake_data, handshake_messages, handshake_requests, handshake_pairs] per 10 s of
