@@ -17,12 +17,12 @@
 
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastrtps/utils/IPLocator.h>
-#include <fastrtps/xmlparser/XMLProfileManager.h>
 
 #include "core/metric_table.hpp"
 #include "core/command_table.hpp"
 #include "core/params.hpp"
 #include "dds/convert.hpp"
+#include "force_transport.hpp"
 #include "dds/discovery.hpp"
 #include "dds/node.hpp"
 #include "dds/node_entities.hpp"
@@ -58,16 +58,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 /// parallel processes): 150 + 5 * (pid % 16) + offset, offset 0..4, always within 150..229.
 int test_domain(int offset) { return 150 + 5 * static_cast<int>(::getpid() % 16) + offset; }
 
-/// Fast DDS short-cuts endpoints of one process (intraprocess delivery). Switch that off so the
-/// pub/sub tests really go through the loopback UDP transport the profile builds.
-void force_transport() {
-  eprosima::fastrtps::LibrarySettingsAttributes settings;
-  settings.intraprocess_delivery = eprosima::fastrtps::INTRAPROCESS_OFF;
-  eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings(settings);
-}
-
 dds::TransportConfig loopback(int domain) {
-  force_transport();
+  test::force_transport();
   dds::TransportConfig t;
   t.profile = "loopback";
   t.domain = domain;

@@ -16,13 +16,12 @@
 #include <thread>
 #include <vector>
 
-#include <fastrtps/xmlparser/XMLProfileManager.h>
-
 #include "config/config.hpp"
 #include "dds/handshake_filter.hpp"
 #include "dds/library_log.hpp"
 #include "dds/node.hpp"
 #include "dds/participant_factory.hpp"
+#include "force_transport.hpp"
 #include "protocol/security.hpp"
 #include "protocol/transport.hpp"
 
@@ -383,10 +382,7 @@ TEST_CASE("secured participants send each handshake only to the participant it n
   const std::string ks = make_keystore(tmp.path / "ks", "--agents 3");
   dds::TransportConfig cfg;
   cfg.domain = 150 + 5 * static_cast<int>(::getpid() % 16) + 2;
-  // One process: switch Fast DDS's intraprocess delivery off, so the handshakes go through the transport.
-  eprosima::fastrtps::LibrarySettingsAttributes settings;
-  settings.intraprocess_delivery = eprosima::fastrtps::INTRAPROCESS_OFF;
-  eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings(settings);
+  test::force_transport();  // one process: the handshakes through the transport, not intraprocess
   const auto before = dds::handshake_filter_counts();
 
   // Four participants in one process (three agents and the supervisor): each handshake message would
