@@ -13,10 +13,11 @@ the largest difference of the centroid error and of the ring error over t = 160 
 scripts/paper/report.py measures the async model; a pair is within the bound when both are <= 0.1.
 A second table per law holds what a user tracking a moving target expects: each tracked run's centroid
 error (its median over the last 100 iterations: the paper's law chatters, so one instant is noise) at
-most 0.1 above the fixed-centre problem's, the median of the same figure over the case's fixed-centre
-runs (every run draws its own phasing, so no fixed-centre run has the tracked run's; the problem's level
-is what tracking should keep; closer to the centre than that is no failure), and how many are within
-0.1 either way. --steps K runs K iterations instead of the experiments' 200 (300: both paths past
+most 0.1 above a fixed-centre run's, that is above the largest of the same figure over the case's
+fixed-centre runs (every run draws its own phasing, so no fixed-centre run has the tracked run's; the
+paper's law comes to rest anywhere from 0.05 to 0.26 off a fixed centre depending on the phasing, a
+spread wider than the bound, so the problem's range is what tracking should keep; closer to the centre
+is no failure), and how many are within 0.1 of the fixed runs' range either way. --steps K runs K iterations instead of the experiments' 200 (300: both paths past
 their transient over the last 100).
 One table per law on stdout (markdown), progress on stderr, every number in DATA/free_running.json, the runs in
 DATA/<law>/<experiment>/<pair>/ (DATA default runs/<UTC time>-free-running). About 12 s per run on 2
@@ -130,20 +131,19 @@ def table(law, results):
 
 def criterion_table(law, results):
     """The markdown table of the user's criterion: each tracked run's centroid error (median over the
-    last WINDOW iterations) against the fixed-centre problem's (the median of its runs' same figure)."""
+    last WINDOW iterations) against the fixed-centre problem's range (its runs' same figure)."""
     n = len(next(iter(results.values())))
     steps = next(iter(results.values()))[0]["steps"]
     lines = [f"| case ({law} law, free-running processes, {n} runs each, centroid error: median over "
              f"t = {steps - WINDOW}..{steps}) | fixed centre | tracked with feed-forward | "
-             "tracked - fixed, least and most | tracked at most 0.1 above | within 0.1 either way |",
+             "tracked - largest fixed, least and most | tracked at most 0.1 above | within 0.1 of the range |",
              "|---|---|---|---|---|---|"]
     for label, pairs in results.items():
         fixed = [p["window"]["fixed"] for p in pairs]
         ff = [p["window"]["ff"] for p in pairs]
-        ref = statistics.median(fixed)
-        diffs = [x - ref for x in ff]
+        diffs = [x - max(fixed) for x in ff]
         above = sum(1 for x in diffs if x <= BOUND)
-        either = sum(1 for x in diffs if abs(x) <= BOUND)
+        either = sum(1 for x in ff if min(fixed) - BOUND <= x <= max(fixed) + BOUND)
         lines.append(f"| {label} | {spread(fixed)} | {spread(ff)} | {min(diffs):+.3f}, {max(diffs):+.3f} | "
                      f"{above} of {n} | {either} of {n} |")
     return "\n".join(lines)

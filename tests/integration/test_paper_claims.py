@@ -172,34 +172,38 @@ class PaperClaimsTest(harness.SwarmTestCase):
         # fresh draw of tick phasings and no fixed-centre run shares a tracked run's. What a user tracking
         # a moving target expects is the swarm around it as around a still one: each tracked run's
         # centroid error (median over t = 200..300: the paper's law chatters, one instant is noise) at
-        # most 0.1 above the fixed-centre problem's, the median of the same figure over fixed-centre runs
-        # (scripts/paper/free_running.py measures the problem's spread over many; docs/RESULTS.md). The
-        # paper's law rests off its centre by a phasing's draw (one fixed-centre run measured 0.088 where
-        # others measure 0.18 to 0.2), so its reference is the median of 3 runs; the arc law's is exact.
-        # Closer to the centre is no failure: tracked runs of the paper's law rest up to 0.1 closer.
-        # 10 tracked phasings in all, on both paths and both laws.
+        # most 0.1 above a fixed-centre run's, that is above the largest of the same figure over the
+        # fixed-centre runs. The paper's law comes to rest off its centre by a phasing's draw, and the
+        # draw depends on the host's load: on an idle host 10 fixed-centre runs measured 0.19 to 0.22,
+        # beside the rest of the suite 0.073, 0.080 and 0.137 (scripts/paper/free_running.py;
+        # docs/RESULTS.md). That spread is wider than the bound, so the reference is the problem's range,
+        # not one draw or a median of three, and the fixed-centre and tracked runs alternate so that both
+        # sample the same load. The arc law's fixed-centre figure is exact (0). Closer to the centre is
+        # no failure. 10 tracked phasings in all, on both paths and both laws.
         cases = {("paper", "line"): (3, 3), ("paper", "circle"): (3, 3), ("arc", "line"): (2, 1),
                  ("arc", "circle"): (2, 1)}  # (tracked runs, fixed-centre runs)
         for (law, path), (runs, fixed_runs) in cases.items():
             start = self.start_csv(f"track_{path}", C0[path] if path == "line" else (0.0, 0.0))
             sets = [f"dynamics.law={law}"]
-            fixed = []
-            for k in range(fixed_runs):
-                _, fx = self.launch(f"free_{law}_{path}_fixed{k}", f"track_{path}", 10, 300, start,
-                                    sets + ["tracking.path=fixed", f"tracking.point=[{C0[path][0]:g},{C0[path][1]:g}]"])
-                fixed.append(self.window(fx, "centroid_error", 200, 300))
-            c_fx = statistics.median(fixed)
-            for j in range(runs):
+            fixed, tracked = [], []
+            for k in range(max(runs, fixed_runs)):
+                if k < fixed_runs:
+                    _, fx = self.launch(f"free_{law}_{path}_fixed{k}", f"track_{path}", 10, 300, start,
+                                        sets + ["tracking.path=fixed",
+                                                f"tracking.point=[{C0[path][0]:g},{C0[path][1]:g}]"])
+                    fixed.append(self.window(fx, "centroid_error", 200, 300))
+                if k < runs:
+                    _, ff = self.launch(f"free_{law}_{path}_ff{k}", f"track_{path}_ff", 10, 300, start, sets)
+                    tracked.append((self.window(ff, "centroid_error", 200, 300),
+                                    self.window(ff, "ring_error", 200, 300)))
+            for j, (c_ff, r_ff) in enumerate(tracked):
                 with self.subTest(law=law, path=path, run=j):
-                    _, ff = self.launch(f"free_{law}_{path}_ff{j}", f"track_{path}_ff", 10, 300, start, sets)
-                    c_ff = self.window(ff, "centroid_error", 200, 300)
-                    r_ff = self.window(ff, "ring_error", 200, 300)
-                    msg = (f"{law} {path} run {j}: centroid error tracked {c_ff:.3f}, fixed centre {c_fx:.3f} "
-                           f"(median of {', '.join('%.3f' % c for c in fixed)}); ring error tracked {r_ff:.3f}")
+                    msg = (f"{law} {path} run {j}: centroid error tracked {c_ff:.3f}, fixed centre at most "
+                           f"{max(fixed):.3f} (runs: {', '.join('%.3f' % c for c in fixed)}); ring error "
+                           f"tracked {r_ff:.3f}")
                     sys.stderr.write(msg + "\n")
-                    self.assertLessEqual(c_ff - c_fx, 0.1, msg)
+                    self.assertLessEqual(c_ff - max(fixed), 0.1, msg)
                     self.assertLess(r_ff, 0.7, msg)  # on a ring of radius about r0 around the centre
-
 
 if __name__ == "__main__":
     harness.main()
