@@ -17,8 +17,8 @@ most 0.1 above a fixed-centre run's, that is above the largest of the same figur
 fixed-centre runs (every run draws its own phasing, so no fixed-centre run has the tracked run's; the
 paper's law comes to rest anywhere from 0.05 to 0.26 off a fixed centre depending on the phasing, a
 spread wider than the bound, so the problem's range is what tracking should keep; closer to the centre
-is no failure), and how many are within 0.1 of the fixed runs' range either way. --steps K runs K iterations instead of the experiments' 200 (300: both paths past
-their transient over the last 100).
+is no failure), and how many are within 0.1 of the fixed runs' range either way. --steps K runs K
+iterations instead of the experiments' 200 (300: both paths past their transient over the last 100).
 One table per law on stdout (markdown), progress on stderr, every number in DATA/free_running.json, the runs in
 DATA/<law>/<experiment>/<pair>/ (DATA default runs/<UTC time>-free-running). About 12 s per run on 2
 idle cores: 10 pairs of both paths and both laws take about 13 minutes. Standard library only; every
