@@ -282,7 +282,9 @@ SIM_ROWS = [(100, "fast", "best", 1, 5000, None), (100, "reference", None, 1, 10
             (1000, "fast", "best", 1, 1500, None), (1000, "fast", "best", 1, 4000, 1.0),
             (1000, "fast", "avx2", 1, 500, None), (1000, "fast", "generic", 1, 200, None),
             (1000, "reference", None, 1, 20, None),
-            (10000, "fast", "best", 1, 20, None), (10000, "fast", "best", 2, 40, None),
+            (1000, "fast", "best", 1, 8000, 0.0),
+            (10000, "fast", "best", 1, 20, None), (10000, "fast", "best", 1, 60, 0.0),
+            (10000, "fast", "best", 2, 40, None),
             (10000, "reference", None, 1, 1, None)]
 
 # --------------------------------------------------------------------------------------------

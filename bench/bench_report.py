@@ -37,6 +37,11 @@ SIM_TARGETS = {1000: 1000.0, 10000: 20.0}
 # the squared distance 2, the four sums 4. The least time a pair can take on this core is that many over
 # the peak multiply-add rate.
 SIM_FMA_PER_PAIR = 25
+# Of those, the weight's (sigma^2 + d^2)^-beta: the power's 19. The rest (squared distance, sums) is all a
+# pass with beta = 0 computes (weight 1: batch_kernel.hpp, HalfBeta<0>).
+SIM_FMA_WEIGHT = 19
+# The simulator's target against that bound: a pair within this many times the time the peak allows.
+SIM_BOUND_TARGET = 1.3
 
 
 def sim_label(r: dict) -> str:
@@ -98,6 +103,24 @@ def sim_line(sim: dict, r: dict, ref: dict) -> str:
             f"| {f_num(r.get('other_load'), '{:.2f}')} | {tgt} | {verdict} |\n")
 
 
+def sim_weight_text(sim: dict, template: str, rows: list, bound: float, peak: float) -> str:
+    """What the weight costs of a pair: the paper's rows against the rows with beta = 0 (no weight), and
+    what a pair would take with the weight at the peak; "" without beta = 0 rows."""
+    zero = {r["agents"]: r for r in sim.get("rows", [])
+            if r["impl"] == "fast" and r.get("beta") == 0.0 and r.get("threads", 1) == 1 and r.get("simd") == "avx512"}
+    cases = [(n, r["ns_per_pair"], zero[n]["ns_per_pair"]) for n, r in rows
+             if r and r.get("ns_per_pair") and n in zero and zero[n].get("ns_per_pair")]
+    if not cases:
+        return ""
+    at_peak = SIM_FMA_WEIGHT / peak * 1e9
+    each = lambda f: "; ".join(f"N = {n}: {f(paper, rest):.2f} ns" for n, paper, rest in cases)
+    return template.format(rest=each(lambda paper, rest: rest), weight=each(lambda paper, rest: paper - rest),
+                           wfma=SIM_FMA_WEIGHT, wpeak=at_peak,
+                           floor="; ".join(f"N = {n}: {rest + at_peak:.2f} ns, x{(rest + at_peak) / bound:.2f} the bound"
+                                           for n, _, rest in cases),
+                           factor=SIM_BOUND_TARGET, target=SIM_BOUND_TARGET * bound)
+
+
 def sim_section(sim: dict) -> str:
     o = ["## Simulator\n\n"]
     if not sim.get("available"):
@@ -123,6 +146,9 @@ def sim_section(sim: dict) -> str:
         if measured:
             o.append(text["bound"].format(fma=SIM_FMA_PER_PAIR, bound=bound, measured=measured))
         o.append(text["limits"] + "\n\n")
+        if measured:
+            weight = sim_weight_text(sim, text["weight"], rows, bound, peak["avx512"])
+            o.append(weight + "\n\n" if weight else "")
     return "".join(o)
 
 
