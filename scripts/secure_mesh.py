@@ -30,7 +30,8 @@ a resend is a new message), the requests among those (handshake_requests: the fi
 message of a handshake; the others are replies and finals) and the pairs of participants they are
 between (handshake_pairs: a pair is counted once, whichever way its messages go). handshake_by_10s
 gives [datagrams, handshake_data, handshake_messages, handshake_requests, handshake_pairs] per 10 s of
-the capture. A saturated host drops datagrams from the capture: capture_seen is what the kernel's filter
+the capture. kinds (and kinds_by_10s, per 10 s) counts the datagrams by what they carry (KINDS below:
+handshake, announcement, key_exchange, protected, data, initial_acknack, acknack, heartbeat, other). A saturated host drops datagrams from the capture: capture_seen is what the kernel's filter
 passed, capture_kept what tcpdump wrote (the counts are of those). Every process started is stopped
 before the next run. Exit 0 when every run meshed, 3 otherwise, 2 on bad arguments.
 """
@@ -148,8 +149,44 @@ def handshake_of(body, flags):
     return pl[48:60], pl[24:40] == bytes(16)
 
 
+SPDP_WRITER = bytes.fromhex("000100c2")
+# What a datagram carries, by the most telling submessage in it (first in this order): a handshake message,
+# a participant announcement, a submessage protected with the key exchange's own key (transformation key
+# id 0: Fast DDS's ParticipantVolatileMessageSecure endpoints, which carry the key exchange), another
+# protected submessage, other DATA, an initial ACKNACK (nothing received yet, nothing asked: a reader
+# that has not heard a heartbeat from its writer), another ACKNACK, a HEARTBEAT, anything else.
+KINDS = ("handshake", "announcement", "key_exchange", "protected", "data", "initial_acknack", "acknack",
+         "heartbeat", "other")
+
+
+def datagram_kind(rtps):
+    """The kind (KINDS) of one RTPS datagram (as captured: maybe cut short)."""
+    seen = set()
+    off = 20
+    while off + 4 <= len(rtps):
+        sid, flags = rtps[off], rtps[off + 1]
+        e = "<" if flags & 1 else ">"
+        length = struct.unpack(e + "H", rtps[off + 2:off + 4])[0]
+        body = rtps[off + 4:off + 4 + length] if length else rtps[off + 4:]
+        if sid == 0x15:
+            seen.add("handshake" if body[8:12] == STATELESS_WRITER else
+                     "announcement" if body[8:12] == SPDP_WRITER else "data")
+        elif sid == 0x31 and len(body) >= 8:  # SEC_PREFIX: transformation kind, then key id
+            seen.add("key_exchange" if body[4:8] == bytes(4) else "protected")
+        elif sid == 0x06 and len(body) >= 20:  # readerId, writerId, readerSNState base (high, low), numBits
+            high, low, bits = struct.unpack(e + "iII", body[8:20])
+            seen.add("initial_acknack" if (high, low, bits) == (0, 0, 0) else "acknack")
+        elif sid == 0x07:
+            seen.add("heartbeat")
+        if length == 0:
+            break
+        off += 4 + length
+    return next((k for k in KINDS if k in seen), "other")
+
+
 def count_handshakes(pcap):
-    """DATA submessages of the stateless (handshake) writer in a pcap of loopback: in all, and per 10 s."""
+    """DATA submessages of the stateless (handshake) writer in a pcap of loopback, in all and per 10 s; and
+    the datagrams by kind (KINDS), in all and per 10 s."""
     data = Path(pcap).read_bytes()
     if len(data) < 24:
         data = struct.pack("<IHHiIII", 0xA1B2C3D4, 2, 4, 0, 0, 65535, 1)  # no capture: no datagram
@@ -174,8 +211,10 @@ def count_handshakes(pcap):
         if rtps[:4] != b"RTPS":
             continue
         t0 = ts if t0 is None else t0
-        bucket = buckets.setdefault((ts - t0) // 10, [0, 0, set(), set(), set()])
+        bucket = buckets.setdefault((ts - t0) // 10, [0, 0, set(), set(), set(), {}])
         bucket[0] += 1
+        kind = datagram_kind(rtps)
+        bucket[5][kind] = bucket[5].get(kind, 0) + 1
         off = 20
         while off + 4 <= len(rtps):
             sid, flags = rtps[off], rtps[off + 1]
@@ -194,12 +233,15 @@ def count_handshakes(pcap):
             if length == 0:
                 break
             off += 4 + length
-    by_10s = [buckets.get(k, [0, 0, set(), set(), set()]) for k in range(max(buckets, default=-1) + 1)]
+    by_10s = [buckets.get(k, [0, 0, set(), set(), set(), {}]) for k in range(max(buckets, default=-1) + 1)]
     union = lambda i: len(set().union(*(b[i] for b in by_10s)))
+    in_order = lambda counts: {k: counts[k] for k in KINDS if counts.get(k)}
     return {"datagrams": sum(b[0] for b in by_10s), "handshake_data": sum(b[1] for b in by_10s),
             "handshake_messages": union(2), "handshake_requests": union(3), "handshake_pairs": union(4),
             "handshake_bytes": hs_bytes,
-            "handshake_by_10s": [[b[0], b[1], len(b[2]), len(b[3]), len(b[4])] for b in by_10s]}
+            "handshake_by_10s": [[b[0], b[1], len(b[2]), len(b[3]), len(b[4])] for b in by_10s],
+            "kinds": in_order({k: sum(b[5].get(k, 0) for b in by_10s) for k in KINDS}),
+            "kinds_by_10s": [in_order(b[5]) for b in by_10s]}
 
 
 def capture_stats(text):

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
-"""scripts/secure_mesh.py: its count of handshake messages in a capture, on a capture made here with
-known datagrams, and its refusal of bad arguments.
+"""scripts/secure_mesh.py: its count of handshake messages and of datagrams by kind in a capture, on
+captures made here with known datagrams, and its refusal of bad arguments.
 
   tests/secure_mesh_test.py SOURCE_DIR WORK_DIR
 """
@@ -94,7 +94,8 @@ pcap(cut, frames[:4] + [long_message, long_message], times=[100, 101, 109, 110, 
 got_cut = mesh.count_handshakes(str(cut))
 want = {"datagrams": 6, "handshake_data": 6, "handshake_messages": 4, "handshake_requests": 2,
         "handshake_pairs": 3, "handshake_bytes": rtps_bytes + 2 * (len(long_message) - 42),
-        "handshake_by_10s": [[3, 3, 2, 1, 2], [1, 1, 1, 0, 1], [2, 2, 1, 1, 1]]}
+        "handshake_by_10s": [[3, 3, 2, 1, 2], [1, 1, 1, 0, 1], [2, 2, 1, 1, 1]],
+        "kinds": {"handshake": 6}, "kinds_by_10s": [{"handshake": 3}, {"handshake": 1}, {"handshake": 2}]}
 if got_cut != want:
     failures.append("a capture cut to 200 bytes: %r, expected %r" % (got_cut, want))
 # Cut before the destinations: the messages are still counted, their pairs are not.
@@ -103,6 +104,33 @@ pcap(short, frames[:4], snap=110)
 got_short = mesh.count_handshakes(str(short))
 if (got_short["handshake_messages"], got_short["handshake_pairs"], got_short["handshake_requests"]) != (3, 0, 0):
     failures.append("a capture cut to 110 bytes: %r, expected 3 messages, no pair, no request" % got_short)
+# Datagrams by kind: one of each, a handshake and an announcement in one datagram counting as the handshake.
+def acknack(base_high, base_low, bits):
+    return submessage(0x06, b"\0\0\0\0" + OTHER + struct.pack("<iII", base_high, base_low, bits) + struct.pack("<i", 1))
+
+
+def protected(key_id):  # SEC_PREFIX (transformation kind, key id, session, IV), SEC_BODY, SEC_POSTFIX
+    return submessage(0x31, b"\0\0\2\1" + key_id + b"s" * 8) + submessage(0x30, b"x" * 24) + \
+        submessage(0x32, b"m" * 20)
+
+
+kind_frames = [frames[3], frame(rtps(a, info_ts, announcement)), frame(rtps(b, protected(bytes(4)))),
+               frame(rtps(b, protected(b"\0\0\0\7"))), frame(rtps(c, info_ts, data(OTHER[::-1], 5))),
+               frame(rtps(c, acknack(0, 0, 0))), frame(rtps(c, acknack(0, 0, 0)), dport=24912),
+               frame(rtps(d, acknack(0, 1, 0))), frame(rtps(d, submessage(0x07, b"\0" * 28))),
+               frame(rtps(d, info_ts))]
+kinds = WORK / "kinds.pcap"
+pcap(kinds, kind_frames, times=[0, 0, 0, 0, 0, 12, 12, 12, 12, 12], snap=200)
+got_kinds = mesh.count_handshakes(str(kinds))
+want_kinds = {"handshake": 1, "announcement": 1, "key_exchange": 1, "protected": 1, "data": 1, "initial_acknack": 2,
+              "acknack": 1, "heartbeat": 1, "other": 1}
+if got_kinds["kinds"] != want_kinds or list(got_kinds["kinds"]) != list(mesh.KINDS):
+    failures.append("datagrams by kind: %r, expected %r" % (got_kinds["kinds"], want_kinds))
+want_by_10s = [{"handshake": 1, "announcement": 1, "key_exchange": 1, "protected": 1, "data": 1},
+               {"initial_acknack": 2, "acknack": 1, "heartbeat": 1, "other": 1}]
+if got_kinds["kinds_by_10s"] != want_by_10s:
+    failures.append("datagrams by kind per 10 s: %r, expected %r" % (got_kinds["kinds_by_10s"], want_by_10s))
+
 stats = mesh.capture_stats("tcpdump: listening on lo\n1230038 packets captured\n8058180 packets received by filter\n"
                            "5545522 packets dropped by kernel\n")
 if stats != {"capture_kept": 1230038, "capture_seen": 8058180, "capture_dropped": 5545522}:
