@@ -31,8 +31,9 @@ message of a handshake; the others are replies and finals) and the pairs of part
 between (handshake_pairs: a pair is counted once, whichever way its messages go). handshake_by_10s
 gives [datagrams, handshake_data, handshake_messages, handshake_requests, handshake_pairs] per 10 s of
 the capture. kinds (and kinds_by_10s, per 10 s) counts the datagrams by what they carry (KINDS below:
-handshake, announcement, key_exchange, protected, data, initial_acknack, acknack, heartbeat, other). A saturated host drops datagrams from the capture: capture_seen is what the kernel's filter
-passed, capture_kept what tcpdump wrote (the counts are of those). Every process started is stopped
+handshake, announcement, key_exchange, protected, data, initial_acknack, acknack, heartbeat, other). A
+saturated host drops datagrams from the capture: capture_seen is what the kernel's filter passed,
+capture_kept what tcpdump wrote (the counts are of those). Every process started is stopped
 before the next run. Exit 0 when every run meshed, 3 otherwise, 2 on bad arguments.
 """
 import argparse
