@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "core/fence.hpp"
+#include "core/metrics.hpp"
 #include "core/law.hpp"
 #include "core/swarm.hpp"
 
@@ -506,39 +507,22 @@ void AgentLogic::book_gap(double gap) {
 }
 
 void AgentLogic::book_gaps(const std::vector<AgentLogic*>& agents) {
-  // One pass over the table for all agents (their positions in a small array the inner loop runs
-  // over), on squared distances: the norm is the square root of the squared norm, and the square root
-  // is monotone, so the smallest norm is the root of the smallest squared norm, bit for bit.
-  thread_local std::vector<double> hx, hy, best;
-  thread_local std::vector<std::int32_t> ids;
-  const std::size_t n = agents.size();
-  hx.resize(n);
-  hy.resize(n);
-  ids.resize(n);
-  best.assign(n, std::numeric_limits<double>::infinity());
-  for (std::size_t k = 0; k < n; ++k) {
-    hx[k] = agents[k]->x_.x();
-    hy[k] = agents[k]->x_.y();
-    ids[k] = agents[k]->id_;
+  // Every agent against every state heard, on a grid (core::nearest_squared): the smallest squared
+  // distance, bit for bit that of comparing every pair, and its square root the smallest norm (the square
+  // root is monotone).
+  thread_local std::vector<core::Vec2> heard, hosted;
+  thread_local std::vector<std::int32_t> heard_ids, hosted_ids;
+  heard.clear(), heard_ids.clear(), hosted.clear(), hosted_ids.clear();
+  for (const auto& e : agents.front()->table_->entries()) {
+    heard.push_back(e.cur.x);
+    heard_ids.push_back(e.id);
   }
-  const auto& entries = agents.front()->table_->entries();
-  for (const auto& e : entries) {
-    const double ex = e.cur.x.x(), ey = e.cur.x.y();
-    if (e.hosted >= 0) {  // one of ours: not a neighbour of itself
-      for (std::size_t k = 0; k < n; ++k) {
-        const double dx = ex - hx[k], dy = ey - hy[k];
-        const double d = dx * dx + dy * dy;
-        if (e.id != ids[k] && d < best[k]) best[k] = d;
-      }
-      continue;
-    }
-    for (std::size_t k = 0; k < n; ++k) {  // branch-free: the compiler vectorises it
-      const double dx = ex - hx[k], dy = ey - hy[k];
-      const double d = dx * dx + dy * dy;
-      best[k] = d < best[k] ? d : best[k];
-    }
+  for (const AgentLogic* a : agents) {
+    hosted.push_back(a->x_);
+    hosted_ids.push_back(a->id_);
   }
-  for (std::size_t k = 0; k < n; ++k) {
+  const std::vector<double> best = core::nearest_squared(heard, heard_ids, hosted, hosted_ids);
+  for (std::size_t k = 0; k < agents.size(); ++k) {
     AgentLogic& a = *agents[k];
     // Any entry but its own: a gap (infinite only if every distance overflows, as the norms would).
     const bool any = a.table_->heard_by(a.id_) > 0;

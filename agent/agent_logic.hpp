@@ -335,7 +335,7 @@ class AgentLogic {
   /// Books `gap` (the smallest distance to a neighbour as last heard; ignored when negative: none) as
   /// book_gap would.
   void book_gap(double gap);
-  /// book_gap() of every agent of one table, in one pass over it (the same figures, bit for bit).
+  /// book_gap() of every agent of one table, found on a grid (the same figures, bit for bit).
   static void book_gaps(const std::vector<AgentLogic*>& agents);
   /// Checks the position against the fence before a step: a new excursion is a breach (counted, and
   /// breach_action taken); back inside, the excursion ends.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numeric>
 #include <utility>
@@ -164,25 +165,40 @@ int count_clusters(const std::vector<Vec2>& x, double link) {
   return clusters;
 }
 
-std::vector<double> nearest_distances(const std::vector<Vec2>& x) {
-  std::vector<double> nn(x.size(), std::numeric_limits<double>::infinity());
-  if (x.size() < 2) return nn;
-  const Grid grid(x, 0.0);
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    const int c = grid.col(x[i]), r = grid.row(x[i]);
-    double best = std::numeric_limits<double>::infinity();
+std::vector<double> nearest_squared(const std::vector<Vec2>& p, const std::vector<std::int32_t>& pid,
+                                    const std::vector<Vec2>& q, const std::vector<std::int32_t>& qid) {
+  std::vector<double> best(q.size(), std::numeric_limits<double>::infinity());
+  if (p.empty() || q.empty()) return best;
+  const Grid grid(p, 0.0);
+  for (std::size_t k = 0; k < q.size(); ++k) {
+    const Vec2& at = q[k];
+    // A query outside the grid starts from the cell its projection onto the grid's box falls in: it is
+    // at least as far from every cell as its projection is (the box is convex).
+    const int c = grid.col(at), r = grid.row(at);
+    double b = std::numeric_limits<double>::infinity();
     // A point in a cell beyond ring k is at least k cells away: once the best is within that (less a
     // margin far above the rounding of the cell's index), stop.
     for (int ring = 0; grid.ring_in_grid(c, r, ring); ++ring) {
       grid.for_each_on_ring(c, r, ring, [&](int j) {
-        const auto other = static_cast<std::size_t>(j);
-        if (other != i) best = std::min(best, (x[i] - x[other]).squaredNorm());
+        const auto i = static_cast<std::size_t>(j);
+        if (pid[i] == qid[k]) return;  // the query's own point
+        const double dx = p[i].x() - at.x(), dy = p[i].y() - at.y();
+        const double d = dx * dx + dy * dy;
+        b = d < b ? d : b;
       });
       const double reach = ring * grid.cell() * (1.0 - 1e-9);
-      if (best <= reach * reach) break;
+      if (b <= reach * reach) break;
     }
-    nn[i] = std::sqrt(best);
+    best[k] = b;
   }
+  return best;
+}
+
+std::vector<double> nearest_distances(const std::vector<Vec2>& x) {
+  std::vector<std::int32_t> ids(x.size());
+  std::iota(ids.begin(), ids.end(), 0);
+  std::vector<double> nn = nearest_squared(x, ids, x, ids);
+  for (double& d : nn) d = std::sqrt(d);
   return nn;
 }
 

@@ -1,6 +1,7 @@
 #pragma once
 /// Convergence metrics of a formation, shared by the simulator and the supervisor.
 /// Undefined values (too few agents, all agents on one point) are std::nullopt, never 0 or NaN.
+#include <cstdint>
 #include <limits>
 #include <optional>
 #include <utility>
@@ -58,6 +59,12 @@ int count_clusters(const std::vector<Vec2>& x, double link = kClusterLink);
 /// Each agent's distance to its nearest other agent (infinity for a lone agent): the same values as
 /// comparing every pair, found on a uniform grid (about O(N) for a spread-out swarm).
 std::vector<double> nearest_distances(const std::vector<Vec2>& x);
+
+/// For each query q[k], the smallest squared distance (dx dx + dy dy, d = p[i] - q[k]) to a point p[i]
+/// whose id pid[i] is not qid[k], infinity if there is none: the same values as comparing every pair,
+/// found on a uniform grid (a group process's agents against every agent it hears, each tick).
+std::vector<double> nearest_squared(const std::vector<Vec2>& p, const std::vector<std::int32_t>& pid,
+                                    const std::vector<Vec2>& q, const std::vector<std::int32_t>& qid);
 
 /// The largest pairwise distance (0 below two agents): the diameter of the convex hull, by rotating
 /// calipers (O(N log N)).

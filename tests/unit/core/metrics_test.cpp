@@ -228,6 +228,62 @@ TEST_CASE("nearest distances, clusters and extent equal comparing every pair, to
   CHECK(count_clusters({}) == 0);
 }
 
+TEST_CASE("nearest squared distances to queries equal comparing every pair, to the bit", "[metrics][pairwise]") {
+  // A group process's agents (the queries, at their new positions, each with its id) against every
+  // state it holds (the points, its own agents' among them): inside the points' box, outside it, far
+  // away, on a point, with and without a point of their own id.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const auto brute = [](const std::vector<Vec2>& p, const std::vector<std::int32_t>& pid, const std::vector<Vec2>& q,
+                        const std::vector<std::int32_t>& qid) {
+    std::vector<double> best(q.size(), std::numeric_limits<double>::infinity());
+    for (std::size_t k = 0; k < q.size(); ++k)
+      for (std::size_t i = 0; i < p.size(); ++i) {
+        if (pid[i] == qid[k]) continue;
+        const double dx = p[i].x() - q[k].x(), dy = p[i].y() - q[k].y();
+        best[k] = std::min(best[k], dx * dx + dy * dy);
+      }
+    return best;
+  };
+  std::vector<std::pair<std::string, std::vector<Vec2>>> sets;
+  for (const int n : {1, 2, 50, 1000}) {
+    std::vector<Vec2> x;
+    for (int i = 0; i < n; ++i) x.emplace_back(10 * u(rng), 10 * u(rng));
+    sets.emplace_back("uniform " + std::to_string(n), x);
+  }
+  sets.emplace_back("ring 1000", ring(1000, 4.0, Vec2(3, -2), 0.0));
+  {
+    std::vector<Vec2> x;
+    for (int i = 0; i < 300; ++i) x.emplace_back(0.1 * i, 5.0 - 0.1 * i);
+    for (int i = 0; i < 5; ++i) x.emplace_back(1.5, 1.5);
+    x.emplace_back(1e6, -1e6);
+    sets.emplace_back("line, duplicates, outlier", x);
+  }
+  for (const auto& [name, p] : sets) {
+    INFO(name);
+    std::vector<std::int32_t> pid(p.size());
+    std::iota(pid.begin(), pid.end(), 100);
+    std::vector<Vec2> q;
+    std::vector<std::int32_t> qid;
+    for (std::size_t i = 0; i < p.size(); i += 7) {  // hosted agents: their own point, moved a little
+      q.push_back(p[i] + Vec2(0.01 * u(rng), 0.01 * u(rng)));
+      qid.push_back(pid[i]);
+    }
+    q.push_back(p.front());  // on a point, not its own
+    qid.push_back(-1);
+    q.emplace_back(30.0, 30.0);  // outside the box
+    qid.push_back(pid.back());
+    q.emplace_back(-2e6, 5e5);  // far outside
+    qid.push_back(-2);
+    CHECK(nearest_squared(p, pid, q, qid) == brute(p, pid, q, qid));
+  }
+  // Nobody else: infinity.
+  CHECK(nearest_squared({Vec2(1, 1)}, {4}, {Vec2(2, 2)}, {4}) ==
+        std::vector<double>{std::numeric_limits<double>::infinity()});
+  CHECK(nearest_squared({}, {}, {Vec2(2, 2)}, {4}) == std::vector<double>{std::numeric_limits<double>::infinity()});
+  CHECK(nearest_squared({Vec2(1, 1)}, {4}, {}, {}).empty());
+}
+
 TEST_CASE("settling: first step after which error stays on its plateau", "[metrics][settle]") {
   std::vector<double> err;
   std::vector<std::optional<double>> cv;
