@@ -6,8 +6,8 @@
 #include <limits>
 
 #include "core/fence.hpp"
-#include "core/metrics.hpp"
 #include "core/law.hpp"
+#include "core/metrics.hpp"
 #include "core/swarm.hpp"
 
 namespace shapeform::agent {

@@ -1,5 +1,6 @@
 #pragma once
-/// Convergence metrics of a formation, shared by the simulator and the supervisor.
+/// Convergence metrics of a formation, shared by the simulator and the supervisor (and the nearest
+/// distances by the agents' gap figures).
 /// Undefined values (too few agents, all agents on one point) are std::nullopt, never 0 or NaN.
 #include <cstdint>
 #include <limits>
