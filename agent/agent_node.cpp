@@ -173,8 +173,8 @@ class AgentNode {
   void report();
   /// The process-wide figures of the status period ending now (loop timing, data ages, CPU, memory).
   void take_period_figures();
-  /// Statuses of the hosted agents k with k % every == phase, with the period's figures; with --json
-  /// also their "status" events.
+  /// Statuses of the hosted agents k with k % every == phase, with the period's figures (with batch_,
+  /// in AgentStatusBatch samples); with --json also their "status" events.
   void publish_status(bool json, std::uint64_t phase = 0, std::uint64_t every = 1);
   /// Says that agent l went `out` beyond the fence, and what it does (safety.breach_action).
   void report_breach(const AgentLogic& l, double out);
@@ -193,8 +193,8 @@ class AgentNode {
   const config::Config& cfg_;
   const AgentOptions opt_;
   const bool group_;
-  /// One AgentStateBatch per tick for all hosted agents (a group with agent.batch_state), else one
-  /// AgentState per hosted agent.
+  /// One AgentStateBatch per tick and one AgentStatusBatch per status period for all hosted agents (a
+  /// group with agent.batch_state), else one AgentState and one AgentStatus per hosted agent.
   const bool batch_;
   /// The states heard, shared by the hosted agents (each sample taken in once).
   std::shared_ptr<NeighbourTable> table_;
@@ -216,7 +216,10 @@ class AgentNode {
   dds::Writer<msg::AgentStateBatch> batch_writer_;    ///< when batch_
   std::vector<dds::StateSample> batch_states_;        ///< reused by publish()
   msg::AgentStateBatch batch_msg_;                     ///< reused by publish()
-  dds::Writer<msg::AgentStatus> status_writer_;
+  dds::Writer<msg::AgentStatus> status_writer_;            ///< unless batch_
+  dds::Writer<msg::AgentStatusBatch> status_batch_writer_;  ///< when batch_
+  std::vector<dds::StatusSample> batch_statuses_;           ///< reused by publish_status()
+  msg::AgentStatusBatch status_batch_msg_;                  ///< reused by publish_status()
   dds::StateInput state_input_;
   dds::Reader<msg::ShapeCommand> command_reader_;
   /// Re-offers the command this process follows (transient-local, KEEP_LAST 1): it outlives its
@@ -273,7 +276,9 @@ AgentNode::AgentNode(const std::vector<std::int32_t>& ids, const std::vector<cor
       state_writer_(batch_ ? dds::Writer<msg::AgentState>() : node_.writer<msg::AgentState>(dds::TopicId::State)),
       batch_writer_(batch_ ? node_.writer<msg::AgentStateBatch>(dds::TopicId::StateBatch)
                            : dds::Writer<msg::AgentStateBatch>()),
-      status_writer_(node_.writer<msg::AgentStatus>(dds::TopicId::Status)),
+      status_writer_(batch_ ? dds::Writer<msg::AgentStatus>() : node_.writer<msg::AgentStatus>(dds::TopicId::Status)),
+      status_batch_writer_(batch_ ? node_.writer<msg::AgentStatusBatch>(dds::TopicId::StatusBatch)
+                                  : dds::Writer<msg::AgentStatusBatch>()),
       state_input_(node_),
       command_reader_(node_.reader<msg::ShapeCommand>(dds::TopicId::Command)),
       command_relay_(cfg.transport.security.enabled ? dds::Writer<msg::ShapeCommand>()
@@ -387,7 +392,7 @@ void AgentNode::on_duplicate(std::int32_t id, const dds::SourceId& other, std::i
 }
 
 void AgentNode::farewell(std::int64_t now) {
-  if (status_writer_.matched() > 0) {
+  if ((batch_ ? status_batch_writer_.matched() : status_writer_.matched()) > 0) {
     take_period_figures();
     publish_status(false);
     ++farewell_sent_;
@@ -697,12 +702,19 @@ void AgentNode::report() {
     util::log_info(std::string(group_ ? "every hosted agent hears at least " : "hearing ") + std::to_string(heard) +
                    " neighbours");
   }
-  // Each hosted agent's status once per status period, a group's agents spread over the period's ticks
-  // (agent k on the ticks where ticks % status_every == k % status_every): a group's statuses never
-  // leave in one burst, which a reader's socket buffer would have to hold at once.
+  // Each hosted agent's status once per status period. With agent.batch_state, all of them in one
+  // AgentStatusBatch (a sample per part of kBatchStatusesPerDatagram, one datagram each) on the period's
+  // first tick; otherwise one AgentStatus each, a group's agents spread over the period's ticks (agent k
+  // on the ticks where ticks % status_every == k % status_every), never in one burst that a reader's
+  // socket buffer would have to hold at once.
   const std::uint64_t phase = ++ticks_ % status_every_;
   if (phase == 0) take_period_figures();
-  if (period_taken_) publish_status(true, phase, status_every_);
+  if (!period_taken_) return;
+  if (batch_) {
+    if (phase == 0) publish_status(true);
+  } else {
+    publish_status(true, phase, status_every_);
+  }
 }
 
 void AgentNode::take_period_figures() {
@@ -717,6 +729,7 @@ void AgentNode::publish_status(bool json, std::uint64_t phase, std::uint64_t eve
   if (phase >= logics_.size()) return;  // no hosted agent on this tick of the period
   dds::StatusSample st = period_;
   st.stamp_ns = util::steady_ns();  // the counters' time
+  batch_statuses_.clear();
   for (std::size_t i = phase; i < logics_.size(); i += every) {
     const auto& l = logics_[i];
     const AgentCounters& k = l->counters();
@@ -758,7 +771,8 @@ void AgentNode::publish_status(bool json, std::uint64_t phase, std::uint64_t eve
     st.blocked_by = static_cast<std::int32_t>(f.blocked_by);
     st.beyond_fence = l->beyond_fence();
     st.fence_breaches = f.fence_breaches;
-    status_writer_.write(dds::to_msg(st));
+    if (batch_) batch_statuses_.push_back(st);
+    else status_writer_.write(dds::to_msg(st));
     if (opt_.json && json)
       emit({{"event", "status"}, {"id", st.id}, {"neighbours_heard", st.neighbours_heard}, {"epoch", st.epoch},
             {"model_time", l->model_time()}, {"x", l->position().x()}, {"y", l->position().y()},
@@ -771,6 +785,11 @@ void AgentNode::publish_status(bool json, std::uint64_t phase, std::uint64_t eve
             {"promises_broken", st.promises_broken}, {"blocked", st.blocked}, {"blocked_by", st.blocked_by},
             {"beyond_fence", st.beyond_fence}, {"fence_breaches", st.fence_breaches}});
   }
+  if (batch_)
+    for (const auto& [begin, end] : dds::batch_ranges(batch_statuses_.size(), dds::kBatchStatusesPerDatagram)) {
+      dds::to_msg(batch_statuses_, begin, end, status_batch_msg_);
+      status_batch_writer_.write(status_batch_msg_);
+    }
 }
 
 }  // namespace

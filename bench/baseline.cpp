@@ -8,8 +8,9 @@
 // shapeform/state_batch (as shapeform_agent_group), each element booked as one agent's sample; more
 // ids than agent.batch_max_states go in several samples per tick, cut as the group cuts them.
 //
-// It publishes AgentStatus exactly as shapeform_agent does (same fields, same meaning, same rate), so
-// the benchmark reads both kinds of process with one probe and one set of formulas.
+// It publishes its statuses exactly as shapeform_agent and shapeform_agent_group do (same fields, same
+// meaning, same rate: one AgentStatus per period, or one AgentStatusBatch per period carrying every
+// listed id), so the benchmark reads both kinds of process with one probe and one set of formulas.
 //
 // The participant comes from the project's one factory (dds::create_participant), so the transport
 // profile and the loopback rule are the agents' own.
@@ -40,6 +41,7 @@
 #include "dds/topic_qos.hpp"
 #include "shapeform/msg/AgentStateBatchPubSubTypes.h"
 #include "shapeform/msg/AgentStatePubSubTypes.h"
+#include "shapeform/msg/AgentStatusBatchPubSubTypes.h"
 #include "shapeform/msg/AgentStatusPubSubTypes.h"
 #include "app/app.hpp"
 #include "util/log.hpp"
@@ -183,16 +185,18 @@ int run(const std::vector<std::int32_t>& ids, bool batch, const config::Config& 
     const sdds::TopicId state_id = batch ? sdds::TopicId::StateBatch : sdds::TopicId::State;
     if (batch) register_type<msg::AgentStateBatchPubSubType>(participant);
     else register_type<msg::AgentStatePubSubType>(participant);
-    register_type<msg::AgentStatusPubSubType>(participant);
+    const sdds::TopicId status_id = batch ? sdds::TopicId::StatusBatch : sdds::TopicId::Status;
+    if (batch) register_type<msg::AgentStatusBatchPubSubType>(participant);
+    else register_type<msg::AgentStatusPubSubType>(participant);
     auto* state_topic = participant->create_topic(sdds::topic_name(state_id), sdds::type_name(state_id), fdds::TopicQos());
-    auto* status_topic = participant->create_topic(sdds::topic_name(sdds::TopicId::Status),
-                                                   sdds::type_name(sdds::TopicId::Status), fdds::TopicQos());
+    auto* status_topic =
+        participant->create_topic(sdds::topic_name(status_id), sdds::type_name(status_id), fdds::TopicQos());
     auto* publisher = participant->create_publisher(fdds::PublisherQos());
     auto* subscriber = participant->create_subscriber(fdds::SubscriberQos());
     if (!state_topic || !status_topic || !publisher || !subscriber)
       throw std::runtime_error("create_topic/publisher/subscriber failed");
     auto* state_writer = publisher->create_datawriter(state_topic, sdds::writer_qos(state_id));
-    auto* status_writer = publisher->create_datawriter(status_topic, sdds::writer_qos(sdds::TopicId::Status));
+    auto* status_writer = publisher->create_datawriter(status_topic, sdds::writer_qos(status_id));
     Ledger ledger(ids);
     StateListener<msg::AgentState> single_listener(ledger);
     StateListener<msg::AgentStateBatch> batch_listener(ledger);
@@ -223,9 +227,9 @@ int run(const std::vector<std::int32_t>& ids, bool batch, const config::Config& 
       }
     }
     std::uint64_t seq = 0, ticks = 0;
-    sdds::StatusSample period;  // the last status period's process-wide figures
-    bool period_taken = false;
     std::vector<Ledger::Snapshot> snaps;
+    std::vector<sdds::StatusSample> statuses;  // this period's, one per id
+    msg::AgentStatusBatch status_batch;        // reused
     while (loop.wait_next(util::stop_flag())) {
       ++seq;
       const std::int64_t stamp = util::steady_ns();
@@ -242,25 +246,29 @@ int run(const std::vector<std::int32_t>& ids, bool batch, const config::Config& 
         one.stamp_ns(stamp);
         state_writer->write(&one);
       }
-      // As shapeform_agent_group: each agent's status once per period, the agents spread over its ticks.
-      const std::uint64_t phase = ++ticks % status_every;
-      if (phase == 0) {
+      // As shapeform_agent and shapeform_agent_group: every status once per period, a batch's in one
+      // AgentStatusBatch (one sample per part of kBatchStatusesPerDatagram).
+      if (++ticks % status_every == 0) {
         ledger.take_ages(ages);
-        period = sdds::process_status(util::steady_ns(), loop.stats(), ages, cpu.percent() * share,
-                                      util::rss_mb() * share);
-        period_taken = true;
-      }
-      if (period_taken && phase < ids.size()) {
-        sdds::StatusSample st = period;
+        sdds::StatusSample st = sdds::process_status(util::steady_ns(), loop.stats(), ages, cpu.percent() * share,
+                                                     util::rss_mb() * share);
         st.stamp_ns = util::steady_ns();
-        ledger.snapshot(ids, phase, status_every, st.stamp_ns, timeout_ns, snaps);
-        for (std::size_t k = phase, n = 0; k < ids.size(); k += status_every, ++n) {
-          const auto& snap = snaps[n];
+        ledger.snapshot(ids, 0, 1, st.stamp_ns, timeout_ns, snaps);
+        statuses.clear();
+        for (std::size_t k = 0; k < ids.size(); ++k) {
           st.id = ids[k];
-          st.neighbours_heard = snap.heard;
-          st.samples_received = snap.received;
-          st.samples_lost = snap.lost;
-          msg::AgentStatus wire = sdds::to_msg(st);
+          st.neighbours_heard = snaps[k].heard;
+          st.samples_received = snaps[k].received;
+          st.samples_lost = snaps[k].lost;
+          statuses.push_back(st);
+        }
+        if (batch) {
+          for (const auto& [begin, end] : sdds::batch_ranges(statuses.size(), sdds::kBatchStatusesPerDatagram)) {
+            sdds::to_msg(statuses, begin, end, status_batch);
+            status_writer->write(&status_batch);
+          }
+        } else {
+          msg::AgentStatus wire = sdds::to_msg(statuses.front());
           status_writer->write(&wire);
         }
       }

@@ -1,4 +1,4 @@
-// shapeform_bench_probe: a passive listener for benchmarks. Subscribes to AgentStatus (agents and
+// shapeform_bench_probe: a passive listener for benchmarks. Subscribes to AgentStatus and AgentStatusBatch (agents and
 // baseline processes) and SwarmMetrics (the supervisor) and appends every sample to CSV files with
 // its receive time on the host's steady clock (CLOCK_MONOTONIC, the clock of every *_stamp_ns):
 //   DIR/status.csv   recv_ns,id,stamp_ns,ticks,overruns,lateness_max_us,lateness_p99_us,
@@ -17,7 +17,7 @@
 #include "core/metric_table.hpp"
 #include "dds/convert.hpp"
 #include "dds/node.hpp"
-#include "shapeform/msg/AgentStatus.h"
+#include "dds/status_input.hpp"
 #include "shapeform/msg/SwarmMetrics.h"
 #include "app/app.hpp"
 #include "util/log.hpp"
@@ -55,18 +55,17 @@ int run(const config::Config& cfg, const std::filesystem::path& dir) {
   int status = 0;
   try {
     dds::Node node(dds::with_identity(cfg.transport, "viewer"), "shapeform_bench_probe");
-    auto status_reader = node.reader<msg::AgentStatus>(dds::TopicId::Status);
+    dds::StatusInput status_input(node);
     auto metrics_reader = node.reader<msg::SwarmMetrics>(dds::TopicId::Metrics);
     std::cout << "ready " << util::steady_ns() << std::endl;
-    std::vector<dds::Received<msg::AgentStatus>> statuses;
+    std::vector<dds::StatusItem> statuses;
     std::vector<dds::Received<msg::SwarmMetrics>> metrics;
     util::RateLoop loop(10.0);
     auto drain = [&] {
-      status_reader.drain(statuses);
+      status_input.drain(statuses);
       for (const auto& r : statuses) {
-        dds::StatusSample s;
-        std::string why;
-        if (!r.valid_data || !dds::from_msg(r.msg, s, why)) continue;
+        if (!r.valid) continue;
+        const dds::StatusSample& s = r.status;
         std::fprintf(status_csv, "%lld,%d,%lld,%llu,%llu,%.1f,%.1f,%d,%llu,%llu,%llu,%llu,%.1f,%.1f,%.4f,%.4f,%llu,%.1f,%.1f\n",
                      static_cast<long long>(r.receive_stamp_ns), s.id, static_cast<long long>(s.stamp_ns),
                      static_cast<unsigned long long>(s.ticks), static_cast<unsigned long long>(s.overruns),

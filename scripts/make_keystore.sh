@@ -118,15 +118,15 @@ fi
 rules() { # NAME -> the allow rules of its role
   case "$1" in
     agent_*)
-      echo '<publish><topics><topic>shapeform/state</topic><topic>shapeform/state_batch</topic><topic>shapeform/status</topic><topic>rt/*/cmd_vel</topic></topics></publish>'
+      echo '<publish><topics><topic>shapeform/state</topic><topic>shapeform/state_batch</topic><topic>shapeform/status</topic><topic>rt/*/cmd_vel</topic><topic>shapeform/status_batch</topic></topics></publish>'
       echo '<subscribe><topics><topic>shapeform/state</topic><topic>shapeform/state_batch</topic><topic>shapeform/command</topic><topic>shapeform/target</topic><topic>rt/*/odom</topic><topic>rt/*/pose</topic></topics></subscribe>'
       ;;
     supervisor)
       echo '<publish><topics><topic>shapeform/command</topic><topic>shapeform/target</topic><topic>shapeform/metrics</topic><topic>rt/shapeform/agents</topic><topic>rt/shapeform/markers</topic></topics></publish>'
-      echo '<subscribe><topics><topic>shapeform/state</topic><topic>shapeform/state_batch</topic><topic>shapeform/command</topic><topic>shapeform/status</topic></topics></subscribe>'
+      echo '<subscribe><topics><topic>shapeform/state</topic><topic>shapeform/state_batch</topic><topic>shapeform/command</topic><topic>shapeform/status</topic><topic>shapeform/status_batch</topic></topics></subscribe>'
       ;;
     viewer)
-      echo '<subscribe><topics><topic>shapeform/state</topic><topic>shapeform/state_batch</topic><topic>shapeform/command</topic><topic>shapeform/target</topic><topic>shapeform/metrics</topic><topic>shapeform/status</topic><topic>rt/*/cmd_vel</topic><topic>rt/*/odom</topic><topic>rt/*/pose</topic><topic>rt/shapeform/agents</topic><topic>rt/shapeform/markers</topic></topics></subscribe>'
+      echo '<subscribe><topics><topic>shapeform/state</topic><topic>shapeform/state_batch</topic><topic>shapeform/command</topic><topic>shapeform/target</topic><topic>shapeform/metrics</topic><topic>shapeform/status</topic><topic>rt/*/cmd_vel</topic><topic>rt/*/odom</topic><topic>rt/*/pose</topic><topic>rt/shapeform/agents</topic><topic>rt/shapeform/markers</topic><topic>shapeform/status_batch</topic></topics></subscribe>'
       ;;
     vehicle)
       echo '<publish><topics><topic>rt/*/odom</topic><topic>rt/*/pose</topic></topics></publish>'

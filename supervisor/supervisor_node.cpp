@@ -23,6 +23,7 @@
 #include "dds/participant.hpp"
 #include "dds/ros2_mirror.hpp"
 #include "dds/state_input.hpp"
+#include "dds/status_input.hpp"
 #include "dds/wire.hpp"
 #include "executor.hpp"
 #include "input_driver.hpp"
@@ -119,14 +120,15 @@ class SupervisorNode {
   dds::Writer<msg::TrackingTarget> target_writer_;
   dds::Writer<msg::SwarmMetrics> metrics_writer_;
   dds::StateInput state_input_;  ///< shapeform/state and shapeform/state_batch
-  dds::Reader<msg::AgentStatus> status_reader_;
+  dds::StatusInput status_input_;  ///< shapeform/status and shapeform/status_batch
   dds::Reader<msg::ShapeCommand> command_reader_;
   std::vector<dds::Received<msg::ShapeCommand>> commands_;
   std::vector<dds::StateItem> states_;
-  std::vector<dds::Received<msg::AgentStatus>> statuses_;
+  std::vector<dds::StatusItem> statuses_;
   std::vector<record::AgentRow> positions_;  ///< one recorded sample (reused)
   /// run.mcap's channel of each topic the supervisor reads or writes (every sample, as CDR).
-  std::uint16_t state_ch_ = 0, batch_ch_ = 0, command_ch_ = 0, status_ch_ = 0, metrics_ch_ = 0, target_ch_ = 0;
+  std::uint16_t state_ch_ = 0, batch_ch_ = 0, command_ch_ = 0, status_ch_ = 0, status_batch_ch_ = 0, metrics_ch_ = 0,
+                target_ch_ = 0;
   std::unique_ptr<ConsoleInput> console_;
   // The ROS 2 mirror (ros2.mirror): writers created only when it is on.
   dds::Writer<dds::ros2::PoseArray> ros2_agents_writer_;
@@ -156,6 +158,7 @@ SupervisorNode::SupervisorNode(const config::Config& cfg, const SupervisorOption
   batch_ch_ = wire_channel(dds::TopicId::StateBatch);
   command_ch_ = wire_channel(dds::TopicId::Command);
   status_ch_ = wire_channel(dds::TopicId::Status);
+  status_batch_ch_ = wire_channel(dds::TopicId::StatusBatch);
   metrics_ch_ = wire_channel(dds::TopicId::Metrics);
   target_ch_ = wire_channel(dds::TopicId::Target);
   out_.set_event_sink([this](const nlohmann::json& e) {
@@ -226,7 +229,7 @@ void SupervisorNode::open_dds() {
   target_writer_ = node_->writer<msg::TrackingTarget>(dds::TopicId::Target);
   metrics_writer_ = node_->writer<msg::SwarmMetrics>(dds::TopicId::Metrics);
   state_input_ = dds::StateInput(*node_);
-  status_reader_ = node_->reader<msg::AgentStatus>(dds::TopicId::Status);
+  status_input_ = dds::StatusInput(*node_);
   command_reader_ = node_->reader<msg::ShapeCommand>(dds::TopicId::Command);
   if (cfg_.ros2.mirror) {
     ros2_agents_writer_ = node_->writer<dds::ros2::PoseArray>(dds::TopicId::Ros2Agents);
@@ -347,12 +350,20 @@ void SupervisorNode::drain_states(std::int64_t now) {
 }
 
 void SupervisorNode::drain_statuses(std::int64_t now) {
-  status_reader_.drain(statuses_);
+  status_input_.drain(statuses_);
+  if (recorder_.is_open()) {  // every sample as it came, before validation
+    for (const auto& r : status_input_.last_statuses())
+      if (r.valid_data) record_wire(status_ch_, now, r.msg);
+    for (const auto& r : status_input_.last_batches())
+      if (r.valid_data) record_wire(status_batch_ch_, now, r.msg);
+  }
   for (const auto& r : statuses_) {
-    if (r.valid_data) record_wire(status_ch_, now, r.msg);
-    dds::StatusSample s;
-    std::string why;
-    if (!r.valid_data || !dds::from_msg(r.msg, s, why) || !owned(s.id, r.source, now)) continue;
+    if (!r.valid) {
+      out_.throttled().warn(r.why.substr(0, r.why.find(':')), "agent status rejected: " + r.why);  // per field
+      continue;
+    }
+    const dds::StatusSample& s = r.status;
+    if (!owned(s.id, r.source, now)) continue;
     monitor_.on_status(s);
     // A breach of the command in force (an excursion that began under it: one going on since an
     // earlier command is the agent returning inside, not a new breach).

@@ -126,30 +126,45 @@ bool sample_json(const msg::SwarmMetrics& m, nlohmann::json& out, std::string&) 
   return true;
 }
 
+namespace {
+nlohmann::json status_json(const dds::StatusSample& s) {
+  return {{"id", s.id},
+          {"stamp_ns", s.stamp_ns},
+          {"ticks", s.ticks},
+          {"overruns", s.overruns},
+          {"lateness_max_us", s.lateness_max_us},
+          {"lateness_p99_us", s.lateness_p99_us},
+          {"neighbours_heard", s.neighbours_heard},
+          {"stale_dropped", s.stale_dropped},
+          {"samples_rejected", s.samples_rejected},
+          {"samples_received", s.samples_received},
+          {"samples_lost", s.samples_lost},
+          {"age_p50_us", s.age_p50_us},
+          {"age_p99_us", s.age_p99_us},
+          {"cpu_percent", s.cpu_percent},
+          {"rss_mb", s.rss_mb},
+          {"epoch", s.epoch},
+          {"vehicle", dds::to_string(s.vehicle)},
+          {"poses_refused", s.poses_refused},
+          {"commands_saturated", s.commands_saturated},
+          {"control_latency_p50_us", s.control_latency_p50_us},
+          {"control_latency_p99_us", s.control_latency_p99_us}};
+}
+}  // namespace
+
 bool sample_json(const msg::AgentStatus& m, nlohmann::json& out, std::string& why) {
   dds::StatusSample s;
   if (!dds::from_msg(m, s, why)) return false;
-  out = {{"id", s.id},
-         {"stamp_ns", s.stamp_ns},
-         {"ticks", s.ticks},
-         {"overruns", s.overruns},
-         {"lateness_max_us", s.lateness_max_us},
-         {"lateness_p99_us", s.lateness_p99_us},
-         {"neighbours_heard", s.neighbours_heard},
-         {"stale_dropped", s.stale_dropped},
-         {"samples_rejected", s.samples_rejected},
-         {"samples_received", s.samples_received},
-         {"samples_lost", s.samples_lost},
-         {"age_p50_us", s.age_p50_us},
-         {"age_p99_us", s.age_p99_us},
-         {"cpu_percent", s.cpu_percent},
-         {"rss_mb", s.rss_mb},
-         {"epoch", s.epoch},
-         {"vehicle", dds::to_string(s.vehicle)},
-         {"poses_refused", s.poses_refused},
-         {"commands_saturated", s.commands_saturated},
-         {"control_latency_p50_us", s.control_latency_p50_us},
-         {"control_latency_p99_us", s.control_latency_p99_us}};
+  out = status_json(s);
+  return true;
+}
+
+bool sample_json(const msg::AgentStatusBatch& m, nlohmann::json& out, std::string& why) {
+  std::vector<dds::StatusSample> statuses;
+  if (!dds::from_msg(m, statuses, why)) return false;
+  nlohmann::json list = nlohmann::json::array();
+  for (const auto& s : statuses) list.push_back(status_json(s));
+  out = {{"first_id", m.first_id()}, {"statuses", std::move(list)}};
   return true;
 }
 

@@ -27,7 +27,7 @@ std::string topics_table(const std::vector<dds::TopicSeen>& topics);
 
 /// Every field of a sample, from the plain struct its from_msg gives (ids and counters as integers,
 /// vectors as [x, y], undefined optionals as null); a state batch: {"first_id", "states": [each state
-/// as one AgentState]}. The command: {"epoch", then its keys as the
+/// as one AgentState]}, a status batch {"first_id", "statuses": [each as one AgentStatus]}. The command: {"epoch", then its keys as the
 /// config file nests them (app::command_json)}; the metrics: {"epoch", "model_time", "stamp_ns",
 /// "converged", then app::metrics_json}.
 /// False (with `why`) when from_msg refuses the sample.
@@ -37,6 +37,7 @@ bool sample_json(const msg::ShapeCommand& m, nlohmann::json& out, std::string& w
 bool sample_json(const msg::TrackingTarget& m, nlohmann::json& out, std::string& why);
 bool sample_json(const msg::SwarmMetrics& m, nlohmann::json& out, std::string& why);
 bool sample_json(const msg::AgentStatus& m, nlohmann::json& out, std::string& why);
+bool sample_json(const msg::AgentStatusBatch& m, nlohmann::json& out, std::string& why);
 /// A vehicle's topics (ROS 2's types): {"vx", "vy", "wz"} (+ "stamp_ns", "frame_id" when stamped);
 /// a pose {"x": [x, y], "yaw", "frame_id", "stamp_ns"} (+ "v": [vx, vy], "wz", "child_frame_id" for
 /// Odometry).

@@ -10,6 +10,7 @@
 #include "dds/convert_ros2.hpp"
 #include "dds/node.hpp"
 #include "dds/state_input.hpp"
+#include "dds/status_input.hpp"
 #include "dds/wire.hpp"
 #include "protocol/command_arbiter.hpp"
 #include "util/log.hpp"
@@ -75,7 +76,7 @@ struct LiveFeed::Impl {
       : link(cfg.vehicle_link),
         node(dds::with_identity(cfg.transport, "viewer"), "shapeform_view"),
         states(node),
-        statuses(node.reader<msg::AgentStatus>(dds::TopicId::Status)),
+        statuses(node),
         commands(node.reader<msg::ShapeCommand>(dds::TopicId::Command)),
         targets(node.reader<msg::TrackingTarget>(dds::TopicId::Target)),
         metrics(node.reader<msg::SwarmMetrics>(dds::TopicId::Metrics)) {}
@@ -85,8 +86,8 @@ struct LiveFeed::Impl {
   // Each reader with the buffer its samples are drained into.
   dds::StateInput states;  // shapeform/state and shapeform/state_batch
   std::vector<dds::StateItem> state_buf;
-  dds::Reader<msg::AgentStatus> statuses;
-  std::vector<dds::Received<msg::AgentStatus>> status_buf;
+  dds::StatusInput statuses;  // shapeform/status and shapeform/status_batch
+  std::vector<dds::StatusItem> status_buf;
   dds::Reader<msg::ShapeCommand> commands;
   std::vector<dds::Received<msg::ShapeCommand>> command_buf;
   dds::Reader<msg::TrackingTarget> targets;
@@ -105,7 +106,7 @@ void LiveFeed::set_sink(SampleSink* sink) { impl_->sink = sink; }
 
 std::vector<dds::TopicId> LiveFeed::topics() {
   return {dds::TopicId::State, dds::TopicId::StateBatch, dds::TopicId::Command,
-          dds::TopicId::Target, dds::TopicId::Metrics, dds::TopicId::Status};
+          dds::TopicId::Target, dds::TopicId::Metrics, dds::TopicId::Status, dds::TopicId::StatusBatch};
 }
 
 void LiveFeed::drain(Scene& scene, double now_s, double period_s) {
@@ -132,10 +133,10 @@ void LiveFeed::drain(Scene& scene, double now_s, double period_s) {
     }
   }
   m.statuses.drain(m.status_buf);
-  forward(m.sink, m.status_buf);
+  forward(m.sink, m.statuses.last_statuses());
+  forward(m.sink, m.statuses.last_batches());
   for (const auto& r : m.status_buf) {
-    dds::StatusSample s;
-    if (r.valid_data && dds::from_msg(r.msg, s, why)) scene.on_status(s.id, s.neighbours_heard, s.lateness_p99_us);
+    if (r.valid) scene.on_status(r.status.id, r.status.neighbours_heard, r.status.lateness_p99_us);
   }
   // The command in force is chosen by the swarm's one rule (dds::CommandArbiter), as agents and
   // supervisor choose it.

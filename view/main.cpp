@@ -79,7 +79,7 @@ int run(int argc, char** argv) {
                "shapeform/scene (foxglove.SceneUpdate, json: agents coloured by state, headings, outline, zones, "
                "fence, centre; frame \"shapeform\", shape units as metres) and shapeform/agent_poses "
                "(foxglove.PosesInFrame) at --fps, and, live, every topic the viewer reads (shapeform/state, "
-               "state_batch, command, target, metrics, status) as cdr with its omgidl schema, forwarded as samples "
+               "state_batch, command, target, metrics, status, status_batch) as cdr with its omgidl schema, forwarded as samples "
                "arrive to the clients subscribed to it. A client too far behind misses messages (counted in the "
                "stop event). With --foxglove-port and no --port, no page is served. --bind applies to both.");
   app.add_config_options();

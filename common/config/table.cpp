@@ -250,8 +250,9 @@ std::vector<P> build() {
       "tick on `shapeform/state_batch` (one AgentStateBatch carrying every hosted agent) instead of one "
       "AgentState per agent on `shapeform/state`: P processes put P samples per tick on the wire instead of N. "
       "A batch of 100 agents is about 13 KB; more than `agent.batch_max_states` agents go in several samples. "
-      "One-agent processes always publish "
-      "`shapeform/state`; every reader reads both",
+      "Their statuses go the same way: one AgentStatusBatch per status period on `shapeform/status_batch` (250 "
+      "agents at most per sample) instead of one AgentStatus per agent on `shapeform/status`. One-agent "
+      "processes always publish `shapeform/state` and `shapeform/status`; every reader reads both topics of each",
       [](auto& c) -> auto& { return c.agent.batch_state; }));
   t.push_back(param<long long>(
       Type::Integer, "agent.batch_max_states", "states",

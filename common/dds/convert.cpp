@@ -222,6 +222,50 @@ bool valid_batch(const msg::AgentStateBatch& m, std::string& why) {
   return true;
 }
 
+void to_msg(const std::vector<StatusSample>& statuses, std::size_t begin, std::size_t end, msg::AgentStatusBatch& out) {
+  out.first_id(statuses.at(begin).id);
+  auto& list = out.statuses();
+  list.clear();
+  for (std::size_t k = begin; k < end; ++k) list.push_back(to_msg(statuses[k]));
+}
+
+bool from_msg(const msg::AgentStatusBatch& m, std::vector<StatusSample>& out, std::string& why) {
+  const auto& list = m.statuses();
+  if (list.empty() || list.size() > kMaxBatchStates) {
+    why = "status_batch.statuses: must hold 1 to " + std::to_string(kMaxBatchStates) + " statuses, got " +
+          std::to_string(list.size());
+    return false;
+  }
+  if (m.first_id() != list.front().id()) {
+    why = "status_batch.first_id: must be the id of statuses[0] (" + std::to_string(list.front().id()) + "), got " +
+          std::to_string(m.first_id());
+    return false;
+  }
+  std::vector<StatusSample> converted(list.size());
+  std::string all;
+  for (std::size_t k = 0; k < list.size(); ++k) {
+    std::string one;
+    if (!from_msg(list[k], converted[k], one)) {
+      // "status.id: ..." -> "status_batch.statuses[3].id: ..."
+      all += (all.empty() ? "" : "; ") + ("status_batch.statuses[" + std::to_string(k) + "]") + one.substr(6);
+    }
+  }
+  if (all.empty()) {
+    std::vector<std::int32_t> ids;
+    ids.reserve(converted.size());
+    for (const auto& s : converted) ids.push_back(s.id);
+    std::sort(ids.begin(), ids.end());
+    if (const auto dup = std::adjacent_find(ids.begin(), ids.end()); dup != ids.end())
+      all = "status_batch.statuses: id " + std::to_string(*dup) + " appears twice";
+  }
+  if (!all.empty()) {
+    why = all;
+    return false;
+  }
+  out = std::move(converted);
+  return true;
+}
+
 msg::TrackingTarget to_msg(const TargetSample& t) {
   msg::TrackingTarget m;
   m.epoch(t.command.epoch);

@@ -15,6 +15,7 @@
 #include "shapeform/msg/AgentState.h"
 #include "shapeform/msg/AgentStateBatch.h"
 #include "shapeform/msg/AgentStatus.h"
+#include "shapeform/msg/AgentStatusBatch.h"
 #include "shapeform/msg/ShapeCommand.h"
 #include "shapeform/msg/SwarmMetrics.h"
 #include "shapeform/msg/TrackingTarget.h"
@@ -100,6 +101,17 @@ msg::AgentStatus to_msg(const StatusSample& s);
 
 /// AgentStatus -> StatusSample when id is in 0..kMaxAgentId; otherwise false, `out` untouched, `why` says so.
 bool from_msg(const msg::AgentStatus& m, StatusSample& out, std::string& why);
+
+/// statuses[begin, end) -> one AgentStatusBatch (first_id: statuses[begin].id; each element as
+/// to_msg(StatusSample)) into out, a message reused from period to period. The parts are those of
+/// batch_ranges(count, kBatchStatusesPerDatagram).
+void to_msg(const std::vector<StatusSample>& statuses, std::size_t begin, std::size_t end, msg::AgentStatusBatch& out);
+
+/// AgentStatusBatch -> one StatusSample per element, in order, when the batch holds 1 to
+/// kMaxBatchStates statuses, first_id is the id of statuses[0], every element converts by
+/// from_msg(AgentStatus) and no id appears twice. Otherwise false (the whole batch refused), `out`
+/// untouched and `why` naming every bad field, e.g. "status_batch.statuses[3].id: must be in 0..9999, got -4".
+bool from_msg(const msg::AgentStatusBatch& m, std::vector<StatusSample>& out, std::string& why);
 
 /// core::Metrics -> wire message (agents as agents_alive, every metric of core::kMetricTable under its
 /// name); undefined (nullopt) values become -1.

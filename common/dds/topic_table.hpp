@@ -47,7 +47,7 @@
     "the supervisor", "`supervisor.metrics_rate_hz` (10 Hz)")                                                    \
   X(Status, "shapeform/status", shapeform::msg::AgentStatus, Reliable, Volatile, KEY(id), false,                                 \
     role::kAgent, role::kSupervisor | role::kViewer,                                                             \
-    "every agent", "`agent.status_rate_hz` (1 Hz)")                                                             \
+    "every agent of a one-agent process", "`agent.status_rate_hz` (1 Hz)")                                       \
   X(CmdVel, "rt/{ns}/cmd_vel", geometry_msgs::msg::dds_::Twist_, Reliable, Volatile, NO_KEY, false,              \
     role::kAgent, role::kVehicle | role::kViewer,                                                                             \
     "every agent with `vehicle.interface: ros2` (`vehicle.cmd_type: twist`, the default), to its vehicle",       \
@@ -69,7 +69,11 @@
   X(Ros2Markers, "rt/shapeform/markers", visualization_msgs::msg::dds_::MarkerArray_, Reliable, Volatile, NO_KEY, \
     false, role::kSupervisor, role::kViewer,                                                                     \
     "the supervisor with `ros2.mirror: true`: agents, ids, outline, keep-out zones, fence, centre, commands",    \
-    "`ros2.rate_hz` (10 Hz)")
+    "`ros2.rate_hz` (10 Hz)")                                                                                     \
+  X(StatusBatch, "shapeform/status_batch", shapeform::msg::AgentStatusBatch, Reliable, Volatile, KEY(first_id),   \
+    false, role::kAgent, role::kSupervisor | role::kViewer,                                                      \
+    "every `shapeform_agent_group` process (`agent.batch_state`, default true)",                                  \
+    "`agent.status_rate_hz` (1 Hz): one sample per process and period, one `AgentStatus` per hosted agent")
 // clang-format on
 
 /// The key column, read by the expansions: the field's name ("" without a key), and a function giving

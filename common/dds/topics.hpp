@@ -80,7 +80,7 @@ inline constexpr std::array kTopicTable{SHAPEFORM_TOPICS(SHAPEFORM_TOPIC_INFO)};
 const TopicInfo& topic_info(TopicId id);
 
 /// DDS topic name: "shapeform/state", "shapeform/state_batch", "shapeform/command", "shapeform/target",
-/// "shapeform/metrics", "shapeform/status".
+/// "shapeform/metrics", "shapeform/status", "shapeform/status_batch", a vehicle's.
 const char* topic_name(TopicId id);
 
 /// The topic named `name` ("shapeform/state"; a vehicle's, "rt/robot_3/odom", by the first row whose
@@ -103,8 +103,8 @@ bool is_vehicle_topic(TopicId id);
 /// starts with '/' is absolute (no namespace). No check here: config validates the parts.
 std::string vehicle_topic_name(const std::string& ns, const std::string& topic);
 
-/// True for keyed topics: State and Status (one instance per agent, @key id), StateBatch (one per
-/// process, @key first_id).
+/// True for keyed topics: State and Status (one instance per agent, @key id), StateBatch and
+/// StatusBatch (one per process, @key first_id).
 bool is_keyed(TopicId id);
 
 /// The endpoint's user id of static endpoint discovery (transport.static_edp), from the topic's row in

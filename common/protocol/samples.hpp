@@ -103,6 +103,11 @@ inline constexpr std::size_t kMaxBatchStates = 1000;
 /// default of agent.batch_max_states; more is fragmented).
 inline constexpr std::size_t kBatchStatesPerDatagram = 500;
 
+/// Statuses per AgentStatusBatch sample that keep it in one UDP datagram: 232 bytes of CDR each,
+/// 250 x 232 = 58,000 bytes plus the RTPS headers. A process hosting more publishes several samples per
+/// status period, cut by dds::batch_ranges; one batch carries at most kMaxBatchStates statuses.
+inline constexpr std::size_t kBatchStatusesPerDatagram = 250;
+
 /// Largest model time accepted in a received AgentState (model time is >= 0: it starts at 0 when a
 /// command is adopted). 1e9 lasts 28 hours at the extreme integration.dt 10 and 1 kHz, and years at
 /// any configured pace; beyond it a sample is absurd.

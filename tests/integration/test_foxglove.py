@@ -66,6 +66,7 @@ class FoxgloveTest(harness.SwarmTestCase):
         self.assertEqual(by_topic["shapeform/scene"]["schemaName"], "foxglove.SceneUpdate")
         for topic, schema in (("shapeform/state", "shapeform::msg::AgentState"),
                               ("shapeform/state_batch", "shapeform::msg::AgentStateBatch"),
+                              ("shapeform/status_batch", "shapeform::msg::AgentStatusBatch"),
                               ("shapeform/command", "shapeform::msg::ShapeCommand")):
             self.assertEqual((by_topic[topic]["encoding"], by_topic[topic]["schemaEncoding"], by_topic[topic]["schemaName"]),
                              ("cdr", "omgidl", schema))

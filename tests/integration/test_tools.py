@@ -31,6 +31,7 @@ TOPICS = {  # name: (type, reliability, durability), as the rows of common/dds/t
     "shapeform/target": ("shapeform::msg::TrackingTarget", "best_effort", "volatile"),
     "shapeform/metrics": ("shapeform::msg::SwarmMetrics", "reliable", "volatile"),
     "shapeform/status": ("shapeform::msg::AgentStatus", "reliable", "volatile"),
+    "shapeform/status_batch": ("shapeform::msg::AgentStatusBatch", "reliable", "volatile"),
 }
 AGENT_NAMES = {"shapeform_agent_%d" % i for i in range(AGENTS)}
 
@@ -67,7 +68,7 @@ class ToolsTest(harness.SwarmTestCase):
             return t if set(t) == set(TOPICS) and writers["shapeform/state"] == AGENT_NAMES \
                 and writers["shapeform/target"] == {"shapeform_supervisor"} \
                 and writers["shapeform/command"] == AGENT_NAMES | {"shapeform_supervisor"} else None
-        topics = harness.poll(complete, 60, "shapeform_topics to see the six topics and every writer", 0.5)
+        topics = harness.poll(complete, 60, "shapeform_topics to see the seven topics and every writer", 0.5)
         host = socket.gethostname()
         pids = {"shapeform_supervisor": sup.pid}
         pids.update({"shapeform_agent_%d" % i: a.pid for i, a in enumerate(agents)})
@@ -90,6 +91,7 @@ class ToolsTest(harness.SwarmTestCase):
         self.assertEqual(participants["shapeform/target"], (sup_name, AGENT_NAMES))
         self.assertEqual(participants["shapeform/metrics"], (sup_name, set()))
         self.assertEqual(participants["shapeform/status"], (AGENT_NAMES, sup_name))
+        self.assertEqual(participants["shapeform/status_batch"], (set(), sup_name))
 
         # Five state samples, as JSON lines with every field.
         for line in self.echo("shapeform/state", 5):

@@ -29,6 +29,7 @@
 #include "dds/participant_factory.hpp"
 #include "dds/stall.hpp"
 #include "dds/state_input.hpp"
+#include "dds/status_input.hpp"
 #include "dds/topic_qos.hpp"
 #include "protocol/transport.hpp"
 #include "shapeform/msg/all_pubsub_types.h"
@@ -724,6 +725,57 @@ TEST_CASE("TrackingTarget converts both ways and refuses non-finite or absurd va
         }) == "target.cx: must be finite, got nan; target.vx: must be finite, got nan");
 }
 
+TEST_CASE("a status batch converts element by element and is refused whole, naming the element", "[dds][convert]") {
+  std::vector<dds::StatusSample> in(4);
+  for (std::size_t k = 0; k < in.size(); ++k) {
+    in[k].id = 30 + static_cast<std::int32_t>(k);
+    in[k].ticks = 100 + k;
+    in[k].neighbours_heard = static_cast<int>(k);
+    in[k].min_gap = 0.25 * static_cast<double>(k);
+  }
+  // A part [1, 4) into a reused message that held a longer, other batch: first_id is the part's first.
+  msg::AgentStatusBatch m;
+  std::vector<dds::StatusSample> longer(6);
+  dds::to_msg(longer, 0, longer.size(), m);
+  dds::to_msg(in, 1, in.size(), m);
+  CHECK(m.first_id() == 31);
+  REQUIRE(m.statuses().size() == 3);
+  std::vector<dds::StatusSample> out;
+  std::string why;
+  REQUIRE(dds::from_msg(m, out, why));
+  REQUIRE(out.size() == 3);
+  for (std::size_t k = 0; k < 3; ++k) {
+    // Each element as the per-agent conversion writes and reads it.
+    CHECK(m.statuses()[k] == dds::to_msg(in[k + 1]));
+    CHECK(out[k].id == in[k + 1].id);
+    CHECK(out[k].ticks == in[k + 1].ticks);
+    CHECK(out[k].neighbours_heard == in[k + 1].neighbours_heard);
+    CHECK(out[k].min_gap == in[k + 1].min_gap);
+  }
+  const auto refused = [&](const msg::AgentStatusBatch& b) {
+    std::vector<dds::StatusSample> untouched(1);
+    std::string w;
+    CHECK_FALSE(dds::from_msg(b, untouched, w));
+    CHECK(untouched.size() == 1);
+    return w;
+  };
+  msg::AgentStatusBatch bad = m;
+  bad.statuses()[1].id(-4);
+  bad.statuses()[2].vehicle(9);
+  CHECK(refused(bad) == "status_batch.statuses[1].id: must be in 0..9999, got -4; "
+                        "status_batch.statuses[2].vehicle: must be 0..3, got 9");
+  bad = m;
+  bad.first_id(30);
+  CHECK(refused(bad) == "status_batch.first_id: must be the id of statuses[0] (31), got 30");
+  bad = m;
+  bad.statuses()[2].id(31);
+  CHECK(refused(bad) == "status_batch.statuses: id 31 appears twice");
+  bad.statuses().clear();
+  CHECK(refused(bad) == "status_batch.statuses: must hold 1 to 1000 statuses, got 0");
+  bad.statuses().assign(dds::kMaxBatchStates + 1, m.statuses()[0]);
+  CHECK(refused(bad) == "status_batch.statuses: must hold 1 to 1000 statuses, got 1001");
+}
+
 TEST_CASE("AgentStatus converts both ways; a negative id is refused", "[dds][convert]") {
   dds::StatusSample s;
   s.id = 5;
@@ -1290,7 +1342,8 @@ TEST_CASE("topic table gives names and keys and QoS", "[dds][topics]") {
     CHECK(w.reliability().kind == r.reliability().kind);
     CHECK(w.durability().kind == r.durability().kind);
     CHECK(dds::is_keyed(id) ==
-          (id == dds::TopicId::State || id == dds::TopicId::StateBatch || id == dds::TopicId::Status));
+          (id == dds::TopicId::State || id == dds::TopicId::StateBatch || id == dds::TopicId::Status ||
+           id == dds::TopicId::StatusBatch));
     if (dds::is_keyed(id)) {
       CHECK(r.resource_limits().max_instances == 0);
       CHECK(r.resource_limits().max_samples == 0);
@@ -1445,6 +1498,57 @@ TEST_CASE("StateInput hears single states and batches, and a disposed batch as e
     return gone.size() == 3;
   }));
   CHECK(gone == std::set<std::int32_t>{20, 21, 22});
+}
+
+TEST_CASE("StatusInput hears single statuses and batches, and names a refused batch's element", "[dds][node][pubsub]") {
+  const auto cfg = loopback(test_domain(0));
+  dds::Node pub(cfg, "test-pub");
+  dds::Node sub(cfg, "test-sub");
+  auto single = pub.writer<msg::AgentStatus>(dds::TopicId::Status);
+  auto batch = pub.writer<msg::AgentStatusBatch>(dds::TopicId::StatusBatch);
+  dds::StatusInput input(sub);
+  REQUIRE(wait_for([&] { return single.matched() >= 1 && batch.matched() >= 1; }));
+  std::vector<dds::StatusSample> group(3);
+  for (std::size_t k = 0; k < group.size(); ++k) {
+    group[k].id = 20 + static_cast<std::int32_t>(k);
+    group[k].neighbours_heard = 5 + static_cast<int>(k);
+  }
+  dds::StatusSample alone;
+  alone.id = 7;
+  msg::AgentStatusBatch wire;
+  dds::to_msg(group, 0, group.size(), wire);
+  std::map<std::int32_t, int> heard;
+  std::set<std::int32_t> heard_batched;
+  std::vector<dds::StatusItem> items;
+  single.write(dds::to_msg(alone));
+  batch.write(wire);
+  REQUIRE(wait_for([&] {
+    input.drain(items);
+    for (const auto& r : items) {
+      REQUIRE(r.valid);
+      CHECK(r.source == pub.source());
+      heard[r.status.id] = r.status.neighbours_heard;
+      if (r.batched) heard_batched.insert(r.status.id);
+    }
+    return heard.size() == 4;
+  }));
+  CHECK(heard == std::map<std::int32_t, int>{{7, 0}, {20, 5}, {21, 6}, {22, 7}});
+  CHECK(heard_batched == std::set<std::int32_t>{20, 21, 22});
+  CHECK(input.last_batches().size() <= 1);
+  // A refused batch is one invalid item naming the element (reliable: written once).
+  wire.statuses()[1].id(-1);
+  batch.write(wire);
+  bool rejected = false;
+  REQUIRE(wait_for([&] {
+    input.drain(items);
+    for (const auto& r : items) {
+      CHECK_FALSE(r.valid);
+      CHECK(r.batched);
+      CHECK(r.why == "status_batch.statuses[1].id: must be in 0..9999, got -1");
+      rejected = true;
+    }
+    return rejected;
+  }));
 }
 
 TEST_CASE("multicast_data pub-sub: keyed state and a reliable topic between three nodes", "[dds][node][pubsub]") {

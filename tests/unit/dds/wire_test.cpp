@@ -92,6 +92,17 @@ TEST_CASE("a batch of kBatchStatesPerDatagram states fits one UDP datagram, one 
   CHECK(dds::to_cdr(batch).size() > kMessage);  // fragmented unless agent.batch_max_states cuts it
 }
 
+TEST_CASE("a status batch of kBatchStatusesPerDatagram fits one UDP datagram, a tenth more does not", "[dds][wire]") {
+  constexpr std::size_t kMessage = 65500, kRtpsOverhead = 300;
+  msg::AgentStatusBatch batch;
+  batch.first_id(0);
+  batch.statuses().assign(dds::kBatchStatusesPerDatagram, msg::AgentStatus());
+  CHECK(dds::to_cdr(batch).size() + kRtpsOverhead <= kMessage);
+  // The constant is near the limit, not far below it: 1.1 times as many would not fit.
+  batch.statuses().assign(dds::kBatchStatusesPerDatagram * 11 / 10 + 20, msg::AgentStatus());
+  CHECK(dds::to_cdr(batch).size() > kMessage);
+}
+
 TEST_CASE("a batch with states and a command with strings and sequences round-trip", "[dds][wire]") {
   msg::AgentStateBatch batch;
   batch.first_id(7);

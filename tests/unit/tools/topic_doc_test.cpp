@@ -121,7 +121,7 @@ TEST_CASE("the generated tables and rules follow the rows", "[tools][topics]") {
   CHECK(rules.find("    viewer)\n      echo '<subscribe><topics><topic>shapeform/state</topic>") !=
         std::string::npos);
   CHECK(rules.find("<publish><topics><topic>shapeform/state</topic><topic>shapeform/state_batch</topic>"
-                   "<topic>shapeform/status</topic><topic>rt/*/cmd_vel</topic>"
+                   "<topic>shapeform/status</topic><topic>rt/*/cmd_vel</topic><topic>shapeform/status_batch</topic>"
                    "</topics></publish>") != std::string::npos);
   // A vehicle's topics: its namespace as a wildcard; a vehicle publishes its pose and reads its commands.
   CHECK(rules.find("    vehicle)\n      echo '<publish><topics><topic>rt/*/odom</topic><topic>rt/*/pose</topic>"
