@@ -98,6 +98,13 @@ class SupervisorNode {
     dds::to_cdr(msg, wire_buffer_);
     recorder_.write_message(channel, wall_s(now), wire_buffer_);
   }
+  /// Every sample of buf that carries data (valid or refused later), as it travelled.
+  template <class Msg>
+  void record_wire(std::uint16_t channel, std::int64_t now, const std::vector<dds::Received<Msg>>& buf) {
+    if (!recorder_.is_open()) return;
+    for (const auto& r : buf)
+      if (r.valid_data) record_wire(channel, now, r.msg);
+  }
   /// Seconds since the supervisor started: a recording's wall_s.
   double wall_s(std::int64_t now) const { return static_cast<double>(now - start_ns_) * 1e-9; }
 
@@ -298,9 +305,9 @@ void SupervisorNode::recover_participant() {
 
 void SupervisorNode::drain_commands(std::int64_t now) {
   command_reader_.drain(commands_);
+  record_wire(command_ch_, now, commands_);  // its own too: what every agent heard
   const std::uint64_t floor = monitor_.min_epoch_followed(now);
   for (const auto& r : commands_) {
-    if (r.valid_data) record_wire(command_ch_, now, r.msg);  // its own too: what every agent heard
     if (!r.valid_data || r.source == node_->source()) continue;  // our own publications are known
     dds::CommandSample c;
     std::string why;
@@ -314,12 +321,8 @@ void SupervisorNode::drain_commands(std::int64_t now) {
 
 void SupervisorNode::drain_states(std::int64_t now) {
   state_input_.drain(states_);
-  if (recorder_.is_open()) {  // every sample as it came, before validation
-    for (const auto& r : state_input_.last_states())
-      if (r.valid_data) record_wire(state_ch_, now, r.msg);
-    for (const auto& r : state_input_.last_batches())
-      if (r.valid_data) record_wire(batch_ch_, now, r.msg);
-  }
+  record_wire(state_ch_, now, state_input_.last_states());  // every sample as it came, before validation
+  record_wire(batch_ch_, now, state_input_.last_batches());
   for (const auto& r : states_) {
     if (r.kind == dds::StateItem::Kind::Gone) {
       // Disposed, or its writer left (its dispose, best effort, may be lost) while it was still heard:
@@ -351,12 +354,8 @@ void SupervisorNode::drain_states(std::int64_t now) {
 
 void SupervisorNode::drain_statuses(std::int64_t now) {
   status_input_.drain(statuses_);
-  if (recorder_.is_open()) {  // every sample as it came, before validation
-    for (const auto& r : status_input_.last_statuses())
-      if (r.valid_data) record_wire(status_ch_, now, r.msg);
-    for (const auto& r : status_input_.last_batches())
-      if (r.valid_data) record_wire(status_batch_ch_, now, r.msg);
-  }
+  record_wire(status_ch_, now, status_input_.last_statuses());  // every sample as it came, before validation
+  record_wire(status_batch_ch_, now, status_input_.last_batches());
   for (const auto& r : statuses_) {
     if (!r.valid) {
       out_.throttled().warn(r.why.substr(0, r.why.find(':')), "agent status rejected: " + r.why);  // per field
