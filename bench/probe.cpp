@@ -1,6 +1,7 @@
-// shapeform_bench_probe: a passive listener for benchmarks. Subscribes to AgentStatus and AgentStatusBatch (agents and
-// baseline processes) and SwarmMetrics (the supervisor) and appends every sample to CSV files with
-// its receive time on the host's steady clock (CLOCK_MONOTONIC, the clock of every *_stamp_ns):
+// shapeform_bench_probe: a passive listener for benchmarks. Subscribes to AgentStatus and
+// AgentStatusBatch (agents and baseline processes) and SwarmMetrics (the supervisor) and appends every
+// status (a batch's one by one) and metrics sample to CSV files with its receive time on the host's
+// steady clock (CLOCK_MONOTONIC, the clock of every *_stamp_ns):
 //   DIR/status.csv   recv_ns,id,stamp_ns,ticks,overruns,lateness_max_us,lateness_p99_us,
 //                    neighbours_heard,stale_dropped,samples_rejected,samples_received,samples_lost,
 //                    age_p50_us,age_p99_us,cpu_percent,rss_mb,epoch,control_latency_p50_us,
