@@ -282,10 +282,8 @@ core::CompiledCommand AgentLogic::effective_command() const {
 
 std::optional<double> AgentLogic::arc() const {
   if (!has_command()) return std::nullopt;
-  const bool follow_target = following_target();
-  const core::CompiledCommand local = follow_target ? effective_command() : cmd_;
-  const double t = follow_target ? 0.0 : t_;
-  const core::ShapeSpec s = core::shape_at(local, t);
+  // The command is copied only to follow a target (asked twice a tick per agent).
+  const core::ShapeSpec s = following_target() ? core::shape_at(effective_command(), 0.0) : core::shape_at(cmd_, t_);
   return core::closest_point(s, cmd_.curve(), x_).s;
 }
 

@@ -127,10 +127,8 @@ class AgentNode {
     drain_commands();
     drain_targets();
     phases_.lap_at(kCommands, util::thread_cpu_ns());
-    state_input_.drain(states_);
-    phases_.lap_at(kUnpack, util::thread_cpu_ns());
     drain_states();
-    phases_.lap_at(kTable, util::thread_cpu_ns());
+    phases_.lap_at(kStates, util::thread_cpu_ns());
     if (identity_.yielding()) return farewell(now);
     if (!identity_.may_publish(now)) return;  // the grace period: listening whether an id is in use
     drain_poses();
@@ -147,8 +145,8 @@ class AgentNode {
   /// sample; CPU, not wall time, so that a busy host's preemptions are not booked to a phase), logged
   /// at exit with the process's CPU split between this thread and the others (Fast DDS's receive and
   /// event threads): scripts/profile_group.py reads that line.
-  enum Phase : std::size_t { kCommands, kUnpack, kTable, kLaw, kPublish, kReport, kPhases };
-  util::PhaseClock<kPhases> phases_{{"commands", "unpack", "table", "law", "publish", "report"}};
+  enum Phase : std::size_t { kCommands, kStates, kLaw, kPublish, kReport, kPhases };
+  util::PhaseClock<kPhases> phases_{{"commands", "states", "law", "publish", "report"}};
   /// The loop thread's and the process's CPU time when the loop began, ns.
   std::int64_t loop_cpu0_ns_ = 0, process_cpu0_ns_ = 0, wall0_ns_ = 0;
   /// Logs the phases (tick times) and the CPU split since run() began.
@@ -229,7 +227,6 @@ class AgentNode {
   dds::CommandId relayed_;  ///< what command_relay_ offers now
   std::uint64_t last_refused_epoch_ = 0;  ///< the last epoch refused as an absurd jump
   dds::Reader<msg::TrackingTarget> target_reader_;
-  std::vector<dds::StateItem> states_;
   std::vector<dds::Received<msg::ShapeCommand>> commands_;
   CommandCompiler compiler_;
   std::vector<CommandCompiler::Result> compiled_;
@@ -504,29 +501,21 @@ void AgentNode::drain_targets() {
   }
 }
 
-void AgentNode::drain_states() {  // states_: drained by tick()
+void AgentNode::drain_states() {
   const double dt = logics_.front()->command().dt;  // the hosted agents follow one command
-  for (const auto& r : states_) {
-    if (r.kind == dds::StateItem::Kind::Gone) {
-      table_->on_gone(r.id);
-      continue;
-    }
-    if (r.kind == dds::StateItem::Kind::Rejected) {
-      reject("state", "state sample rejected: " + r.why, r.why);
-      continue;
-    }
+  // Each state from the message into the table: no list of the swarm's states in between.
+  state_input_.drain([this, dt](const dds::StateItem& r) {
+    if (r.kind == dds::StateItem::Kind::Gone) return table_->on_gone(r.id);
+    if (r.kind == dds::StateItem::Kind::Rejected) return reject("state", "state sample rejected: " + r.why, r.why);
     const dds::StateSample& s = r.state;
     const bool ours = hosted(s.id);
-    if (ours && !identity_.ours(r.source)) {  // our id, from another participant
-      on_duplicate(s.id, r.source, r.receive_stamp_ns);
-      continue;
-    }
+    if (ours && !identity_.ours(r.source)) return on_duplicate(s.id, r.source, r.receive_stamp_ns);  // from another participant
     // Once into the shared table; each hosted agent leaves its own entry out.
     table_->on_state(s.id, s.x, s.seq, r.receive_stamp_ns, s.command, s.arc, s.model_time, s.prev_x, s.prev_arc, dt);
     // Data age of samples from agents hosted elsewhere (a process's own samples are not a delivery).
     if (!ours && ages_us_.size() < ages_us_.capacity())
       ages_us_.push_back(static_cast<double>(r.receive_stamp_ns - s.stamp_ns) * 1e-3);
-  }
+  });
 }
 
 void AgentNode::step(std::int64_t now) {

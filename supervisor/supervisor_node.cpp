@@ -10,7 +10,6 @@
 #include <cmath>
 #include <exception>
 #include <iostream>
-#include <map>
 #include <memory>
 #include <optional>
 
@@ -130,7 +129,6 @@ class SupervisorNode {
   dds::StatusInput status_input_;  ///< shapeform/status and shapeform/status_batch
   dds::Reader<msg::ShapeCommand> command_reader_;
   std::vector<dds::Received<msg::ShapeCommand>> commands_;
-  std::vector<dds::StateItem> states_;
   std::vector<dds::StatusItem> statuses_;
   std::vector<record::AgentRow> positions_;  ///< one recorded sample (reused)
   /// run.mcap's channel of each topic the supervisor reads or writes (every sample, as CDR).
@@ -140,7 +138,6 @@ class SupervisorNode {
   // The ROS 2 mirror (ros2.mirror): writers created only when it is on.
   dds::Writer<dds::ros2::PoseArray> ros2_agents_writer_;
   dds::Writer<dds::ros2::MarkerArray> ros2_markers_writer_;
-  std::map<std::int32_t, core::Vec2> velocities_;  ///< each agent's latest velocity (its state's v)
   dds::ros2::PoseArray ros2_agents_;                ///< reused between publications
   dds::ros2::MarkerArray ros2_markers_;
 };
@@ -320,10 +317,7 @@ void SupervisorNode::drain_commands(std::int64_t now) {
 }
 
 void SupervisorNode::drain_states(std::int64_t now) {
-  state_input_.drain(states_);
-  record_wire(state_ch_, now, state_input_.last_states());  // every sample as it came, before validation
-  record_wire(batch_ch_, now, state_input_.last_batches());
-  for (const auto& r : states_) {
+  state_input_.drain([this, now](const dds::StateItem& r) {
     if (r.kind == dds::StateItem::Kind::Gone) {
       // Disposed, or its writer left (its dispose, best effort, may be lost) while it was still heard:
       // a clean exit, logged once. A writer leaving after the agent fell silent (a lease expiring after
@@ -335,21 +329,22 @@ void SupervisorNode::drain_states(std::int64_t now) {
         monitor_.on_departed(r.id);
         util::log_info("agent " + std::to_string(r.id) + " left");
       }
-      continue;
+      return;
     }
     if (r.kind == dds::StateItem::Kind::Rejected) {
       ++rejected_;
       out_.throttled().warn(r.why.substr(0, r.why.find(':')), "agent state rejected: " + r.why);  // per field
-      continue;
+      return;
     }
     const dds::StateSample& s = r.state;
     if (!owned(s.id, r.source, now)) {
       ++rejected_;
-      continue;
+      return;
     }
-    monitor_.on_state(s.id, s.x, s.prev_x, s.command, s.model_time, now, r.source);
-    velocities_[s.id] = s.v;  // the mirror's poses and the recording's headings
-  }
+    monitor_.on_state(s.id, s.x, s.prev_x, s.command, s.model_time, now, r.source, s.v);
+  });
+  record_wire(state_ch_, now, state_input_.last_states());  // every sample as it came, before validation
+  record_wire(batch_ch_, now, state_input_.last_batches());
 }
 
 void SupervisorNode::drain_statuses(std::int64_t now) {
@@ -444,10 +439,7 @@ void SupervisorNode::metrics_tick(std::int64_t now) {
 
 void SupervisorNode::mirror_tick(std::int64_t now) {
   std::vector<dds::MirrorAgent> agents;
-  for (const auto& [id, x] : monitor_.alive_positions(now)) {
-    const auto v = velocities_.find(id);
-    agents.push_back({id, x, v != velocities_.end() ? v->second : core::Vec2::Zero()});
-  }
+  for (const auto& [id, x] : monitor_.alive_positions(now)) agents.push_back({id, x, monitor_.agents().at(id).v});
   const bool commanded = authority_.epoch() != 0;
   const dds::MirrorScene scene =
       dds::mirror_scene(std::move(agents), commanded ? &authority_.current() : nullptr,
@@ -466,13 +458,12 @@ void SupervisorNode::record_metrics(const SwarmMonitor::Sample& s, std::int64_t 
     recorder_.write_metrics({wall, t, authority_.epoch(), s.alive, s.metrics, s.converged});
     const auto step = static_cast<std::int64_t>(std::llround(t / authority_.current().dt));
     positions_.clear();
-    for (const auto& [id, x] : monitor_.alive_positions(now, t))
-    {
+    for (const auto& [id, x] : monitor_.alive_positions(now, t)) {
       // Drawn with the direction it moves in (its state's velocity), as the ROS 2 mirror orients it.
+      const AgentView& a = monitor_.agents().at(id);
       std::optional<double> heading;
-      if (const auto v = velocities_.find(id); v != velocities_.end() && v->second.norm() > 1e-12)
-        heading = std::atan2(v->second.y(), v->second.x());
-      positions_.push_back({id, monitor_.agents().at(id).command.epoch, x.x(), x.y(), heading});
+      if (a.v.norm() > 1e-12) heading = std::atan2(a.v.y(), a.v.x());
+      positions_.push_back({id, a.command.epoch, x.x(), x.y(), heading});
     }
     recorder_.write_positions(wall, t, step, positions_);
     recorder_.flush_if_due(record::Recorder::Clock::now());

@@ -25,11 +25,13 @@ SwarmMonitor::Claim SwarmMonitor::claim(std::int32_t id, const dds::SourceId& so
 }
 
 void SwarmMonitor::on_state(std::int32_t id, const core::Vec2& x, const core::Vec2& prev_x, dds::CommandId command,
-                            double model_time, std::int64_t now_ns, const dds::SourceId& source) {
+                            double model_time, std::int64_t now_ns, const dds::SourceId& source,
+                            const core::Vec2& v) {
   AgentView& a = agents_[id];
   if (source.known()) a.source = source;
   a.x = x;
   a.prev_x = prev_x;
+  a.v = v;
   a.command = command;
   a.model_time = model_time;
   a.last_seen_ns = now_ns;

@@ -3,19 +3,20 @@
 /// who is alive, the command in force and the model clock of its epoch, and the convergence metrics
 /// (computed with the same core functions as the simulator).
 #include <cstdint>
-#include <map>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "core/metrics.hpp"
 #include "protocol/samples.hpp"
+#include "util/id_map.hpp"
 
 namespace shapeform::supervisor {
 
 struct AgentView {
   core::Vec2 x = core::Vec2::Zero();
   core::Vec2 prev_x = core::Vec2::Zero();  ///< position one step earlier (AgentState.prev_x/prev_y)
+  core::Vec2 v = core::Vec2::Zero();       ///< velocity over its last step (AgentState.vx/vy)
   dds::CommandId command;       ///< the command the agent follows (epoch 0: none yet)
   double model_time = 0.0;      ///< the agent's model time
   std::int64_t last_seen_ns = 0;
@@ -45,9 +46,10 @@ class SwarmMonitor {
   enum class Claim { Owner, NewDuplicate, Duplicate };
   Claim claim(std::int32_t id, const dds::SourceId& source, std::int64_t now_ns);
 
-  /// A state of agent id (source: the participant that published it, see claim()).
+  /// A state of agent id (source: the participant that published it, see claim(); v: its velocity).
   void on_state(std::int32_t id, const core::Vec2& x, const core::Vec2& prev_x, dds::CommandId command,
-                double model_time, std::int64_t now_ns, const dds::SourceId& source = {});
+                double model_time, std::int64_t now_ns, const dds::SourceId& source = {},
+                const core::Vec2& v = core::Vec2::Zero());
   void on_status(const dds::StatusSample& s);
   void on_departed(std::int32_t id);
 
@@ -67,7 +69,8 @@ class SwarmMonitor {
   int alive_count(std::int64_t now_ns) const;
   /// Alive agents following the current epoch.
   int following_count(std::int64_t now_ns) const;
-  const std::map<std::int32_t, AgentView>& agents() const { return agents_; }
+  /// Every agent heard, ascending ids.
+  const util::IdMap<AgentView>& agents() const { return agents_; }
 
   /// Whether every alive agent reported (in its latest status) hearing at least `count` neighbours.
   bool all_hear(int count, std::int64_t now_ns) const;
@@ -110,7 +113,7 @@ class SwarmMonitor {
   std::int64_t idle_timeout_ns_;  ///< for agents that follow no command yet
   core::ConvergenceDetector detector_;
   bool lockstep_;
-  std::map<std::int32_t, AgentView> agents_;
+  util::IdMap<AgentView> agents_;  ///< found by id many thousand times a second: no tree
   std::optional<core::CompiledCommand> command_;
   dds::CommandId id_;
   std::uint64_t max_epoch_seen_ = 0;

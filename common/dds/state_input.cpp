@@ -12,29 +12,41 @@ StateInput::StateInput(Node& node)
 
 void StateInput::drain(std::vector<StateItem>& out) {
   out.clear();
+  drain([&out](const StateItem& item) { out.push_back(item); });
+}
+
+void StateInput::drain(const std::function<void(const StateItem&)>& each) {
+  StateItem& item = item_;
+  // Sets what every item of one sample shares; a Gone or Rejected item carries no state.
+  const auto begin = [&item](std::int64_t stamp, const SourceId& source, bool batched) {
+    item.kind = StateItem::Kind::State;
+    item.id = -1;
+    item.receive_stamp_ns = stamp;
+    item.source = source;
+    item.instance = InstanceState::Alive;
+    item.batched = batched;
+    item.why.clear();
+  };
   single_.drain(single_buf_);
   for (const auto& r : single_buf_) {
-    StateItem item;
-    item.receive_stamp_ns = r.receive_stamp_ns;
-    item.source = r.source;
+    begin(r.receive_stamp_ns, r.source, false);
     if (!r.valid_data) {
       if (r.key_id < 0) continue;  // an instance never heard alive: nobody to drop
       item.kind = StateItem::Kind::Gone;
       item.id = r.key_id;
       item.instance = r.instance;
+      item.state = {};
     } else if (from_msg(r.msg, item.state, item.why)) {
       item.id = item.state.id;
     } else {
       item.kind = StateItem::Kind::Rejected;
+      item.state = {};
     }
-    out.push_back(std::move(item));
+    each(item);
   }
   batch_.drain(batch_buf_);
   for (const auto& r : batch_buf_) {
-    StateItem item;
-    item.receive_stamp_ns = r.receive_stamp_ns;
-    item.source = r.source;
-    item.batched = true;
+    begin(r.receive_stamp_ns, r.source, true);
     const std::pair<SourceId, std::int32_t> instance{r.source, r.key_id};
     if (!r.valid_data) {
       auto it = carried_.find(instance);
@@ -45,30 +57,29 @@ void StateInput::drain(std::vector<StateItem>& out) {
       if (it == carried_.end()) continue;
       item.kind = StateItem::Kind::Gone;
       item.instance = r.instance;
+      item.state = {};
       for (const std::int32_t id : it->second) {
         item.id = id;
-        out.push_back(item);
+        each(item);
       }
       carried_.erase(it);
       continue;
     }
     if (!valid_batch(r.msg, item.why)) {
       item.kind = StateItem::Kind::Rejected;
-      out.push_back(std::move(item));
+      item.state = {};
+      each(item);
       continue;
     }
     ++batches_;
     std::vector<std::int32_t>& ids = carried_[instance];
     ids.clear();
-    // Each element converted straight into its item (no intermediate list of samples).
-    const auto& states = r.msg.states();
-    const std::size_t base = out.size();
-    out.resize(base + states.size(), item);
-    for (std::size_t k = 0; k < states.size(); ++k) {
-      StateItem& one = out[base + k];
-      one.state = to_sample(states[k]);
-      one.id = one.state.id;
-      ids.push_back(one.id);
+    // Each element converted straight into the one item (no list of thousands of items).
+    for (const auto& element : r.msg.states()) {
+      item.state = to_sample(element);
+      item.id = item.state.id;
+      ids.push_back(item.id);
+      each(item);
     }
   }
 }

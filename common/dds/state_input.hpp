@@ -4,6 +4,7 @@
 /// and tick, from shapeform_agent_group), drained into one list of per-agent items. Agents,
 /// supervisor and viewer read state only through this class.
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <string>
 #include <utility>
@@ -40,9 +41,13 @@ class StateInput {
   /// A reader of each state topic on `node` (reader_qos: multicast when transport.multicast_data).
   explicit StateInput(Node& node);
 
-  /// Moves everything received since the last call into out (cleared first): the per-agent samples,
-  /// then each batch unpacked into one item per element, in the batch's order. A disposed batch
-  /// instance, or one whose writer left, gives one Gone item for every id that instance last carried.
+  /// Passes everything received since the last call to each(item): the per-agent samples, then each
+  /// batch unpacked into one item per element, in the batch's order. A disposed batch instance, or
+  /// one whose writer left, gives one Gone item for every id that instance last carried. The item is
+  /// good only during the call: one item is reused, so a receiver of thousands of states a tick fills
+  /// no list of them (an agent group's loop goes straight from the message into its table).
+  void drain(const std::function<void(const StateItem&)>& each);
+  /// The same, copied into out (cleared first).
   void drain(std::vector<StateItem>& out);
 
   /// The samples of each topic as the last drain took them (before validation), for who forwards them
@@ -61,6 +66,7 @@ class StateInput {
   /// The ids each batch instance (writer's participant, first_id) carried last.
   std::map<std::pair<SourceId, std::int32_t>, std::vector<std::int32_t>> carried_;
   std::uint64_t batches_ = 0;
+  StateItem item_;  ///< the one item drain() passes on
 };
 
 }  // namespace shapeform::dds

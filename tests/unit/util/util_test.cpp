@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <map>
 #include <memory>
 #include <numeric>
 #include <random>
@@ -13,6 +14,7 @@
 #include <thread>
 #include <vector>
 
+#include "util/id_map.hpp"
 #include "util/log.hpp"
 #include "util/phase_clock.hpp"
 #include "util/proc_stats.hpp"
@@ -315,4 +317,45 @@ TEST_CASE("PhaseClock books each lap to the phase that ended and means per tick"
   CHECK(clock.mean_us(1) == Approx(2.0));
   CHECK(clock.mean_us(2) == Approx(1.0));
   CHECK(clock.line() == "a 2.0 us, b 2.0 us, c 1.0 us, total 5.0 us per tick over 2 ticks");
+}
+
+TEST_CASE("IdMap holds what std::map holds, in ascending ids, under random inserts, updates and erasures", "[util]") {
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> id(0, 300), op(0, 9);
+  util::IdMap<int> flat;
+  std::map<std::int32_t, int> tree;
+  for (int step = 0; step < 20000; ++step) {
+    const std::int32_t k = id(rng);
+    const int o = op(rng);
+    if (o < 6) {
+      flat[k] += step;
+      tree[k] += step;
+    } else if (o < 8) {
+      REQUIRE(flat.erase(k) == tree.erase(k));
+    } else {
+      REQUIRE(flat.contains(k) == (tree.count(k) == 1));
+      REQUIRE((flat.find(k) == flat.end()) == (tree.find(k) == tree.end()));
+      if (tree.count(k) == 1) REQUIRE(flat.at(k) == tree.at(k));
+      else REQUIRE_THROWS_AS(flat.at(k), std::out_of_range);
+    }
+    if (step % 997 == 0) {
+      REQUIRE(std::vector<std::pair<std::int32_t, int>>(flat.begin(), flat.end()) ==
+              std::vector<std::pair<std::int32_t, int>>(tree.begin(), tree.end()));
+    }
+  }
+  REQUIRE(flat.size() == tree.size());
+  REQUIRE(std::vector<std::pair<std::int32_t, int>>(flat.begin(), flat.end()) ==
+          std::vector<std::pair<std::int32_t, int>>(tree.begin(), tree.end()));
+}
+
+TEST_CASE("IdMap refuses a negative id and finds none", "[util]") {
+  util::IdMap<int> m;
+  m[3] = 1;
+  REQUIRE(m.find(-1) == m.end());
+  REQUIRE_FALSE(m.contains(-5));
+  REQUIRE_THROWS_AS(m[-1], std::out_of_range);
+  REQUIRE(m.size() == 1);
+  m.clear();
+  REQUIRE(m.empty());
+  REQUIRE(m.find(3) == m.end());
 }
