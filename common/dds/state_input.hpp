@@ -1,7 +1,7 @@
 #pragma once
 /// Every reader of agent state in one place: the per-agent topic (shapeform/state, one AgentState per
 /// agent and tick) and the per-process one (shapeform/state_batch, one AgentStateBatch per process
-/// and tick, from shapeform_agent_group), drained into one list of per-agent items. Agents,
+/// and tick, from shapeform_agent_group), drained as one stream of per-agent items. Agents,
 /// supervisor and viewer read state only through this class.
 #include <cstdint>
 #include <functional>
