@@ -40,16 +40,11 @@ void NeighbourTable::on_state(std::int32_t id, const core::Vec2& x, std::uint64_
   const std::optional<Snapshot> before =
       prev_x ? std::optional<Snapshot>(Snapshot{*prev_x, command, model_time - dt, prev_arc}) : std::nullopt;
   if (id < 0) return;  // never a valid sample's (dds::valid_state): nothing to index it by
-  Entry* it = find(id);
+  const auto found = entries_.find(id);
+  Entry* it = found == entries_.end() ? nullptr : &found->second;
   std::uint64_t lost = 0;
   if (it == nullptr) {
-    const auto at = std::lower_bound(entries_.begin(), entries_.end(), id, [](const Entry& e, std::int32_t i) { return e.id < i; });
-    const auto k = static_cast<std::size_t>(at - entries_.begin());
-    entries_.insert(at, Entry{id, hosted_index(id), now_ns, seq, snap, before.value_or(snap)});
-    const auto slot = static_cast<std::size_t>(id);
-    if (slot >= pos_of_.size()) pos_of_.resize(slot + 1, -1);
-    reindex(k);
-    it = &entries_[k];
+    it = &entries_.insert_or_assign(id, Entry{hosted_index(id), now_ns, seq, snap, before.value_or(snap)});
   } else {
     Entry& e = *it;
     if (seq <= e.seq) return;  // duplicate or reordered: keep the newest
@@ -68,47 +63,29 @@ void NeighbourTable::on_state(std::int32_t id, const core::Vec2& x, std::uint64_
   }
 }
 
-NeighbourTable::Entry* NeighbourTable::find(std::int32_t id) {
-  const auto slot = static_cast<std::size_t>(id);
-  if (id < 0 || slot >= pos_of_.size() || pos_of_[slot] < 0) return nullptr;
-  return &entries_[static_cast<std::size_t>(pos_of_[slot])];
-}
-
-void NeighbourTable::reindex(std::size_t from) {
-  for (std::size_t k = from; k < entries_.size(); ++k) pos_of_[static_cast<std::size_t>(entries_[k].id)] = static_cast<int>(k);
-}
-
 void NeighbourTable::on_gone(std::int32_t id) {
-  const Entry* e = find(id);
-  if (e == nullptr) return;
+  const auto e = entries_.find(id);
+  if (e == entries_.end()) return;
   ++total_.departed;
-  if (e->hosted >= 0) ++own_[static_cast<std::size_t>(e->hosted)].departed;
-  const auto k = static_cast<std::size_t>(e - entries_.data());
-  entries_.erase(entries_.begin() + static_cast<std::ptrdiff_t>(k));
-  pos_of_[static_cast<std::size_t>(id)] = -1;
-  reindex(k);
+  if (e->second.hosted >= 0) ++own_[static_cast<std::size_t>(e->second.hosted)].departed;
+  entries_.erase(id);
 }
 
 void NeighbourTable::drop_stale(std::int64_t now_ns, bool commanded) {
   if (now_ns == dropped_at_ns_) return;
   dropped_at_ns_ = now_ns;
   const std::int64_t timeout = commanded ? timeout_ns_ : idle_timeout_ns_;
-  bool dropped = false;
-  const auto stale = [&](const Entry& e) {
+  entries_.erase_if([&](const auto& p) {
+    const Entry& e = p.second;
     if (now_ns - e.last_seen_ns <= timeout) return false;
     ++total_.stale;
     if (e.hosted >= 0) ++own_[static_cast<std::size_t>(e.hosted)].stale;
-    pos_of_[static_cast<std::size_t>(e.id)] = -1;
-    dropped = true;
     return true;
-  };
-  entries_.erase(std::remove_if(entries_.begin(), entries_.end(), stale), entries_.end());
-  if (dropped) reindex(0);
+  });
 }
 
 int NeighbourTable::heard_by(std::int32_t id) const {
-  const auto it = std::lower_bound(entries_.begin(), entries_.end(), id, [](const Entry& e, std::int32_t i) { return e.id < i; });
-  return static_cast<int>(entries_.size()) - (it != entries_.end() && it->id == id ? 1 : 0);
+  return static_cast<int>(entries_.size()) - (entries_.contains(id) ? 1 : 0);
 }
 
 AgentCounters NeighbourTable::counters_for(std::int32_t id) const {
@@ -209,8 +186,8 @@ bool AgentLogic::recheck_commands() {
 
 std::uint64_t AgentLogic::peer_floor() const {
   std::uint64_t floor = 0;
-  for (const auto& e : table_->entries())
-    if (e.id != id_ && !e.cur.command.none() && (floor == 0 || e.cur.command.epoch < floor)) floor = e.cur.command.epoch;
+  for (const auto& [id, e] : table_->entries())
+    if (id != id_ && !e.cur.command.none() && (floor == 0 || e.cur.command.epoch < floor)) floor = e.cur.command.epoch;
   return floor;
 }
 
@@ -235,8 +212,8 @@ void AgentLogic::adopt() {
   if (lockstep_) {
     // A late joiner starts at the step the swarm is at, so nobody waits for its past.
     long k0 = 0;
-    for (const auto& e : table_->entries())
-      if (e.id != id_ && e.cur.command == command) k0 = std::max(k0, step_of(e.cur.model_time));
+    for (const auto& [id, e] : table_->entries())
+      if (id != id_ && e.cur.command == command) k0 = std::max(k0, step_of(e.cur.model_time));
     t_ = static_cast<double>(k0) * cmd_.dt;
   }
   if (target_ && target_->command != command) target_.reset();
@@ -319,8 +296,8 @@ bool AgentLogic::step() {
   frame.by_target = follow_target;
   nbrs_.clear();
   bool ready = true;
-  for (const auto& e : table_->entries()) {
-    if (e.id == id_) continue;  // never itself
+  for (const auto& [id, e] : table_->entries()) {
+    if (id == id_) continue;  // never itself
     // Lockstep: the neighbour's state of step k (the newest, or the one before if it is already
     // ahead); free running: the newest.
     const Snapshot* use = &e.cur;
@@ -329,7 +306,7 @@ bool AgentLogic::step() {
       if (e.cur.command != followed || cur < k) ready = false;
       else if (cur > k && e.prev.command == followed && step_of(e.prev.model_time) == k) use = &e.prev;
     }
-    core::Neighbour n{e.id, seen_now(frame, *use, e.last_seen_ns, followed)};
+    core::Neighbour n{id, seen_now(frame, *use, e.last_seen_ns, followed)};
     if (arc_law && use->command == followed && use->arc) n.s = *use->arc;
     nbrs_.push_back(n);
   }
@@ -423,16 +400,16 @@ core::StepResult AgentLogic::filtered(const core::StepResult& r, std::optional<c
   snbrs_.clear();
   known_next_.clear();
   auto g = known_.begin();
-  for (const auto& e : table_->entries()) {
-    for (; g != known_.end() && g->id < e.id; ++g) silent(*g);
-    if (g != known_.end() && g->id == e.id) ++g;
-    if (e.id == id_) continue;
+  for (const auto& [id, e] : table_->entries()) {
+    for (; g != known_.end() && g->id < id; ++g) silent(*g);
+    if (g != known_.end() && g->id == id) ++g;
+    if (id == id_) continue;
     const Snapshot* use = &e.cur;
     if (lockstep_ && e.cur.command == followed && step_of(e.cur.model_time) > k && e.prev.command == followed)
       use = &e.prev;
     const bool exact = lockstep_ && use->command == followed && step_of(use->model_time) == k;
     core::SafetyNeighbour& j =
-        snbrs_.emplace_back(core::SafetyNeighbour{e.id, use->x, exact ? 0.0 : std::max(age(e.last_seen_ns), lag(*use)), max_speed});
+        snbrs_.emplace_back(core::SafetyNeighbour{id, use->x, exact ? 0.0 : std::max(age(e.last_seen_ns), lag(*use)), max_speed});
     if (braking) {
       const bool step_before = use == &e.cur && e.prev.command == use->command &&
                                std::abs(use->model_time - cmd_.dt - e.prev.model_time) <= 1e-9 * (1.0 + std::abs(use->model_time));
@@ -447,7 +424,7 @@ core::StepResult AgentLogic::filtered(const core::StepResult& r, std::optional<c
         if (j.age_s > 0.0) j.max_speed = core::braking_reach(speed, j.age_s / cmd_.dt, vmax, accel, h) / j.age_s;
       }
     }
-    known_next_.push_back({e.id, e.cur.x, e.last_seen_ns});
+    known_next_.push_back({id, e.cur.x, e.last_seen_ns});
   }
   for (; g != known_.end(); ++g) silent(*g);
   known_.swap(known_next_);
@@ -489,8 +466,8 @@ core::StepResult AgentLogic::return_step() const {
 
 void AgentLogic::book_gap() {
   double gap = -1.0;
-  for (const auto& e : table_->entries())
-    if (e.id != id_) {
+  for (const auto& [id, e] : table_->entries())
+    if (id != id_) {
       const double g = (e.cur.x - x_).norm();
       if (gap < 0.0 || g < gap) gap = g;
     }
@@ -511,9 +488,9 @@ void AgentLogic::book_gaps(const std::vector<AgentLogic*>& agents) {
   thread_local std::vector<core::Vec2> heard, hosted;
   thread_local std::vector<std::int32_t> heard_ids, hosted_ids;
   heard.clear(), heard_ids.clear(), hosted.clear(), hosted_ids.clear();
-  for (const auto& e : agents.front()->table_->entries()) {
+  for (const auto& [id, e] : agents.front()->table_->entries()) {
     heard.push_back(e.cur.x);
-    heard_ids.push_back(e.id);
+    heard_ids.push_back(id);
   }
   for (const AgentLogic* a : agents) {
     hosted.push_back(a->x_);
@@ -588,9 +565,9 @@ void AgentLogic::step_shared(const std::vector<AgentLogic*>& agents) {
   frame.by_target = follow_target;
   // The agents hosted here are taken as they are now (hosted), the others as last heard (moved into
   // the hosted agents' model time as step() moves them).
-  for (const auto& e : first.table_->entries()) {
+  for (const auto& [id, e] : first.table_->entries()) {
     if (e.hosted >= 0) continue;
-    core::Neighbour n{e.id, first.seen_now(frame, e.cur, e.last_seen_ns, followed)};
+    core::Neighbour n{id, first.seen_now(frame, e.cur, e.last_seen_ns, followed)};
     if (e.cur.command == followed && e.cur.arc) n.s = *e.cur.arc;
     others.push_back(n);
   }

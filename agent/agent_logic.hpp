@@ -18,6 +18,7 @@
 #include "core/vehicle.hpp"
 #include "protocol/command_arbiter.hpp"
 #include "protocol/samples.hpp"
+#include "util/id_map.hpp"
 
 namespace shapeform::agent {
 
@@ -74,7 +75,6 @@ class NeighbourTable {
     std::optional<double> arc;
   };
   struct Entry {
-    std::int32_t id;
     int hosted;  ///< index of the hosted agent with this id, -1 for an agent hosted elsewhere
     std::int64_t last_seen_ns;
     std::uint64_t seq;
@@ -97,8 +97,8 @@ class NeighbourTable {
   /// now_ns: the hosted agents each call it).
   void drop_stale(std::int64_t now_ns, bool commanded = true);
 
-  /// Every agent heard, ascending ids.
-  const std::vector<Entry>& entries() const { return entries_; }
+  /// Every agent heard, ascending ids: pairs of id and entry.
+  const util::IdMap<Entry>& entries() const { return entries_; }
   /// Agents heard by hosted agent `id` (every entry but its own).
   int heard_by(std::int32_t id) const;
   /// The table's counters as hosted agent `id` counts them (samples_rejected, steps_clamped: 0).
@@ -117,15 +117,8 @@ class NeighbourTable {
   std::int64_t timeout_ns_;
   std::int64_t idle_timeout_ns_;
   std::int64_t dropped_at_ns_ = -1;  ///< the last drop_stale's now_ns
-  std::vector<Entry> entries_;
-  /// pos_of_[id]: the index of agent id's entry, -1 if none (sized to the largest id heard): one
-  /// look-up per received sample instead of a search; rebuilt from the changed index on when an
-  /// entry comes or goes.
-  std::vector<int> pos_of_;
-  /// Agent id's entry, nullptr if none.
-  Entry* find(std::int32_t id);
-  /// pos_of_ of entries_[from...] (after an insertion or an erasure there).
-  void reindex(std::size_t from);
+  /// Found by id in one look-up per received sample.
+  util::IdMap<Entry> entries_;
   Counts total_;            ///< the process's counts, every agent's samples
   std::vector<Counts> own_; ///< per hosted agent: the part that is its own samples
 };

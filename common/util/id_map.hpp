@@ -50,14 +50,12 @@ class IdMap {
   /// for a negative id (no slot to index it by).
   T& operator[](std::int32_t id) {
     if (const int k = slot(id); k >= 0) return items_[static_cast<std::size_t>(k)].second;
-    if (id < 0) throw std::out_of_range("IdMap: negative id " + std::to_string(id));
-    // Appending is the common case (ids heard in ascending order); else the first id above goes up one.
-    std::size_t k = items_.size();
-    while (k > 0 && items_[k - 1].first > id) --k;
-    items_.insert(items_.begin() + static_cast<std::ptrdiff_t>(k), value_type(id, T{}));
-    if (static_cast<std::size_t>(id) >= pos_.size()) pos_.resize(static_cast<std::size_t>(id) + 1, -1);
-    reindex(k);
-    return items_[k].second;
+    return insert(id, T{});
+  }
+  /// id's value set to value (inserted if there is none); throws as operator[] does.
+  T& insert_or_assign(std::int32_t id, T value) {
+    if (const int k = slot(id); k >= 0) return items_[static_cast<std::size_t>(k)].second = std::move(value);
+    return insert(id, std::move(value));
   }
 
   /// Removes id (if there); returns how many were removed (0 or 1).
@@ -69,6 +67,23 @@ class IdMap {
     reindex(static_cast<std::size_t>(k));
     return 1;
   }
+  /// Removes every pair for which pred(pair) is true, in one pass; returns how many.
+  template <class Pred>
+  std::size_t erase_if(Pred pred) {
+    const std::size_t before = items_.size();
+    std::size_t kept = 0;
+    for (std::size_t k = 0; k < items_.size(); ++k) {
+      if (pred(const_cast<const value_type&>(items_[k]))) {
+        pos_[static_cast<std::size_t>(items_[k].first)] = -1;
+      } else {
+        if (kept != k) items_[kept] = std::move(items_[k]);
+        pos_[static_cast<std::size_t>(items_[kept].first)] = static_cast<int>(kept);
+        ++kept;
+      }
+    }
+    items_.resize(kept);
+    return before - kept;
+  }
   void clear() {
     items_.clear();
     pos_.clear();
@@ -78,6 +93,17 @@ class IdMap {
   std::vector<value_type> items_;  ///< ascending ids
   std::vector<int> pos_;           ///< pos_[id]: the index of id in items_, -1 if absent
 
+  /// Inserts id (absent) with value, in order.
+  T& insert(std::int32_t id, T value) {
+    if (id < 0) throw std::out_of_range("IdMap: negative id " + std::to_string(id));
+    // Appending is the common case (ids heard in ascending order); else the first id above goes up one.
+    std::size_t k = items_.size();
+    while (k > 0 && items_[k - 1].first > id) --k;
+    items_.insert(items_.begin() + static_cast<std::ptrdiff_t>(k), value_type(id, std::move(value)));
+    if (static_cast<std::size_t>(id) >= pos_.size()) pos_.resize(static_cast<std::size_t>(id) + 1, -1);
+    reindex(k);
+    return items_[k].second;
+  }
   int slot(std::int32_t id) const {
     const auto k = static_cast<std::size_t>(id);
     return id < 0 || k >= pos_.size() ? -1 : pos_[k];

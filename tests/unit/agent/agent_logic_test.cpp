@@ -1083,10 +1083,10 @@ TEST_CASE("the neighbour table's index follows arrivals, departures and drops (r
     }
     REQUIRE(table.entries().size() == model.size());
     auto m = model.begin();
-    for (const auto& e : table.entries()) {
-      REQUIRE(e.id == m->first);
+    for (const auto& [key, e] : table.entries()) {
+      REQUIRE(key == m->first);
       REQUIRE(e.cur.x.x() == std::get<0>(m->second));
-      REQUIRE(e.hosted == (e.id == 2 ? 0 : e.id == 5 ? 1 : -1));
+      REQUIRE(e.hosted == (key == 2 ? 0 : key == 5 ? 1 : -1));
       ++m;
     }
   }

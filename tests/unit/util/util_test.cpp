@@ -321,7 +321,7 @@ TEST_CASE("PhaseClock books each lap to the phase that ended and means per tick"
 
 TEST_CASE("IdMap holds what std::map holds, in ascending ids, under random inserts, updates and erasures", "[util]") {
   std::mt19937 rng(7);
-  std::uniform_int_distribution<int> id(0, 300), op(0, 9);
+  std::uniform_int_distribution<int> id(0, 300), op(0, 11);
   util::IdMap<int> flat;
   std::map<std::int32_t, int> tree;
   for (int step = 0; step < 20000; ++step) {
@@ -332,6 +332,17 @@ TEST_CASE("IdMap holds what std::map holds, in ascending ids, under random inser
       tree[k] += step;
     } else if (o < 8) {
       REQUIRE(flat.erase(k) == tree.erase(k));
+    } else if (o == 10) {
+      REQUIRE(flat.insert_or_assign(k, step) == step);
+      tree[k] = step;
+    } else if (o == 11 && step % 50 == 0) {
+      // Every value divisible by the id's last digit plus 2 goes, in one pass.
+      const auto doomed = [](std::int32_t key, int value) { return value % (key % 10 + 2) == 0; };
+      std::size_t gone = 0;
+      for (auto it = tree.begin(); it != tree.end();)
+        if (doomed(it->first, it->second)) it = tree.erase(it), ++gone;
+        else ++it;
+      REQUIRE(flat.erase_if([&](const auto& p) { return doomed(p.first, p.second); }) == gone);
     } else {
       REQUIRE(flat.contains(k) == (tree.count(k) == 1));
       REQUIRE((flat.find(k) == flat.end()) == (tree.find(k) == tree.end()));
