@@ -377,7 +377,12 @@ void ConvergenceDetector::add(double t, const std::optional<double>& shape_error
     sum += s.err;
   }
   const double mean = sum / static_cast<double>(window_.size());
-  const bool steady = hi - lo <= std::max(p_.band_abs, p_.band_rel * mean);
+  const double band = std::max(p_.band_abs, p_.band_rel * mean);
+  // Steady until converged: the error stayed within the band over the span. Once converged, only a
+  // rise by more than the band above the span's lowest error ends it: a formation still creeping
+  // closer to its shape stays converged (otherwise a decay of about band / hold could flip the
+  // verdict back and forth).
+  const bool steady = converged_ ? window_.back().err - lo <= band : hi - lo <= band;
   // Growth over the last `hold` span, whatever restarted the window meanwhile, against the same
   // size-relative bound: on its shape a formation can only keep growing along an unbounded curve
   // (the line), where it never settles.

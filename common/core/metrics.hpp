@@ -102,6 +102,8 @@ std::optional<int> settle_index(const std::vector<double>& shape_error,
 ///   side 5; bound 0.8, 0.8, 1.0);
 /// - it is steady: the error stayed within a band (max - min <= max(band_abs, band_rel * mean)) and
 ///   the uniformity (gap CV) <= gap_cv_max (the paper's law plateaus off the shape and chatters);
+///   once converged, a falling error keeps the verdict and only a rise of more than the band above
+///   the span's lowest error ends it;
 /// - it stopped growing: its spread (core::spread) rose by at most the on-shape bound over the span
 ///   (the paper's line grows for ever at about 0.2 units per model time with every agent on it).
 /// Which command the agents follow is the caller's part: it feeds samples only while every agent

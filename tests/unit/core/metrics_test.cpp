@@ -326,6 +326,45 @@ TEST_CASE("online convergence detector holds for the hold time", "[metrics][sett
   CHECK_FALSE(d.converged());
 }
 
+TEST_CASE("verdict: once converged, a falling error keeps it and a rise ends it", "[metrics][verdict]") {
+  ConvergenceDetector::Params p;
+  p.hold = 10;
+  ConvergenceDetector d(p);
+  d.set_command(circle_cmd(4.0));
+  for (int k = 0; k < 20; ++k) d.add(k, 0.17, 0.05, 4.0);
+  REQUIRE(d.converged());
+  // Closer to the shape, by more than the band (0.02) within the span, in steps and creeping: still
+  // converged at every sample.
+  for (int k = 20; k < 40; ++k) {
+    d.add(k, k < 25 ? 0.17 - 0.012 * (k - 19) : 0.11 - 0.003 * (k - 25), 0.05, 4.0);
+    CHECK(d.converged());
+  }
+  // Before it was converged a fall of that size is not steady: a new detector waits for the span.
+  ConvergenceDetector fresh(p);
+  fresh.set_command(circle_cmd(4.0));
+  int unsteady = 0;
+  for (int k = 0; k < 20; ++k) {
+    fresh.add(k, 0.2 - 0.003 * k, 0.05, 4.0);
+    CHECK_FALSE(fresh.converged());
+    unsteady += fresh.why() == ConvergenceDetector::Why::Unsteady;
+  }
+  CHECK(unsteady >= 2);
+  // A rise within the band above the span's lowest error keeps it; by more than the band ends it.
+  const double low = 0.11 - 0.003 * 14;
+  d.add(40, low + 0.015, 0.05, 4.0);
+  CHECK(d.converged());
+  d.add(41, low + 0.025, 0.05, 4.0);
+  CHECK_FALSE(d.converged());
+  CHECK(d.why() == ConvergenceDetector::Why::Unsteady);
+  // Judged anew from there: converged again after a whole span.
+  for (int k = 42; k < 51; ++k) {
+    d.add(k, low + 0.025, 0.05, 4.0);
+    CHECK_FALSE(d.converged());
+  }
+  d.add(51, low + 0.025, 0.05, 4.0);
+  CHECK(d.converged());
+}
+
 TEST_CASE("verdict: off the shape, however steady, is not converged", "[metrics][verdict]") {
   ConvergenceDetector::Params p;
   p.hold = 10;
