@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """The paper's claims on real agent processes, through scripts/launch_swarm.sh (one process per agent
-and a supervisor on loopback; fixed seeds; each test's runs one after another on the test's domain).
+and a supervisor on loopback; fixed seeds; each test's runs one after another on the test's domain, but
+the free-running test's in pairs side by side on two).
 
 - Repulsion: on the ellipse and the square (12 agents, 200 iterations) r = 0.1 lowers the gap CV at least
   tenfold against r = 0 (without repulsion the agents pile up in clumps). Both are medians over the last
@@ -39,6 +40,9 @@ import harness  # noqa: E402
 
 C0 = {"line": (-10.0, -10.0), "circle": (6.0, 0.0)}
 RATE_HZ = 50.0
+# The free-running test's tracked runs go beside its fixed-centre runs on this domain: paper_trailing's,
+# a swarm test, so never in use while the free-running test (ALONE) runs (tests/integration/CMakeLists.txt).
+SECOND_DOMAIN = 141
 # For checking that the tests can fail: extra overrides for every launch, after the test's own, e.g.
 # SHAPEFORM_IT_LAUNCH_SETS="tracking.feedforward=false" or "dynamics.r=0".
 LAUNCH_MUTATION = os.environ.get("SHAPEFORM_IT_LAUNCH_SETS", "").split()
@@ -62,16 +66,25 @@ class PaperClaimsTest(harness.SwarmTestCase):
 
     def launch(self, tag, scen, n, steps, init, sets=()):
         """One swarm run of `steps` iterations; returns (summary, metric rows after the command)."""
+        return self.finish(self.start_launch(tag, scen, n, steps, init, sets))
+
+    def start_launch(self, tag, scen, n, steps, init, sets=(), domain=None):
+        """Starts one swarm run of `steps` iterations (on `domain`, default the test's); finish() waits."""
         record = os.path.join(self.run_dir, "rec_" + tag)
         argv = ["bash", launcher(), "--build", build_dir(), "--runs", os.path.join(self.run_dir, "runs"),
-                "--domain", str(self.domain), "-n", str(n), "--scenario", scen, "--steps", str(steps),
+                "--domain", str(self.domain if domain is None else domain), "-n", str(n), "--scenario", scen,
+                "--steps", str(steps),
                 "--init", init, "--record", record, "--json", "--set", f"supervisor.metrics_rate_hz={RATE_HZ:g}",
                 # No agent leaves in these runs: a neighbour unheard for a moment on a busy machine is
                 # kept (0.5 s) rather than dropped after 3 periods, so the law stays all-to-all.
                 "--set", "agent.neighbour_timeout_periods=25"]
         for s in list(sets) + LAUNCH_MUTATION:
             argv += ["--set", s]
-        p = self.start("launch_" + tag, argv)
+        return tag, self.start("launch_" + tag, argv), record, n, steps
+
+    def finish(self, launch):
+        """Waits for a run of start_launch; returns (summary, metric rows after the command)."""
+        tag, p, record, n, steps = launch
         status = p.wait(steps / RATE_HZ * 4 + 120)
         summary = harness.summary(p.out())
         self.assertIsNotNone(summary, f"{tag}: no summary (launcher exit status {status})")
@@ -177,10 +190,10 @@ class PaperClaimsTest(harness.SwarmTestCase):
         # draw depends on the host's load: on an idle host 10 fixed-centre runs measured 0.19 to 0.22,
         # beside the rest of the suite 0.073, 0.080 and 0.137, while tracked runs stayed at 0.11 to 0.22
         # (scripts/paper/free_running.py; docs/RESULTS.md). That spread is wider than the bound, so the
-        # reference is the problem's range, not one draw or a median of three; the fixed-centre and
-        # tracked runs alternate so that both sample the same conditions, and the test runs with no
-        # other swarm beside it (ALONE). The arc law's fixed-centre figure is exact (0). Closer to the
-        # centre is no failure. 10 tracked phasings in all, on both paths and both laws.
+        # reference is the problem's range, not one draw or a median of three; a fixed-centre run and a
+        # tracked run go side by side, on two domains, so that both sample the same conditions, and the
+        # test runs with no other swarm beside it (ALONE). The arc law's fixed-centre figure is exact
+        # (0). Closer to the centre is no failure. 10 tracked phasings in all, on both paths and both laws.
         cases = {("paper", "line"): (3, 3), ("paper", "circle"): (3, 3), ("arc", "line"): (2, 1),
                  ("arc", "circle"): (2, 1)}  # (tracked runs, fixed-centre runs)
         for (law, path), (runs, fixed_runs) in cases.items():
@@ -188,15 +201,20 @@ class PaperClaimsTest(harness.SwarmTestCase):
             sets = [f"dynamics.law={law}"]
             fixed, tracked = [], []
             for k in range(max(runs, fixed_runs)):
+                fx = ff = None
                 if k < fixed_runs:
-                    _, fx = self.launch(f"free_{law}_{path}_fixed{k}", f"track_{path}", 10, 300, start,
-                                        sets + ["tracking.path=fixed",
-                                                f"tracking.point=[{C0[path][0]:g},{C0[path][1]:g}]"])
-                    fixed.append(self.window(fx, "centroid_error", 200, 300))
+                    fx = self.start_launch(f"free_{law}_{path}_fixed{k}", f"track_{path}", 10, 300, start,
+                                           sets + ["tracking.path=fixed",
+                                                   f"tracking.point=[{C0[path][0]:g},{C0[path][1]:g}]"])
                 if k < runs:
-                    _, ff = self.launch(f"free_{law}_{path}_ff{k}", f"track_{path}_ff", 10, 300, start, sets)
-                    tracked.append((self.window(ff, "centroid_error", 200, 300),
-                                    self.window(ff, "ring_error", 200, 300)))
+                    ff = self.start_launch(f"free_{law}_{path}_ff{k}", f"track_{path}_ff", 10, 300, start, sets,
+                                           domain=SECOND_DOMAIN)
+                if fx:
+                    fixed.append(self.window(self.finish(fx)[1], "centroid_error", 200, 300))
+                if ff:
+                    rows = self.finish(ff)[1]
+                    tracked.append((self.window(rows, "centroid_error", 200, 300),
+                                    self.window(rows, "ring_error", 200, 300)))
             for j, (c_ff, r_ff) in enumerate(tracked):
                 with self.subTest(law=law, path=path, run=j):
                     msg = (f"{law} {path} run {j}: centroid error tracked {c_ff:.3f}, fixed centre at most "
