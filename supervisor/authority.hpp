@@ -79,6 +79,8 @@ class CommandAuthority {
   void refuse_invalid(std::uint64_t epoch, const std::string& why);
   /// Re-judges the commands refused so far against the agents' epochs now; true when one was learnt.
   bool recheck(std::uint64_t peer_floor, std::int64_t now_ns);
+  /// Whether a refused command waits for recheck() (without one, recheck() does nothing).
+  bool has_refused() const { return arbiter_.has_refused(); }
   /// A learnt command's model clock is where the agents following it are: taken once they report it.
   void sync_clock(std::int64_t now_ns);
   /// commands.csv: the command in force (when one is) from now.

@@ -303,6 +303,8 @@ void SupervisorNode::recover_participant() {
 void SupervisorNode::drain_commands(std::int64_t now) {
   command_reader_.drain(commands_);
   record_wire(command_ch_, now, commands_);  // its own too: what every agent heard
+  // Nothing heard and nothing to recheck (most ticks): no pass over the agents for the floor.
+  if (commands_.empty() && !authority_.has_refused()) return;
   const std::uint64_t floor = monitor_.min_epoch_followed(now);
   for (const auto& r : commands_) {
     if (!r.valid_data || r.source == node_->source()) continue;  // our own publications are known

@@ -285,8 +285,15 @@ Metrics compute_metrics(const CompiledCommand& cmd, const std::vector<Vec2>& x, 
   m.arc_gap_cv = coefficient_of_variation(arc_gaps(s, curve, x));
   if (!pairwise) return m;
 
-  m.clusters = count_clusters(x);
-  const std::vector<double> nn = nearest_distances(x);
+  std::vector<std::int32_t> ids(n);
+  std::iota(ids.begin(), ids.end(), 0);
+  std::vector<double> nn = nearest_squared(x, ids, x, ids);
+  // No two agents within the link (a formed swarm; the margin covers the two functions' roundings of
+  // a squared distance): every agent is its own cluster, without the linking pass.
+  const double link2 = kClusterLink * kClusterLink;
+  m.clusters = *std::min_element(nn.begin(), nn.end()) > link2 * (1.0 + 1e-9) ? static_cast<int>(n)
+                                                                              : count_clusters(x);
+  for (double& d : nn) d = std::sqrt(d);
   m.nn_cv = coefficient_of_variation(nn);
   m.min_separation = *std::min_element(nn.begin(), nn.end());
   m.extent = largest_distance(x);

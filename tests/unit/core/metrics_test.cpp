@@ -221,6 +221,16 @@ TEST_CASE("nearest distances, clusters and extent equal comparing every pair, to
     CHECK(nearest_distances(x) == b.nn);
     CHECK(largest_distance(x) == b.extent);
     CHECK(count_clusters(x) == b.clusters);
+    // compute_metrics skips the linking pass when no pair is within the link: the same count.
+    CHECK(compute_metrics(circle_cmd(), x, 0.0).clusters == b.clusters);
+  }
+  {  // every pair just over the link, and one pair just under it
+    std::vector<Vec2> x;
+    for (int i = 0; i < 50; ++i) x.emplace_back(kClusterLink * (1 + 1e-12) * i, 0.0);
+    CHECK(compute_metrics(circle_cmd(), x, 0.0).clusters == brute(x).clusters);
+    x.emplace_back(x.back().x() + kClusterLink * (1 - 1e-12), 0.0);
+    CHECK(compute_metrics(circle_cmd(), x, 0.0).clusters == brute(x).clusters);
+    CHECK(brute(x).clusters == 50);
   }
   CHECK(largest_distance({}) == 0.0);
   CHECK(largest_distance({Vec2(1, 1), Vec2(1, 1)}) == 0.0);
