@@ -285,17 +285,12 @@ Metrics compute_metrics(const CompiledCommand& cmd, const std::vector<Vec2>& x, 
   m.arc_gap_cv = coefficient_of_variation(arc_gaps(s, curve, x));
   if (!pairwise) return m;
 
-  std::vector<std::int32_t> ids(n);
-  std::iota(ids.begin(), ids.end(), 0);
-  std::vector<double> nn = nearest_squared(x, ids, x, ids);
-  // No two agents within the link (a formed swarm; the margin covers the two functions' roundings of
-  // a squared distance): every agent is its own cluster, without the linking pass.
-  const double link2 = kClusterLink * kClusterLink;
-  m.clusters = *std::min_element(nn.begin(), nn.end()) > link2 * (1.0 + 1e-9) ? static_cast<int>(n)
-                                                                              : count_clusters(x);
-  for (double& d : nn) d = std::sqrt(d);
+  const std::vector<double> nn = nearest_distances(x);
   m.nn_cv = coefficient_of_variation(nn);
   m.min_separation = *std::min_element(nn.begin(), nn.end());
+  // No two agents within the link (a spread-out swarm; the margin is far above the roundings of a
+  // distance): every agent is its own cluster, without the linking pass.
+  m.clusters = m.min_separation > kClusterLink * (1.0 + 1e-9) ? static_cast<int>(n) : count_clusters(x);
   m.extent = largest_distance(x);
   return m;
 }
