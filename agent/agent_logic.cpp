@@ -164,6 +164,13 @@ void AgentLogic::stop_vehicle() {
   v_ = core::Vec2::Zero();
 }
 
+void AgentLogic::skip(std::uint64_t periods) {
+  if (periods == 0 || lockstep_ || !has_command() || cmd_.hold || fence_ == FenceState::Stopped) return;
+  const double by = static_cast<double>(periods) * cmd_.dt;
+  t_ += by;
+  target_age_ += by;
+}
+
 AgentCounters AgentLogic::counters() const {
   AgentCounters c = table_->counters_for(id_);
   c.samples_rejected = rejected_;

@@ -265,8 +265,17 @@ class AgentLogic {
   /// The command for the external vehicle now: the last step's, zero before any command, while held,
   /// and after stop_vehicle().
   const core::VehicleCommand& vehicle_command() const { return command_; }
-  /// The pose is lost (or the agent stops): command zero, model time stands still.
+  /// The pose is lost (or the agent stops): command zero, no step (model time moves on by skip()).
   void stop_vehicle();
+  /// `periods` of the command's clock passed without a step of this agent: its loop skipped them (a
+  /// busy host, a stall), or its robot had no fresh pose. Free running, its model time (and its
+  /// tracked target's age) moves on by as many steps, its position not, so that its model time stays
+  /// the periods since it adopted the command, as its neighbours' and the supervisor's are: a state
+  /// whose model time is behind an agent's own is taken as that much older by the safety filter, so a
+  /// neighbour whose clock had stood still would look old for the rest of the command and hold agents
+  /// near it. In lockstep (steps are counted, not timed), before any command, while held and when
+  /// stopped by the fence, model time stands still, as in step().
+  void skip(std::uint64_t periods);
   std::uint64_t poses_refused() const { return poses_refused_; }
   /// A pose refused before on_pose (its message was invalid): counted with the others.
   void count_refused_pose() { ++poses_refused_; }

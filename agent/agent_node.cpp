@@ -243,6 +243,7 @@ class AgentNode {
   const std::uint64_t status_every_;  ///< ticks per status period
   const std::uint64_t idle_every_;    ///< ticks per state publication before the first command
   std::uint64_t seq_ = 0, ticks_ = 0;
+  std::uint64_t overruns_seen_ = 0;  ///< the loop's skipped periods already given to the agents (step())
   int heard_logged_ = -1;
   IdentityGuard identity_;
   std::int64_t farewell_end_ns_ = 0;  ///< yielding: stop at the latest then
@@ -519,6 +520,10 @@ void AgentNode::drain_states() {
 }
 
 void AgentNode::step(std::int64_t now) {
+  // Periods the loop skipped since the last tick pass on the agents' clocks too (AgentLogic::skip).
+  const std::uint64_t overruns = loop_.overruns();
+  for (auto& l : logics_) l->skip(overruns - overruns_seen_);
+  overruns_seen_ = overruns;
   sharing_.clear();
   for (std::size_t k = 0; k < logics_.size(); ++k) {
     AgentLogic& l = *logics_[k];
@@ -548,6 +553,7 @@ void AgentNode::step(std::int64_t now) {
         l.step();
       } else {
         l.stop_vehicle();
+        l.skip(1);  // no step this period: the clock moves on all the same
         if (l.has_pose() && robots_[k].health == dds::VehicleHealth::Driving)
           vehicle_health(k, dds::VehicleHealth::PoseLost,
                          "no pose from " + robots_[k].io.topics().pose_name() + " for " +

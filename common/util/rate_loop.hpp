@@ -60,6 +60,9 @@ class RateLoop {
   /// Snapshot of the statistics. Computes the p99 on demand without allocating.
   LoopStats stats() const;
 
+  /// Whole periods skipped since start / reset_stats() (stats().overruns, without computing the p99).
+  std::uint64_t overruns() const { return stats_.overruns; }
+
   /// Clears lateness/work maxima, the lateness window and the counters; keeps the deadline grid.
   void reset_stats();
 

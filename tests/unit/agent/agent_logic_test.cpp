@@ -860,13 +860,22 @@ core::CompiledCommand line_90(double d) {
   return core::compile(c);
 }
 
+/// One agent's loop skips `periods` periods from period `from` on (a busy host, a stall); at its next
+/// tick it is told of them (AgentLogic::skip) as its process's loop does, unless `told` is false.
+struct Stall {
+  int agent = -1;
+  int from = 0;
+  int periods = 0;
+  bool told = true;
+};
+
 /// Free-running agents with a clock: period P = 20 ms, each agent ticking at its own phase, its state
 /// delivered to the others `latency` later (a fraction `loss` lost). Returns the smallest distance of
 /// two agents' true positions after any step, and the agents. With a vehicle, each agent drives one and
 /// its states carry its previous position, as agent processes' do.
 double free_running(const core::CompiledCommand& cmd, const std::vector<Vec2>& start, int periods,
                     std::vector<AgentLogic>& agents, std::int64_t latency = 3 * kMs, double loss = 0.0,
-                    const core::VehicleParams* vehicle = nullptr) {
+                    const core::VehicleParams* vehicle = nullptr, const Stall& stall = {}) {
   constexpr std::int64_t P = 20 * kMs;
   agents.clear();
   for (int i = 0; i < static_cast<int>(start.size()); ++i) {
@@ -899,7 +908,9 @@ double free_running(const core::CompiledCommand& cmd, const std::vector<Vec2>& s
   // Ticks in time order; deliveries due before a tick are taken first.
   std::vector<std::pair<std::int64_t, int>> ticks;
   for (int k = 0; k < periods; ++k)
-    for (std::size_t i = 0; i < agents.size(); ++i) ticks.emplace_back(k * P + offset[i], static_cast<int>(i));
+    for (std::size_t i = 0; i < agents.size(); ++i)
+      if (static_cast<int>(i) != stall.agent || k < stall.from || k >= stall.from + stall.periods)
+        ticks.emplace_back(k * P + offset[i], static_cast<int>(i));
   std::sort(ticks.begin(), ticks.end());
   for (const auto& [now, i] : ticks) {
     for (auto it = inflight.begin(); it != inflight.end();) {
@@ -913,6 +924,8 @@ double free_running(const core::CompiledCommand& cmd, const std::vector<Vec2>& s
       it = inflight.erase(it);
     }
     AgentLogic& a = agents[static_cast<std::size_t>(i)];
+    if (i == stall.agent && stall.told && now / P == stall.from + stall.periods)
+      a.skip(static_cast<std::uint64_t>(stall.periods));
     a.drop_stale(now);
     const Vec2 before = a.position();
     a.step();
@@ -954,6 +967,46 @@ TEST_CASE("safety filter: free-running agents with late and lost states never co
       CHECK(broken == 0);
       CHECK(min_gap >= d - 1e-9);  // what each agent saw of its neighbours, as last heard
     }
+}
+
+TEST_CASE("safety filter: an agent whose loop skipped periods keeps its clock, and nobody is held by it",
+          "[agent][safety]") {
+  // The middle agent's loop skips 25 periods (0.5 s) on the way. Were its model time to stand still
+  // meanwhile, it would be 25 steps behind the others' for the rest of the command, its states taken as
+  // 25 steps old (margins of 2.5 against a slot spacing of 1): agents near it are held for ever.
+  const double d = 0.25;
+  const auto start = on_x_axis(12, 0.5);
+  std::vector<AgentLogic> agents;
+  const auto on_line = [&] {
+    std::vector<double> along;
+    for (const auto& a : agents) {
+      if (std::abs(a.position().x()) > 1e-3) return false;
+      along.push_back(a.position().y());
+    }
+    std::sort(along.begin(), along.end());
+    for (std::size_t k = 1; k < along.size(); ++k)
+      if (std::abs(along[k] - along[k - 1] - 1.0) > 1e-3) return false;  // arc.spacing
+    return true;
+  };
+  const auto held = [&] {
+    int n = 0;
+    for (const auto& a : agents) n += a.safety().blocked ? 1 : 0;
+    return n;
+  };
+  for (const bool told : {false, true}) {
+    CAPTURE(told);
+    CHECK(free_running(line_90(d), start, 1500, agents, 3 * kMs, 0.0, nullptr, Stall{5, 10, 25, told}) >= d - 1e-9);
+    const double stalled = agents[5].model_time(), other = agents[4].model_time();
+    if (told) {
+      CHECK(stalled == other);  // the same clock (each of their 1500 periods)
+      CHECK(on_line());
+      CHECK(held() == 0);
+    } else {
+      CHECK(other - stalled == 25.0);  // the stall's periods behind for good
+      CHECK_FALSE(on_line());
+      CHECK(held() > 0);
+    }
+  }
 }
 
 TEST_CASE("safety filter: free-running double integrators with late and lost states never come closer than d",
