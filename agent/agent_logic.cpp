@@ -165,7 +165,7 @@ void AgentLogic::stop_vehicle() {
 }
 
 void AgentLogic::skip(std::uint64_t periods) {
-  if (periods == 0 || lockstep_ || !has_command() || cmd_.hold || fence_ == FenceState::Stopped) return;
+  if (periods == 0 || lockstep_ || !has_command() || cmd_.hold) return;
   const double by = static_cast<double>(periods) * cmd_.dt;
   t_ += by;
   target_age_ += by;
@@ -282,10 +282,12 @@ bool AgentLogic::step() {
     return false;
   }
   if (fence_ == FenceState::Stopped) {
-    // Stopped by a breach (stop, or hold until the supervisor holds everyone): as held.
+    // Stopped by a breach (stop, or hold until the supervisor holds everyone): still, its clock going
+    // on with the others' (skip()).
     v_ = core::Vec2::Zero();
     core::stop(vehicle_state_);
     command_ = {};
+    skip(1);
     return false;
   }
   if (fence_ == FenceState::Returning) {

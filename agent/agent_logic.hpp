@@ -273,8 +273,8 @@ class AgentLogic {
   /// the periods since it adopted the command, as its neighbours' and the supervisor's are: a state
   /// whose model time is behind an agent's own is taken as that much older by the safety filter, so a
   /// neighbour whose clock had stood still would look old for the rest of the command and hold agents
-  /// near it. In lockstep (steps are counted, not timed), before any command, while held and when
-  /// stopped by the fence, model time stands still, as in step().
+  /// near it (so an agent stopped by the fence counts its periods too). In lockstep (steps are counted,
+  /// not timed), before any command and while held, model time stands still, as in step().
   void skip(std::uint64_t periods);
   std::uint64_t poses_refused() const { return poses_refused_; }
   /// A pose refused before on_pose (its message was invalid): counted with the others.

@@ -1082,6 +1082,7 @@ TEST_CASE("fence: a command whose fence leaves the agent outside is a breach; th
       CHECK(a.fence_state() == agent::FenceState::Stopped);
       for (int k = 0; k < 5; ++k) CHECK_FALSE(a.step());
       CHECK(a.position() == Vec2(5, 0));
+      CHECK(a.model_time() == 5.0);  // still, its clock going on with the others'
       REQUIRE(adopt(a, core::compile(c), 2));
       CHECK(a.safety().fence_breaches == 0);
     }
