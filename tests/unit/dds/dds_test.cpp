@@ -1,5 +1,7 @@
 // Unit tests of common/dds: conversions, validation, the transport profiles' QoS, the topic table, and
 // an in-process loopback pub/sub between two nodes (each test case on its own DDS domain).
+#include <netinet/in.h>
+#include <sys/socket.h>
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
@@ -1867,6 +1869,53 @@ TEST_CASE("participants made after many in one process still take slots the peer
     b_reader.drain(batch);
     return std::any_of(batch.begin(), batch.end(), [](const auto& r) { return r.valid_data && r.msg.id() == 1; });
   }));
+}
+
+TEST_CASE("participants are made while other sockets open and close (their ports read from their own sockets)",
+          "[dds][node]") {
+  // The kernel lists /proc/net/udp a page at a time: a reading taken while sockets open and close can
+  // miss sockets bound all along, and the factory, reading the new participant's ports there, refused
+  // it as one that found no free slot (integration.echo_sigterm_busy on a loaded host).
+  // A busy host's table: 300 sockets bound throughout, 2 x 50 opened and closed over and over.
+  const auto open_bound = [](std::vector<int>& fds, int n) {
+    for (int k = 0; k < n; ++k) {
+      const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+      sockaddr_in a{};
+      a.sin_family = AF_INET;
+      a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+      if (fd >= 0 && ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0) fds.push_back(fd);
+      else if (fd >= 0) ::close(fd);
+    }
+  };
+  std::vector<int> held;
+  open_bound(held, 300);
+  std::atomic<bool> stop{false};
+  std::vector<std::thread> churn;
+  for (int t = 0; t < 2; ++t)
+    churn.emplace_back([&stop, &open_bound] {
+      std::vector<int> fds;
+      while (!stop.load()) {
+        open_bound(fds, 50);
+        for (const int fd : fds) ::close(fd);
+        fds.clear();
+      }
+    });
+  auto cfg = loopback(test_domain(2));
+  int made = 0;
+  std::string error;
+  for (int k = 0; k < 100 && error.empty(); ++k) {
+    try {
+      dds::Node node(cfg, "test-churn-" + std::to_string(k));
+      ++made;
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+  }
+  stop = true;
+  for (auto& t : churn) t.join();
+  for (const int fd : held) ::close(fd);
+  CAPTURE(error);
+  CHECK(made == 100);
 }
 
 TEST_CASE("the stall watch reports a loop late by more than the threshold", "[dds]") {
