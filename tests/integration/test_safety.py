@@ -14,12 +14,17 @@
   the action hold (the supervisor holds the swarm and says so; after `resume` the agents outside
   return inside).
 
+- Agent 5 paused 0.6 s as the filtered crossing starts: the line still forms, nobody held (a paused
+  loop's skipped periods move its model time on).
+
 Run directly: test_safety.py --bin build/bin --source . --domain 112
 """
 import itertools
 import math
 import os
+import signal
 import sys
+import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness  # noqa: E402
@@ -107,6 +112,35 @@ class SafetyTest(harness.LauncherTestCase):
             self.assertGreater(on["agents_blocked"], 0, "not converged: the agents held say so")
         self.assertGreaterEqual(self.recorded_min(harness.events(p.out(), "run")[0]["dir"]), SEPARATION - 1e-9,
                                 "recorded positions kept apart")
+
+    def test_crossing_with_a_paused_agent(self):
+        """An agent whose loop skips periods keeps its clock (docs/SAFETY.md, "Skipped periods keep the
+        clock"): agent 5 stopped 0.6 s (30 periods) as the filtered crossing starts; the others do not take
+        its states as 30 steps old for the rest of the command, so the line forms with nobody held. With
+        the model time that stood still while the loop skipped periods, 5 agents stayed held by agent 5."""
+        config = harness.scenario("arc_circle")
+        sets = [a for s in ["swarm.agents=%d" % AGENTS] + LINE_90 + ["safety.min_separation=%g" % SEPARATION]
+                for a in ("--set", s)]
+        sup = self.start_supervisor(config, extra=sets)
+        agents = [self.start_agent(i, config, extra=sets + ["--start", "%.4f,0" % (0.5 * (i - (AGENTS - 1) / 2))])
+                  for i in range(AGENTS)]
+        self.assertTrue(sup.wait_agents(AGENTS, 60), "the supervisor hears every agent")
+        victim = agents[5]
+        self.assertEqual(sup.command("start"), 1)
+        victim.signal(signal.SIGSTOP)
+        try:
+            harness.poll(lambda: (harness.procs._proc_stat(victim.pid) or ("gone",))[0] == "T", 5,
+                         "the kernel to stop agent 5", 0.01)
+            time.sleep(0.6)  # the fault itself
+        finally:
+            victim.signal(signal.SIGCONT)
+        self.assertTrue(sup.wait_converged(60), "the line forms")
+        status = sup.ask("status", "status")
+        self.assertEqual([a["safety"] for a in status["agents"] if a["safety"]], [], "nobody held")
+        m = sup.metrics()
+        self.assertGreater(m["filter_interventions"], 0, "the filter moved steps")
+        self.assertGreaterEqual(m["min_separation_run"], SEPARATION - 1e-9)
+        self.assert_all_alive(agents + [sup])
 
     def agents_where(self, sup, ok):
         """Whether every agent's position satisfies ok(x, y), by the supervisor's status."""
