@@ -150,6 +150,10 @@ class Proc:
             except ProcessLookupError:
                 pass
 
+    def kernel_state(self):
+        """The kernel's one-letter state of the process (R, S, D, T, Z...), 'gone' when it has exited."""
+        return (_proc_stat(self.pid) or ("gone",))[0]
+
     def stop(self, grace=5.0):
         """SIGTERM, wait up to grace seconds, then SIGKILL of the group; returns the exit status."""
         stop_all([self], grace=grace)

@@ -91,11 +91,6 @@ class LanTest(harness.LanSwarmTestCase):
         return alive
 
     @staticmethod
-    def kernel_state(p):
-        """The kernel's one-letter state of a process (R, S, D, T, Z...), 'gone' when it has exited."""
-        return (harness.procs._proc_stat(p.pid) or ("gone",))[0]
-
-    @staticmethod
     def hear(agents, marks, counts):
         """True when each agent's newest status after its mark reports counts[agent's index] neighbours."""
         return all(a.hears(n, m) for a, m, n in zip(agents, marks, counts))
@@ -295,7 +290,7 @@ class LanTest(harness.LanSwarmTestCase):
         try:
             # The signal is queued at once but takes hold when the kernel next schedules the process (a
             # write to a busy disk finishes first): the fault starts when the kernel says it is stopped.
-            poll(lambda: self.kernel_state(victim) == "T", 5, "the kernel to stop the agent", 0.01)
+            poll(lambda: victim.kernel_state() == "T", 5, "the kernel to stop the agent", 0.01)
             poll(lambda: self.hear(others, marks, [AGENTS - 2] * len(others)), 8,
                  "the 10 others to drop the paused agent")
             poll(lambda: self.alive_ids(sup) == set(range(AGENTS)) - {victim_id}, 8,
@@ -304,7 +299,7 @@ class LanTest(harness.LanSwarmTestCase):
             time.sleep(max(0.0, 5.0 - (time.monotonic() - t_stop)))  # the fault itself: 5 s
             # It really was stopped: not a line printed, and the kernel still says so.
             self.assertEqual(victim.mark(), paused_out, "the paused agent printed nothing while stopped")
-            self.assertEqual(self.kernel_state(victim), "T", "the kernel still has the agent stopped")
+            self.assertEqual(victim.kernel_state(), "T", "the kernel still has the agent stopped")
         finally:
             victim.signal(signal.SIGCONT)
         marks = [a.mark() for a in agents]

@@ -129,7 +129,7 @@ class SafetyTest(harness.LauncherTestCase):
         self.assertEqual(sup.command("start"), 1)
         victim.signal(signal.SIGSTOP)
         try:
-            harness.poll(lambda: (harness.procs._proc_stat(victim.pid) or ("gone",))[0] == "T", 5,
+            harness.poll(lambda: victim.kernel_state() == "T", 5,
                          "the kernel to stop agent 5", 0.01)
             time.sleep(0.6)  # the fault itself
         finally:
