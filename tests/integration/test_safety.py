@@ -127,10 +127,11 @@ class SafetyTest(harness.LauncherTestCase):
         self.assertTrue(sup.wait_agents(AGENTS, 60), "the supervisor hears every agent")
         victim = agents[5]
         self.assertEqual(sup.command("start"), 1)
+        # Stopped once it follows the command: its clock runs from there.
+        harness.poll(lambda: 1 in victim.epochs(), 10, "agent 5 to follow epoch 1", 0.01)
         victim.signal(signal.SIGSTOP)
         try:
-            harness.poll(lambda: victim.kernel_state() == "T", 5,
-                         "the kernel to stop agent 5", 0.01)
+            harness.poll(lambda: victim.kernel_state() == "T", 5, "the kernel to stop agent 5", 0.01)
             time.sleep(0.6)  # the fault itself
         finally:
             victim.signal(signal.SIGCONT)
