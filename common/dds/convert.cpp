@@ -53,20 +53,41 @@ Optional defined_or_null(T v) {
 }  // namespace
 
 namespace {
-/// Whether a state passes every check of valid_state, decided without building any message: a
-/// receiver takes every agent's state each tick, and nearly all are fine. A state near a limit, or
-/// wrong, goes through the checks that name the field.
-bool plainly_valid(const msg::AgentState& s) {
+/// Whether a state with these fields passes every check of valid_state, decided without building any
+/// message: a receiver takes every agent's state each tick, and nearly all are fine. A state near a
+/// limit, or wrong, goes through the checks that name the field.
+bool plainly_valid(std::int32_t id, double model_time, double x, double y, double prev_x, double prev_y, double arc,
+                   double prev_arc, double vx, double vy) {
   const auto within = [](double v) { return std::abs(v) <= kStateLimit; };  // false for NaN
-  const double speed2 = s.vx() * s.vx() + s.vy() * s.vy();
-  return s.id() >= 0 && s.id() <= kMaxAgentId && s.model_time() >= 0.0 && s.model_time() <= kModelTimeLimit &&
-         within(s.x()) && within(s.y()) && within(s.prev_x()) && within(s.prev_y()) && std::isfinite(s.arc()) &&
-         std::isfinite(s.prev_arc()) && speed2 <= 0.98 * kStateLimit * kStateLimit;
+  const double speed2 = vx * vx + vy * vy;
+  return id >= 0 && id <= kMaxAgentId && model_time >= 0.0 && model_time <= kModelTimeLimit && within(x) &&
+         within(y) && within(prev_x) && within(prev_y) && std::isfinite(arc) && std::isfinite(prev_arc) &&
+         speed2 <= 0.98 * kStateLimit * kStateLimit;
+}
+
+/// m -> out (every field read once from the generated accessors, which are not inlined), and whether m
+/// plainly passes valid_state (the function above).
+bool convert(const msg::AgentState& m, StateSample& out) {
+  const double x = m.x(), y = m.y(), vx = m.vx(), vy = m.vy(), prev_x = m.prev_x(), prev_y = m.prev_y();
+  const double arc = m.arc(), prev_arc = m.prev_arc(), model_time = m.model_time();
+  const bool has_arc = m.has_arc();
+  out.id = m.id();
+  out.seq = m.seq();
+  out.stamp_ns = m.stamp_ns();
+  out.command = CommandId{m.epoch(), SourceId{m.issuer()}};
+  out.model_time = model_time;
+  out.x = core::Vec2(x, y);
+  out.v = core::Vec2(vx, vy);
+  out.arc = has_arc ? std::optional<double>(arc) : std::nullopt;
+  out.prev_x = core::Vec2(prev_x, prev_y);
+  out.prev_arc = has_arc ? std::optional<double>(prev_arc) : std::nullopt;
+  return plainly_valid(out.id, model_time, x, y, prev_x, prev_y, arc, prev_arc, vx, vy);
 }
 }  // namespace
 
 bool valid_state(const msg::AgentState& s, std::string& why) {
-  if (plainly_valid(s)) return true;
+  if (plainly_valid(s.id(), s.model_time(), s.x(), s.y(), s.prev_x(), s.prev_y(), s.arc(), s.prev_arc(), s.vx(), s.vy()))
+    return true;
   Problems p("state");
   if (s.id() < 0 || s.id() > kMaxAgentId)
     p.add("id", "must be in 0.." + std::to_string(kMaxAgentId) + ", got " + std::to_string(s.id()));
@@ -95,16 +116,7 @@ bool valid_state(const msg::AgentState& s, std::string& why) {
 
 StateSample to_sample(const msg::AgentState& m) {
   StateSample out;
-  out.id = m.id();
-  out.seq = m.seq();
-  out.stamp_ns = m.stamp_ns();
-  out.command = CommandId{m.epoch(), SourceId{m.issuer()}};
-  out.model_time = m.model_time();
-  out.x = core::Vec2(m.x(), m.y());
-  out.v = core::Vec2(m.vx(), m.vy());
-  out.arc = m.has_arc() ? std::optional<double>(m.arc()) : std::nullopt;
-  out.prev_x = core::Vec2(m.prev_x(), m.prev_y());
-  out.prev_arc = m.has_arc() ? std::optional<double>(m.prev_arc()) : std::nullopt;
+  convert(m, out);
   return out;
 }
 
@@ -129,8 +141,9 @@ msg::AgentState to_msg(const StateSample& s) {
 }
 
 bool from_msg(const msg::AgentState& m, StateSample& out, std::string& why) {
-  if (!valid_state(m, why)) return false;
-  out = to_sample(m);
+  StateSample converted;
+  if (!convert(m, converted) && !valid_state(m, why)) return false;
+  out = converted;
   return true;
 }
 
@@ -165,10 +178,20 @@ std::vector<std::pair<std::size_t, std::size_t>> batch_ranges(std::size_t count,
 }
 
 bool from_msg(const msg::AgentStateBatch& m, std::vector<StateSample>& out, std::string& why) {
-  if (!valid_batch(m, why)) return false;
-  out.clear();
-  out.reserve(m.states().size());
-  for (const auto& s : m.states()) out.push_back(to_sample(s));
+  // Each field read once: the elements converted into a reused list, checked on the values read. A
+  // batch that is not plainly fine (an element near a limit or wrong, ids not ascending, a wrong
+  // size or first_id) goes through valid_batch, which decides it and names what is wrong.
+  thread_local std::vector<StateSample> converted;
+  const auto& states = m.states();
+  converted.resize(states.size());
+  bool plain = !states.empty() && states.size() <= kMaxBatchStates;
+  for (std::size_t k = 0; k < states.size(); ++k) {
+    plain = convert(states[k], converted[k]) && plain;
+    if (k > 0 && converted[k].id <= converted[k - 1].id) plain = false;
+  }
+  if (plain && m.first_id() != converted.front().id) plain = false;
+  if (!plain && !valid_batch(m, why)) return false;
+  out.swap(converted);
   return true;
 }
 

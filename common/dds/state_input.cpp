@@ -65,7 +65,7 @@ void StateInput::drain(const std::function<void(const StateItem&)>& each) {
       carried_.erase(it);
       continue;
     }
-    if (!valid_batch(r.msg, item.why)) {
+    if (!from_msg(r.msg, batch_states_, item.why)) {
       item.kind = StateItem::Kind::Rejected;
       item.state = {};
       each(item);
@@ -74,10 +74,10 @@ void StateInput::drain(const std::function<void(const StateItem&)>& each) {
     ++batches_;
     std::vector<std::int32_t>& ids = carried_[instance];
     ids.clear();
-    // Each element converted straight into the one item (no list of thousands of items).
-    for (const auto& element : r.msg.states()) {
-      item.state = to_sample(element);
-      item.id = item.state.id;
+    // Each element passed on in the one item (no list of thousands of items).
+    for (const StateSample& state : batch_states_) {
+      item.state = state;
+      item.id = state.id;
       ids.push_back(item.id);
       each(item);
     }

@@ -67,6 +67,7 @@ class StateInput {
   std::map<std::pair<SourceId, std::int32_t>, std::vector<std::int32_t>> carried_;
   std::uint64_t batches_ = 0;
   StateItem item_;  ///< the one item drain() passes on
+  std::vector<StateSample> batch_states_;  ///< one batch's states, converted (reused)
 };
 
 }  // namespace shapeform::dds

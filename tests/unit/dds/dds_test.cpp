@@ -558,6 +558,16 @@ TEST_CASE("a state batch converts element by element and is refused whole, namin
     CHECK(untouched.size() == 1);
     return w;
   };
+  // Distinct ids in another order (not how a group publishes, but a valid batch): taken in its order.
+  msg::AgentStateBatch shuffled = m;
+  std::swap(shuffled.states()[0], shuffled.states()[1]);
+  shuffled.first_id(41);
+  REQUIRE(dds::from_msg(shuffled, out, why));
+  REQUIRE(out.size() == 3);
+  CHECK(out[0].id == 41);
+  CHECK(out[1].id == 40);
+  CHECK(out[1].x == in[0].x);
+  CHECK(out[2].id == 42);
   msg::AgentStateBatch bad = m;
   bad.states()[1].x(std::nan(""));
   bad.states()[2].vy(1e300);
