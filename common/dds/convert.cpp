@@ -180,11 +180,12 @@ std::vector<std::pair<std::size_t, std::size_t>> batch_ranges(std::size_t count,
 bool from_msg(const msg::AgentStateBatch& m, std::vector<StateSample>& out, std::string& why) {
   // Each field read once: the elements converted into a reused list, checked on the values read. A
   // batch that is not plainly fine (an element near a limit or wrong, ids not ascending, a wrong
-  // size or first_id) goes through valid_batch, which decides it and names what is wrong.
-  thread_local std::vector<StateSample> converted;
+  // first_id) goes through valid_batch, which decides it and names what is wrong.
   const auto& states = m.states();
+  if (states.empty() || states.size() > kMaxBatchStates) return valid_batch(m, why);  // refused for its size
+  thread_local std::vector<StateSample> converted;
   converted.resize(states.size());
-  bool plain = !states.empty() && states.size() <= kMaxBatchStates;
+  bool plain = true;
   for (std::size_t k = 0; k < states.size(); ++k) {
     plain = convert(states[k], converted[k]) && plain;
     if (k > 0 && converted[k].id <= converted[k - 1].id) plain = false;
