@@ -189,7 +189,9 @@ def main() -> int:
     finally:
         procs.stop_all([p for p in started + [probe] if p is not None and p.running()], grace=10)
     group_split = cpu_split(before, after, t1 - t0)
-    base_split = run_baseline(args, bindir, rdir, sets, t0 - launched, t1 - t0) if args.baseline else None
+    base_split = None
+    if args.baseline and code == 0:
+        base_split = run_baseline(args, bindir, rdir, sets, t0 - launched, t1 - t0)
     profiles = [p for p in (parse_profile(g.log()) for g in started[:-1]) if p]
     if not profiles:
         print(f"profile_group.py: no group logged a profile line; see {rdir}", file=sys.stderr)
@@ -227,4 +229,8 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except (AssertionError, RuntimeError) as e:  # a swarm that did not converge, a process that did not start
+        print(f"profile_group.py: {e}", file=sys.stderr)
+        sys.exit(1)
