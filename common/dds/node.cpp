@@ -96,6 +96,8 @@ void ParticipantWatch::on_participant_discovery(fdds::DomainParticipant* partici
       break;
     }
     case Status::DROPPED_PARTICIPANT:
+      // Rare in a healthy swarm; logged so that a pair left unmatched after one can be told apart.
+      util::log_info("participant " + to_string(peer) + " dropped: nothing heard from it for the lease");
       split_.dropped(peer, now);
       break;
     case Status::REMOVED_PARTICIPANT:
@@ -258,16 +260,18 @@ std::optional<Node::Recovery> Node::recover(double period_s) {
   }
   const Recovery done = *pending_;
   pending_.reset();
-  char text[200];
+  char text[300];
+  const std::string now = to_string(detail::prefix_of(entities_->participant->guid().guidPrefix));
   if (done.cause == Recovery::Cause::Stall)
     std::snprintf(text, sizeof text,
-                  "stalled for %.2f s (longer than the lease allows, %.2f s): participant recreated, rediscovering",
-                  done.seconds, stall_threshold_s(entities_->transport));
+                  "stalled for %.2f s (longer than the lease allows, %.2f s): participant recreated as %s, "
+                  "rediscovering",
+                  done.seconds, stall_threshold_s(entities_->transport), now.c_str());
   else
     std::snprintf(text, sizeof text,
                   "participant %s dropped for silence was heard again %.2f s later (it may not have dropped this "
-                  "one): participant recreated, rediscovering",
-                  to_string(done.peer).c_str(), done.seconds);
+                  "one): participant recreated as %s, rediscovering",
+                  to_string(done.peer).c_str(), done.seconds, now.c_str());
   util::log_warn(text);
   return done;
 }
