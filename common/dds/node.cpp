@@ -17,6 +17,7 @@
 #include "dds/topic_qos.hpp"
 #include "shapeform/msg/all_pubsub_types.h"  // every idl/*.idl's PubSubType, generated
 #include "util/log.hpp"
+#include "util/text.hpp"
 
 namespace shapeform::dds {
 
@@ -79,7 +80,9 @@ void ParticipantWatch::on_participant_discovery(fdds::DomainParticipant* partici
   std::lock_guard<std::mutex> lock(mutex_);
   switch (info.status) {
     case Status::DISCOVERED_PARTICIPANT: {
-      split_.discovered(peer, now);
+      if (const auto after = split_.discovered(peer, now))
+        util::log_info("participant " + to_string(peer) + " announced itself again " + util::format_g10(*after) +
+                       " s after its drop");
       const auto& data = info.info.m_userData.data_vec();
       const std::size_t tag = kIdentityTag.size();
       if (data.size() == tag + 12 && std::equal(kIdentityTag.begin(), kIdentityTag.end(), data.begin())) {

@@ -35,11 +35,13 @@ void SplitWatch::dropped(const SourceId& peer, std::int64_t now_ns) {
   returned_.erase(peer);
 }
 
-void SplitWatch::discovered(const SourceId& peer, std::int64_t now_ns) {
+std::optional<double> SplitWatch::discovered(const SourceId& peer, std::int64_t now_ns) {
   const auto it = dropped_.find(peer);
-  if (it == dropped_.end()) return;
-  if (now_ns - it->second <= window_ns_) returned_[peer] = {now_ns, static_cast<double>(now_ns - it->second) * 1e-9};
+  if (it == dropped_.end()) return std::nullopt;
+  const double unheard_s = static_cast<double>(now_ns - it->second) * 1e-9;
+  if (now_ns - it->second <= window_ns_) returned_[peer] = {now_ns, unheard_s};
   dropped_.erase(it);
+  return unheard_s;
 }
 
 void SplitWatch::authenticated(const SourceId& peer) {

@@ -59,7 +59,8 @@ class SplitWatch {
   SplitWatch(double window_s, double grace_s, bool secured = false);
 
   void dropped(const SourceId& peer, std::int64_t now_ns);     ///< its lease ran out
-  void discovered(const SourceId& peer, std::int64_t now_ns);  ///< its announcement, first or again
+  /// Its announcement, first or again; for a peer dropped before, the seconds since its drop.
+  std::optional<double> discovered(const SourceId& peer, std::int64_t now_ns);
   void authenticated(const SourceId& peer);                     ///< secured: its handshake ended
   void removed(const SourceId& peer);                          ///< it said goodbye
   void endpoint(const SourceId& peer);  ///< one of its endpoints announced (to this participant)

@@ -1955,11 +1955,13 @@ TEST_CASE("the split watch: a peer dropped for silence and heard again within th
   a.prefix[0] = 1;
   b.prefix[0] = 2;
   c.prefix[0] = 3;
-  w.discovered(a, 0);  // first discovery: nothing to do
+  CHECK_FALSE(w.discovered(a, 0));  // first discovery: nothing to do (no drop before it)
   CHECK_FALSE(w.due(10'000 * kMs));
   // a partition of about a lease: dropped at 2.0 s, heard again at 2.6 s: due after the grace
   w.dropped(a, 2000 * kMs);
-  w.discovered(a, 2600 * kMs);
+  const auto back = w.discovered(a, 2600 * kMs);  // the time since its drop, for the log
+  REQUIRE(back);
+  CHECK(*back == Approx(0.6));
   CHECK_FALSE(w.due(3000 * kMs));  // within the grace: the peer may rebuild itself (it stalled)
   const auto due = w.due(3100 * kMs);
   REQUIRE(due);
@@ -1969,7 +1971,7 @@ TEST_CASE("the split watch: a peer dropped for silence and heard again within th
   CHECK_FALSE(w.due(4000 * kMs));
   // a long partition: dropped at 10 s, heard again at 20 s: it dropped this one too, nothing due
   w.dropped(b, 10'000 * kMs);
-  w.discovered(b, 20'000 * kMs);
+  CHECK(w.discovered(b, 20'000 * kMs).value_or(0.0) == Approx(10.0));
   CHECK_FALSE(w.due(30'000 * kMs));
   // a peer that stalled: heard again, then removed (its own rebuild says goodbye) within the grace
   w.dropped(c, 40'000 * kMs);
