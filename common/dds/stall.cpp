@@ -29,8 +29,10 @@ SplitWatch::SplitWatch(double window_s, double grace_s, bool secured)
       secured_(secured) {}
 
 void SplitWatch::dropped(const SourceId& peer, std::int64_t now_ns) {
-  // Bounded: drops older than the window can no longer make a return due.
-  for (auto it = dropped_.begin(); it != dropped_.end();) it = now_ns - it->second > window_ns_ ? dropped_.erase(it) : std::next(it);
+  // Bounded: drops older than kDropMemoryS are forgotten (a return within the window makes one due; a
+  // later one is still reported by discovered(), for the log).
+  const auto memory_ns = static_cast<std::int64_t>(kDropMemoryS * 1e9);
+  for (auto it = dropped_.begin(); it != dropped_.end();) it = now_ns - it->second > memory_ns ? dropped_.erase(it) : std::next(it);
   dropped_[peer] = now_ns;
   returned_.erase(peer);
 }

@@ -83,12 +83,14 @@ class SplitWatch {
   /// 2.9.1 resends an unanswered handshake message every second, so a handshake that loses each of its
   /// three messages once still ends within about 4 s.
   static constexpr double kAuthBoundS = 5.0;
+  /// How long a drop is remembered for discovered() to report the peer's return (seconds).
+  static constexpr double kDropMemoryS = 600.0;
 
  private:
   std::int64_t window_ns_;
   std::int64_t grace_ns_;  ///< secured: kAuthBoundS
   bool secured_;
-  std::map<SourceId, std::int64_t> dropped_;                      ///< peer -> when, forgotten after window_s
+  std::map<SourceId, std::int64_t> dropped_;                      ///< peer -> when, forgotten after kDropMemoryS
   std::map<SourceId, std::pair<std::int64_t, double>> returned_;  ///< peer -> (came back at, unheard_s)
 };
 

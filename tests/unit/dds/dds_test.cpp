@@ -1973,6 +1973,12 @@ TEST_CASE("the split watch: a peer dropped for silence and heard again within th
   w.dropped(b, 10'000 * kMs);
   CHECK(w.discovered(b, 20'000 * kMs).value_or(0.0) == Approx(10.0));
   CHECK_FALSE(w.due(30'000 * kMs));
+  // a late return is still reported after another peer's drop in between (for the log), and not due
+  w.dropped(b, 31'000 * kMs);
+  w.dropped(c, 36'000 * kMs);
+  CHECK(w.discovered(b, 39'000 * kMs).value_or(0.0) == Approx(8.0));
+  w.removed(c);
+  CHECK_FALSE(w.due(39'000 * kMs + 10 * kMs * 1000));
   // a peer that stalled: heard again, then removed (its own rebuild says goodbye) within the grace
   w.dropped(c, 40'000 * kMs);
   w.discovered(c, 41'000 * kMs);
