@@ -341,6 +341,11 @@ int AgentNode::run() {
   for (const auto& l : logics_)
     if (l->external()) l->stop_vehicle();
   command_robots();
+  // The stop is the command that must arrive: a lost datagram is resent only while its writer lives,
+  // and the writers go with node_ below. Each robot's driver gets the rest of 0.5 s in all to ack it.
+  const std::int64_t ack_deadline = util::steady_ns() + 500'000'000;
+  for (auto& r : robots_)
+    r.io.wait_acknowledged(std::max<double>(0.0, static_cast<double>(ack_deadline - util::steady_ns()) * 1e-9));
   if (batch_) {
     // Its instances, one per part of agent.batch_max_states (each disposes every id it carried).
     for (const auto& [begin, end] : dds::batch_ranges(ids_.size(), static_cast<std::size_t>(cfg_.agent.batch_max_states))) {

@@ -182,6 +182,13 @@ int Writer<Msg>::matched() const {
 }
 
 template <class Msg>
+bool Writer<Msg>::wait_acknowledged(double seconds) {
+  const auto e = entities_.lock();
+  if (!e || get() == nullptr) return false;
+  return detail::is_ok(get()->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(seconds)));
+}
+
+template <class Msg>
 bool Writer<Msg>::valid() const {
   return get() != nullptr && !entities_.expired();
 }

@@ -96,6 +96,9 @@ class Writer {
 
   /// Number of matched readers now (-1 without a writer).
   int matched() const;
+  /// Waits up to `seconds` until every matched reader acknowledged what was written (reliable topics: a
+  /// lost sample is resent meanwhile). False on timeout or without a writer.
+  bool wait_acknowledged(double seconds);
 
   bool valid() const;
   /// The DataWriter serving this handle now (another one after Node::rebuild()).

@@ -46,6 +46,10 @@ bool VehicleController::command(const VelocitySample& v) {
   return twist_.write(m);
 }
 
+bool VehicleController::wait_acknowledged(double seconds) {
+  return topics_.cmd_stamped ? twist_stamped_.wait_acknowledged(seconds) : twist_.wait_acknowledged(seconds);
+}
+
 int VehicleController::pose_writers() const { return topics_.pose_stamped ? pose_.matched() : odom_.matched(); }
 
 VehicleDriver::VehicleDriver(Node& node, const VehicleTopics& t) : topics_(t) {

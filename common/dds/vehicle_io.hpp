@@ -46,6 +46,8 @@ class VehicleController {
   void drain(std::vector<PoseItem>& out);
   /// Publishes the command (TwistStamped: with its stamp and frame). False when DDS refuses it.
   bool command(const VelocitySample& v);
+  /// Waits up to `seconds` until the robot's driver acknowledged every command written (false on timeout).
+  bool wait_acknowledged(double seconds);
   /// Writers of the pose topic matched now (the robot's driver, when it is there).
   int pose_writers() const;
   const VehicleTopics& topics() const { return topics_; }
