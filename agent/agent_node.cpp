@@ -326,7 +326,8 @@ AgentNode::AgentNode(const std::vector<std::int32_t>& ids, const std::vector<cor
 }
 
 int AgentNode::run() {
-  util::log_info("participant " + dds::to_string(node_.source()));  // as its peers' logs name it
+  // As its peers' logs name it, and where it listens (the port: the participant slot it holds).
+  util::log_info("participant " + dds::to_string(node_.source()) + " on " + node_.listening());
   loop_cpu0_ns_ = util::thread_cpu_ns();
   process_cpu0_ns_ = util::process_cpu_ns();
   wall0_ns_ = util::steady_ns();

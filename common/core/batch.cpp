@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <new>
 #include <thread>
 
 #include "batch_pairs.hpp"
@@ -65,9 +66,24 @@ PairFn pair_fn(Simd s) {
   return batch::pairs_generic;
 }
 
+/// Storage on 64-byte boundaries: the pass's vectors (up to 8 doubles) then never cross a cache line.
+template <class T>
+struct CacheLineAllocator {
+  using value_type = T;
+  static constexpr std::align_val_t kAlign{64};
+  CacheLineAllocator() = default;
+  template <class U>
+  CacheLineAllocator(const CacheLineAllocator<U>&) {}
+  T* allocate(std::size_t n) { return static_cast<T*>(::operator new(n * sizeof(T), kAlign)); }
+  void deallocate(T* p, std::size_t) { ::operator delete(p, kAlign); }
+  friend bool operator==(const CacheLineAllocator&, const CacheLineAllocator&) { return true; }
+  friend bool operator!=(const CacheLineAllocator&, const CacheLineAllocator&) { return false; }
+};
+using Doubles = std::vector<double, CacheLineAllocator<double>>;
+
 /// Four output arrays of n + kPad doubles, set as PairPass expects them.
 struct Sums {
-  std::vector<double> sx, sy, nd2, nid;
+  Doubles sx, sy, nd2, nid;
   void reset(std::size_t size) {
     sx.assign(size, 0.0);
     sy.assign(size, 0.0);
@@ -114,9 +130,9 @@ void paper_velocities_batch(const CompiledCommand& cmd, const std::vector<Vec2>&
   // Structure of arrays, reused between calls: O(N) memory, no allocation per step. (Thread-local for
   // callers on several threads; the pass's helper threads get references, not their own copies.)
   const auto size = static_cast<std::size_t>(n + batch::kPad);
-  thread_local std::vector<double> xs, ys;
+  thread_local Doubles xs, ys;
   thread_local std::vector<Sums> per_part;
-  std::vector<double>&X = xs, &Y = ys;
+  Doubles &X = xs, &Y = ys;
   std::vector<Sums>& sums = per_part;
   X.assign(size, 0.0);
   Y.assign(size, 0.0);

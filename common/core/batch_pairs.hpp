@@ -10,7 +10,8 @@ namespace shapeform::core::batch {
 /// Entries every array of PairPass must hold beyond n (the widest vector reads whole vectors).
 constexpr std::int64_t kPad = 8;
 
-/// Inputs and outputs of one pair pass, as structures of arrays of n + kPad doubles each.
+/// Inputs and outputs of one pair pass, as structures of arrays of n + kPad doubles each (best on
+/// 64-byte boundaries: the pass's vectors then never cross a cache line).
 struct PairPass {
   const double* x = nullptr;  ///< agents' first coordinates (shape units)
   const double* y = nullptr;  ///< agents' second coordinates

@@ -10,6 +10,7 @@
 #include <fastdds/dds/subscriber/qos/SubscriberQos.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
 #include <fastdds/dds/topic/qos/TopicQos.hpp>
+#include <fastrtps/utils/IPLocator.h>
 
 #include "dds/library_log.hpp"
 #include "dds/node_entities.hpp"
@@ -264,7 +265,8 @@ std::optional<Node::Recovery> Node::recover(double period_s) {
   const Recovery done = *pending_;
   pending_.reset();
   char text[300];
-  const std::string now = to_string(detail::prefix_of(entities_->participant->guid().guidPrefix));
+  const std::string now = to_string(detail::prefix_of(entities_->participant->guid().guidPrefix)) + " (on " +
+                          listening() + ")";
   if (done.cause == Recovery::Cause::Stall)
     std::snprintf(text, sizeof text,
                   "stalled for %.2f s (longer than the lease allows, %.2f s): participant recreated as %s, "
@@ -280,6 +282,20 @@ std::optional<Node::Recovery> Node::recover(double period_s) {
 }
 
 SourceId Node::source() const { return entities_->identity; }
+
+std::string Node::listening() const {
+  std::vector<fdds::DataReader*> readers;
+  if (entities_->subscriber == nullptr || !detail::is_ok(entities_->subscriber->get_datareaders(readers)) || readers.empty())
+    return {};
+  eprosima::fastrtps::rtps::LocatorList_t locators;
+  if (!detail::is_ok(readers.front()->get_listening_locators(locators))) return {};
+  std::string out;
+  for (const auto& l : locators) {
+    if (!out.empty()) out += ",";
+    out += eprosima::fastrtps::rtps::IPLocator::ip_to_string(l) + ":" + std::to_string(l.port);
+  }
+  return out;
+}
 
 std::vector<SourceId> Node::take_refused() {
   if (!entities_->transport.security.enabled) return {};

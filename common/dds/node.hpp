@@ -174,6 +174,9 @@ class Node {
   /// This process's identity, as its samples carry it in Received::source everywhere: the GUID prefix
   /// of its first participant, kept across rebuilds (a rebuilt participant announces it).
   SourceId source() const;
+  /// Where this participant's readers receive user data now, "address:port" each (for the logs: the
+  /// port says which participant slot the process holds); empty before its first reader.
+  std::string listening() const;
   /// With DDS Security: the participants refused (authentication failed: the participant listener;
   /// permissions failed: Fast DDS's log, dds/library_log.hpp) since the last call, each once (up to
   /// kRefusedRemembered of them); a warning is logged for each. Always empty without security.
