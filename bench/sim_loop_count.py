@@ -7,12 +7,15 @@ object file the build made (objdump -d), so the report's figure is of the loop t
 
 usage: bench/sim_loop_count.py [OBJECT] [--check]
 
-OBJECT defaults to build/common/core/CMakeFiles/shapeform_core.dir/batch_avx512.cpp.o. The loop is the
-whole-block loop of the kernel's row groups for any beta (common/core/batch_kernel.hpp, PairKernel::rows
-with AnyBeta): the shortest loop (a backward branch) holding one vscalefpd per row of a group, two, and
-no scalar arithmetic. Prints its vector instructions, its multiply-adds and multiplies (vfmadd*, vfnmadd*,
-vfmsub*, vfnmsub*, vmulpd), and the multiply-adds per pair they make (8 lanes each) (16 pairs per iteration: 2 rows x 8 lanes). With --check
-the exit status is 1 unless the count per pair is bench_report.SIM_FMA_PER_PAIR.
+OBJECT defaults to build/common/core/CMakeFiles/shapeform_core.dir/batch_avx512.cpp.o. A group of two rows
+goes through each tile of agents j in three sweeps (common/core/batch_kernel.hpp, PairKernel::rows with
+AnyBeta), each a loop (a backward branch) with no scalar arithmetic, found as the shortest loop that has:
+the distances: four vector compares (two rows' nearest-neighbour bookkeeping) and no vgetmantpd or
+vscalefpd; the weights' heads: two vgetmantpd (two vectors of weights) and no vscalefpd; the tails and
+sums: two vscalefpd (two rows) and no vgetmantpd. Each covers 16 pairs. Prints the three loops' vector
+instructions, their multiply-adds and multiplies (vfmadd*, vfnmadd*, vfmsub*, vfnmsub*, vmulpd), and the
+multiply-adds per pair they make (8 lanes each). With --check the exit status is 1 unless the count per
+pair is bench_report.SIM_FMA_PER_PAIR.
 """
 from __future__ import annotations
 
@@ -45,10 +48,19 @@ def instructions(obj: Path) -> list[tuple[int, str, str]]:
     return out
 
 
-def pair_loop(ins: list[tuple[int, str, str]]) -> list[str] | None:
-    """The mnemonics of the whole-block loop (see the module's doc), or None."""
+CMP = re.compile(r"^vcmp\w*pd$")
+SWEEPS = {  # name: (what the loop must hold, what it must not)
+    "distances": (lambda c: sum(n for o, n in c.items() if CMP.match(o)) == 2 * ROWS,
+                  lambda c: c["vgetmantpd"] or c["vscalefpd"]),
+    "heads": (lambda c: c["vgetmantpd"] == 2, lambda c: c["vscalefpd"]),
+    "tails": (lambda c: c["vscalefpd"] == ROWS, lambda c: c["vgetmantpd"]),
+}
+
+
+def sweep_loops(ins: list[tuple[int, str, str]]) -> dict[str, list[str]]:
+    """The mnemonics of each sweep's loop (see the module's doc) that was found."""
     index = {a: i for i, (a, _, _) in enumerate(ins)}
-    best = None
+    best: dict[str, list[str]] = {}
     for i, (a, op, args) in enumerate(ins):
         m = re.match(r"([0-9a-f]+)\b", args)
         if not op.startswith("j") or not m:
@@ -57,10 +69,12 @@ def pair_loop(ins: list[tuple[int, str, str]]) -> list[str] | None:
         if target >= a or target not in index:
             continue
         body = [o for _, o, _ in ins[index[target]:i + 1]]
+        if any(o.endswith("sd") and o != "vbroadcastsd" for o in body):
+            continue
         c = Counter(body)
-        if c["vscalefpd"] == ROWS and not any(o.endswith("sd") and o != "vbroadcastsd" for o in body):
-            if best is None or len(body) < len(best):
-                best = body
+        for name, (holds, lacks) in SWEEPS.items():
+            if holds(c) and not lacks(c) and (name not in best or len(body) < len(best[name])):
+                best[name] = body
     return best
 
 
@@ -75,16 +89,22 @@ def main() -> int:
     if not args.object.is_file():
         sys.exit(f"sim_loop_count: no object file {args.object} (build shapeform_core first, or give the path "
                  "of batch_avx512.cpp.o)")
-    loop = pair_loop(instructions(args.object))
-    if loop is None:
-        sys.exit(f"sim_loop_count: no loop with {ROWS} vscalefpd and no scalar arithmetic in {args.object}: "
-                 "has PairKernel's loop changed? (update this script and bench_report.SIM_FMA_PER_PAIR)")
+    loops = sweep_loops(instructions(args.object))
+    missing = [name for name in SWEEPS if name not in loops]
+    if missing:
+        sys.exit(f"sim_loop_count: no loop of the {', '.join(missing)} sweep in {args.object}: has PairKernel's "
+                 "pass changed? (update this script and bench_report.SIM_FMA_PER_PAIR)")
     pairs = ROWS * LANES
-    fma = sum(1 for o in loop if FMA.match(o))
-    vec = sum(1 for o in loop if o.startswith("v"))
+    fma = vec = 0
+    for name in SWEEPS:
+        f = sum(1 for o in loops[name] if FMA.match(o))
+        v = sum(1 for o in loops[name] if o.startswith("v"))
+        print(f"{name} sweep: {len(loops[name])} instructions, {v} vector, {f} vector multiply-adds or multiplies "
+              f"per {pairs} pairs")
+        fma, vec = fma + f, vec + v
     per_pair = fma * LANES / pairs  # each vector instruction does LANES pairs' operation
-    print(f"inner loop: {len(loop)} instructions, {vec} vector, {fma} vector multiply-adds or multiplies per "
-          f"{pairs} pairs: {per_pair:g} multiply-adds or multiplies per pair")
+    print(f"in all: {vec} vector instructions, {fma} multiply-adds or multiplies per {pairs} pairs: "
+          f"{per_pair:g} multiply-adds or multiplies per pair")
     if args.check:
         sys.path.insert(0, str(ROOT / "bench"))
         sys.dont_write_bytecode = True

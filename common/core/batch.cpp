@@ -81,10 +81,11 @@ struct CacheLineAllocator {
 };
 using Doubles = std::vector<double, CacheLineAllocator<double>>;
 
-/// Four output arrays of n + kPad doubles, set as PairPass expects them.
+/// Four output arrays of n + kPad doubles, set as PairPass expects them, and the pass's scratch.
 struct Sums {
-  Doubles sx, sy, nd2, nid;
+  Doubles sx, sy, nd2, nid, scratch;
   void reset(std::size_t size) {
+    scratch.resize(static_cast<std::size_t>(batch::kScratch));
     sx.assign(size, 0.0);
     sy.assign(size, 0.0);
     nd2.assign(size, std::numeric_limits<double>::infinity());
@@ -145,8 +146,9 @@ void paper_velocities_batch(const CompiledCommand& cmd, const std::vector<Vec2>&
   const auto pass = [&, pairs](std::size_t k) {
     Sums& s = sums[k];
     s.reset(size);
-    pairs({X.data(), Y.data(), n, s2, -g.beta, s.sx.data(), s.sy.data(), s.nd2.data(), s.nid.data()}, rows[k],
-          rows[k + 1]);
+    pairs({X.data(), Y.data(), n, s2, -g.beta, s.sx.data(), s.sy.data(), s.nd2.data(), s.nid.data(),
+           s.scratch.data()},
+          rows[k], rows[k + 1]);
   };
   std::vector<std::thread> helpers;
   for (std::size_t k = 1; k < sums.size(); ++k) helpers.emplace_back(pass, k);

@@ -95,9 +95,9 @@ struct PairKernel {
   using M = typename Isa::M;
   static constexpr int kW = Isa::kWidth;
 
-  /// The pair weight u^-beta, u = sigma^2 + d^2, in two halves: head(u) and tail(head(u)), so that the
-  /// pipelined pass can start one block's weights before it finishes the previous block's.
-  /// Isa::pow_neg for any beta: its logarithm, then its exponential.
+  /// The pair weight u^-beta, u = sigma^2 + d^2, in two halves: head(u) and tail(head(u)), each applied
+  /// to a whole tile in its own sweep (rows()). Isa::pow_neg for any beta: its logarithm, then its
+  /// exponential.
   struct AnyBeta {
     typename Isa::Pow c;
     V head(V u) const { return Isa::pow_log(u, c); }
@@ -173,81 +173,91 @@ struct PairKernel {
     return Isa::load(iota);
   }
 
-  /// What a whole block's first half hands to its second half, per row: the differences and the
-  /// weight's head.
-  template <int R>
-  struct Started {
-    V dx[R], dy[R], h[R];
-  };
-
-  /// The first half of block<R, false>: the squared distances, the nearest-neighbour bookkeeping (j's
-  /// read and written here) and the weights' heads.
-  template <int R, class Weight>
-  static void block_head(const PairPass& p, const Weight& weight, std::int64_t j, V jv, Rows<R>& rs,
-                         Started<R>& st) {
-    const V xj = Isa::load(p.x + j), yj = Isa::load(p.y + j);
-    V jd = Isa::load(p.nd2 + j), jid = Isa::load(p.nid + j);
-#pragma GCC unroll 4
-    for (int r = 0; r < R; ++r) {
-      const V dx = xj - rs.x[r], dy = yj - rs.y[r];
-      const V d2 = dx * dx + dy * dy;  // as the per-agent law rounds it (no FMA): the same nearest neighbours
-      st.dx[r] = dx, st.dy[r] = dy, st.h[r] = weight.head(p.s2 + d2);
-      const M nearer = d2 < jd;  // as in block
-      jd = nearer ? d2 : jd;
-      jid = nearer ? rs.self[r] : jid;
-      const M mine = d2 < rs.best[r];
-      rs.best[r] = mine ? d2 : rs.best[r];
-      rs.best_j[r] = mine ? jv : rs.best_j[r];
-    }
-    Isa::store(p.nd2 + j, jd);
-    Isa::store(p.nid + j, jid);
-  }
-
-  /// The second half: the weights' tails and the sums, in block's order (the same results).
-  template <int R, class Weight>
-  static void block_tail(const PairPass& p, const Weight& weight, std::int64_t j, Rows<R>& rs,
-                         const Started<R>& st) {
-    V sx = Isa::load(p.sx + j), sy = Isa::load(p.sy + j);
-#pragma GCC unroll 4
-    for (int r = 0; r < R; ++r) {
-      const V w = weight.tail(st.h[r]);
-      rs.ax[r] = Isa::fma(w, st.dx[r], rs.ax[r]);
-      rs.ay[r] = Isa::fma(w, st.dy[r], rs.ay[r]);
-      sx = Isa::fnma(w, st.dx[r], sx);
-      sy = Isa::fnma(w, st.dy[r], sy);
-    }
-    Isa::store(p.sx + j, sx);
-    Isa::store(p.sy + j, sy);
-  }
-
   /// Rows i .. i + R - 1 against every j from `from` (> i + R - 1) to n. Blocks start at multiples of
-  /// kW, so that with PairPass's arrays aligned no vector read or written crosses a cache line (such a
-  /// load costs two: 5 % of the pass at N = 1000); the block holding `from` counts its lanes from
-  /// there. Whole blocks are software pipelined: the next block's first half (the long dependency chain
-  /// of the weight's logarithm) is issued before this block's second half, so the core's out-of-order
-  /// window holds work that is ready rather than a chain that waits (the sums and their order are
-  /// those of block).
+  /// kW, so that with PairPass's arrays aligned no vector read or written crosses a cache line; the
+  /// block holding `from` counts its lanes from there. Whole blocks go in tiles of kTile agents j, in
+  /// three sweeps over p.scratch (R weights' arguments per j): distances and nearest neighbours, then
+  /// the weights' heads, then their tails and the sums. Each sweep keeps its constants in registers
+  /// and its dependency chains short, so it runs at the rate of its multiply-adds; the values and the
+  /// order of the sums are those of block.
   template <int R, class Weight>
   static void rows(const PairPass& p, const Weight& weight, Rows<R>& rs, std::int64_t from) {
+    constexpr std::int64_t kTile = kScratch / R;
     std::int64_t j = from / kW * kW;
     V jv = lane() + static_cast<double>(j);
     if (j < from) {
       block<R, true>(p, weight, j, jv, static_cast<double>(p.n), rs, static_cast<double>(from));
       j += kW, jv += static_cast<double>(kW);
     }
-    if (j + kW <= p.n) {
-      Started<R> now;
-      block_head(p, weight, j, jv, rs, now);
-      for (; j + 2 * kW <= p.n; j += kW, jv += static_cast<double>(kW)) {
-        Started<R> next;
-        block_head(p, weight, j + kW, jv + static_cast<double>(kW), rs, next);
-        block_tail(p, weight, j, rs, now);
-        now = next;
-      }
-      block_tail(p, weight, j, rs, now);
-      j += kW, jv += static_cast<double>(kW);
+    const std::int64_t whole = j + (p.n > j ? (p.n - j) / kW * kW : 0);
+    while (j < whole) {
+      const std::int64_t end = whole - j < kTile ? whole : j + kTile;
+      near_sweep<R>(p, j, end, jv, rs);
+      head_sweep(weight, p.scratch, (end - j) * R);
+      tail_sweep<R>(p, weight, j, end, rs);
+      jv += static_cast<double>(end - j);
+      j = end;
     }
     if (j < p.n) block<R, true>(p, weight, j, jv, static_cast<double>(p.n), rs);
+  }
+
+  /// The first sweep: each pair's squared distance, as block rounds it, and the nearest-neighbour
+  /// bookkeeping; sigma^2 + d^2 into the scratch.
+  template <int R>
+  static void near_sweep(const PairPass& p, std::int64_t j, std::int64_t end, V jv, Rows<R>& rs) {
+    const V s2 = Isa::splat(p.s2);
+    double* u = p.scratch;
+    for (; j < end; j += kW, jv += static_cast<double>(kW), u += R * kW) {
+      const V xj = Isa::load(p.x + j), yj = Isa::load(p.y + j);
+      V jd = Isa::load(p.nd2 + j), jid = Isa::load(p.nid + j);
+#pragma GCC unroll 4
+      for (int r = 0; r < R; ++r) {
+        const V dx = xj - rs.x[r], dy = yj - rs.y[r];
+        const V d2 = dx * dx + dy * dy;  // as the per-agent law rounds it (no FMA): the same nearest neighbours
+        Isa::store(u + r * kW, s2 + d2);
+        const M nearer = d2 < jd;  // as in block
+        jd = nearer ? d2 : jd;
+        jid = nearer ? rs.self[r] : jid;
+        const M mine = d2 < rs.best[r];
+        rs.best[r] = mine ? d2 : rs.best[r];
+        rs.best_j[r] = mine ? jv : rs.best_j[r];
+      }
+      Isa::store(p.nd2 + j, jd);
+      Isa::store(p.nid + j, jid);
+    }
+  }
+
+  /// The second sweep: the weights' heads, in place (a copy of the weight's constants: nothing the
+  /// sweep stores can change them, so they stay in registers).
+  template <class Weight>
+  static void head_sweep(const Weight& weight, double* u, std::int64_t count) {
+    const Weight w = weight;
+    for (std::int64_t k = 0; k < count; k += 2 * kW) {
+      Isa::store(u + k, w.head(Isa::load(u + k)));
+      Isa::store(u + k + kW, w.head(Isa::load(u + k + kW)));
+    }
+  }
+
+  /// The third sweep: the weights' tails and the sums, the differences computed again (the same values).
+  template <int R, class Weight>
+  static void tail_sweep(const PairPass& p, const Weight& weight, std::int64_t j, std::int64_t end, Rows<R>& rs) {
+    const Weight w8 = weight;
+    const double* h = p.scratch;
+    for (; j < end; j += kW, h += R * kW) {
+      const V xj = Isa::load(p.x + j), yj = Isa::load(p.y + j);
+      V sx = Isa::load(p.sx + j), sy = Isa::load(p.sy + j);
+#pragma GCC unroll 4
+      for (int r = 0; r < R; ++r) {
+        const V dx = xj - rs.x[r], dy = yj - rs.y[r];
+        const V w = w8.tail(Isa::load(h + r * kW));
+        rs.ax[r] = Isa::fma(w, dx, rs.ax[r]);
+        rs.ay[r] = Isa::fma(w, dy, rs.ay[r]);
+        sx = Isa::fnma(w, dx, sx);  // j sees x_i - x_j = -(dx, dy)
+        sy = Isa::fnma(w, dy, sy);
+      }
+      Isa::store(p.sx + j, sx);
+      Isa::store(p.sy + j, sy);
+    }
   }
 
   /// Adds row i's lanes to agent i's outputs. i's candidates so far have lower ids than any lane's,
@@ -284,9 +294,9 @@ struct PairKernel {
   }
 
   /// Rows in groups of kRows: j's loads and stores shared by the group, and kRows independent
-  /// dependency chains per vector. Two measured fastest, before the pipelining (AVX-512, N = 1000: 1.03,
-  /// 0.94, 0.99 and 1.01 ns per pair for 1 to 4 rows) and with it (one and three rows slower on a busy
-  /// host): more rows spill registers. bench/sim_loop_count.py finds the loop by its two rows.
+  /// dependency chains per vector. Two measured fastest with earlier forms of the pass (AVX-512,
+  /// N = 1000: 1.03, 0.94, 0.99 and 1.01 ns per pair for 1 to 4 rows): more rows spill registers.
+  /// bench/sim_loop_count.py finds the sweeps' loops by their two rows.
   static constexpr int kRows = 2;
 
   static void run(const PairPass& p, std::int64_t row_begin, std::int64_t row_end) {

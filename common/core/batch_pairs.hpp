@@ -26,7 +26,12 @@ struct PairPass {
   double* sy = nullptr;
   double* nd2 = nullptr;
   double* nid = nullptr;
+  /// The pass's working memory: kScratch doubles of its own (best on a 64-byte boundary).
+  double* scratch = nullptr;
 };
+
+/// Doubles PairPass::scratch holds: the weights of a tile of agents j for a group of rows.
+constexpr std::int64_t kScratch = 1024;
 
 /// Adds the pairs (i, j), row_begin <= i < row_end, i < j < n, to both i's and j's outputs.
 void pairs_generic(const PairPass& p, std::int64_t row_begin, std::int64_t row_end);
