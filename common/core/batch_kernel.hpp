@@ -99,6 +99,7 @@ struct PairKernel {
   /// to a whole tile in its own sweep (rows()). Isa::pow_neg for any beta: its logarithm, then its
   /// exponential.
   struct AnyBeta {
+    static constexpr bool kSweeps = true;  ///< its two halves in sweeps of their own (rows())
     typename Isa::Pow c;
     V head(V u) const { return Isa::pow_log(u, c); }
     V tail(V t) const { return Isa::pow_exp(t, c); }
@@ -109,6 +110,7 @@ struct PairKernel {
   /// what the benchmark's beta = 0 rows measure (the pass's cost apart from the weight).
   template <int k>
   struct HalfBeta {
+    static constexpr bool kSweeps = false;  ///< in one pass with the rest (rows())
     V tail(V w) const { return w; }
     V head(V u) const {
       if constexpr (k == 0) {
@@ -190,13 +192,22 @@ struct PairKernel {
       j += kW, jv += static_cast<double>(kW);
     }
     const std::int64_t whole = j + (p.n > j ? (p.n - j) / kW * kW : 0);
-    while (j < whole) {
-      const std::int64_t end = whole - j < kTile ? whole : j + kTile;
-      near_sweep<R>(p, j, end, jv, rs);
-      head_sweep(weight, p.scratch, (end - j) * R);
-      tail_sweep<R>(p, weight, j, end, rs);
-      jv += static_cast<double>(end - j);
-      j = end;
+    if constexpr (Weight::kSweeps) {
+      while (j < whole) {
+        const std::int64_t end = whole - j < kTile ? whole : j + kTile;
+        near_sweep<R>(p, j, end, jv, rs);
+        head_sweep(weight, p.scratch, (end - j) * R);
+        tail_sweep<R>(p, weight, j, end, rs);
+        jv += static_cast<double>(end - j);
+        j = end;
+      }
+    } else {
+      // A weight of a square root or a division: in one pass with the distances and sums, whose work
+      // then overlaps the divider's (in sweeps, beta = 1/2 took half as long again).
+      Rows<R> local = rs;  // copies nothing stored below can alias: they stay in registers
+      const Weight w = weight;
+      for (; j < whole; j += kW, jv += static_cast<double>(kW)) block<R, false>(p, w, j, jv, 0.0, local);
+      rs = local;
     }
     if (j < p.n) block<R, true>(p, weight, j, jv, static_cast<double>(p.n), rs);
   }
@@ -204,7 +215,8 @@ struct PairKernel {
   /// The first sweep: each pair's squared distance, as block rounds it, and the nearest-neighbour
   /// bookkeeping; sigma^2 + d^2 into the scratch.
   template <int R>
-  static void near_sweep(const PairPass& p, std::int64_t j, std::int64_t end, V jv, Rows<R>& rs) {
+  static void near_sweep(const PairPass& p, std::int64_t j, std::int64_t end, V jv, Rows<R>& rows) {
+    Rows<R> rs = rows;  // a copy nothing stored below can alias: it stays in registers
     const V s2 = Isa::splat(p.s2);
     double* u = p.scratch;
     for (; j < end; j += kW, jv += static_cast<double>(kW), u += R * kW) {
@@ -225,6 +237,7 @@ struct PairKernel {
       Isa::store(p.nd2 + j, jd);
       Isa::store(p.nid + j, jid);
     }
+    rows = rs;
   }
 
   /// The second sweep: the weights' heads, in place (a copy of the weight's constants: nothing the
@@ -240,7 +253,8 @@ struct PairKernel {
 
   /// The third sweep: the weights' tails and the sums, the differences computed again (the same values).
   template <int R, class Weight>
-  static void tail_sweep(const PairPass& p, const Weight& weight, std::int64_t j, std::int64_t end, Rows<R>& rs) {
+  static void tail_sweep(const PairPass& p, const Weight& weight, std::int64_t j, std::int64_t end, Rows<R>& rows) {
+    Rows<R> rs = rows;  // copies, as in near_sweep
     const Weight w8 = weight;
     const double* h = p.scratch;
     for (; j < end; j += kW, h += R * kW) {
@@ -258,6 +272,7 @@ struct PairKernel {
       Isa::store(p.sx + j, sx);
       Isa::store(p.sy + j, sy);
     }
+    rows = rs;
   }
 
   /// Adds row i's lanes to agent i's outputs. i's candidates so far have lower ids than any lane's,
