@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <memory>
 #include <optional>
 #include <set>
@@ -20,6 +21,7 @@
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "dds/handshake_filter.hpp"
@@ -66,11 +68,11 @@ std::optional<std::set<std::uint32_t>> host_udp_ports() {
   return ports;
 }
 
-/// The ports this process's own IPv4 UDP sockets are bound to (getsockname of each descriptor in
-/// /proc/self/fd): exact, whatever other processes do. nullopt where /proc cannot tell.
-std::optional<std::set<std::uint32_t>> own_udp_ports() {
+/// This process's own IPv4 UDP sockets, by inode, and the port each is bound to (getsockname of each
+/// descriptor in /proc/self/fd): exact, whatever other processes do. nullopt where /proc cannot tell.
+std::optional<std::map<std::uint64_t, std::uint32_t>> own_udp_sockets() {
   namespace fs = std::filesystem;
-  std::set<std::uint32_t> ports;
+  std::map<std::uint64_t, std::uint32_t> sockets;
   std::error_code ec;
   for (fs::directory_iterator it("/proc/self/fd", ec), end; !ec && it != end; it.increment(ec)) {
     const int fd = std::atoi(it->path().filename().c_str());
@@ -79,22 +81,27 @@ std::optional<std::set<std::uint32_t>> own_udp_ports() {
     if (getsockopt(fd, SOL_SOCKET, SO_TYPE, &type, &type_len) != 0 || type != SOCK_DGRAM) continue;
     sockaddr_in addr{};
     socklen_t addr_len = sizeof addr;
-    if (getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &addr_len) == 0 && addr.sin_family == AF_INET)
-      ports.insert(ntohs(addr.sin_port));
+    struct stat st {};
+    if (getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &addr_len) == 0 && addr.sin_family == AF_INET &&
+        fstat(fd, &st) == 0)
+      sockets[static_cast<std::uint64_t>(st.st_ino)] = ntohs(addr.sin_port);
   }
   if (ec) return std::nullopt;
-  return ports;
+  return sockets;
 }
 
-/// True when `after` holds a metatraffic and a user unicast port of `domain` (slots 0..249) that
-/// `before` did not: the participant created in between can be reached. The two need not be of the
-/// same slot (processes starting together take them in different orders). Fast DDS 2.9 creates a
-/// participant even when every port slot it tried was taken, and that participant silently hears nothing.
-bool gained_unicast_ports(int domain, const std::set<std::uint32_t>& before, const std::set<std::uint32_t>& after) {
+/// True when `after` holds a metatraffic and a user unicast port of `domain` (slots 0..249) on sockets
+/// that `before` did not hold: the participant created in between can be reached. Sockets, not ports:
+/// a port another socket of this process held before and let go may be the new participant's (a
+/// loaded test closing sockets by the hundred saw that refused as no free port). The two need not be
+/// of the same slot (processes starting together take them in different orders). Fast DDS 2.9 creates
+/// a participant even when every port slot it tried was taken, and that participant silently hears nothing.
+bool gained_unicast_ports(int domain, const std::map<std::uint64_t, std::uint32_t>& before,
+                          const std::map<std::uint64_t, std::uint32_t>& after) {
   const std::uint32_t port0 = metatraffic_unicast_port0(domain);
   bool metatraffic = false, user = false;
-  for (const std::uint32_t p : after) {
-    if (p < port0 || p >= port0 + 500 || before.count(p) != 0) continue;
+  for (const auto& [socket, p] : after) {
+    if (p < port0 || p >= port0 + 500 || before.count(socket) != 0) continue;
     ((p - port0) % 2 == 0 ? metatraffic : user) = true;
   }
   return metatraffic && user;
@@ -318,7 +325,7 @@ fdds::DomainParticipant* create_participant(const TransportConfig& cfg, const st
   }
   auto* factory = fdds::DomainParticipantFactory::get_instance();
   if (factory == nullptr) fail("create_participant: DomainParticipantFactory unavailable");
-  const auto ports_before = own_udp_ports();
+  const auto sockets_before = own_udp_sockets();
   fdds::DomainParticipant* participant =
       // Mask none: the listener hears the participant-level callbacks (discovery, authentication), which
       // no mask gates; with data_on_readers in its mask it would take every sample from the readers'
@@ -335,8 +342,8 @@ fdds::DomainParticipant* create_participant(const TransportConfig& cfg, const st
     fail("create_participant failed for " + quoted(name) + " on " + describe(cfg) +
          " (see Fast DDS log above; ports in use or bad interface address?)");
   }
-  const auto ports_after = own_udp_ports();
-  if (ports_before && ports_after && !gained_unicast_ports(cfg.domain, *ports_before, *ports_after)) {
+  const auto sockets_after = own_udp_sockets();
+  if (sockets_before && sockets_after && !gained_unicast_ports(cfg.domain, *sockets_before, *sockets_after)) {
     factory->delete_participant(participant);
     fail("create_participant: " + quoted(name) + " found no free participant port on domain " + str(cfg.domain) +
          ": this host already runs transport.max_participants (" + str(cfg.max_participants) +

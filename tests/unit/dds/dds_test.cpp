@@ -28,6 +28,7 @@
 #include "dds/discovery.hpp"
 #include "dds/node.hpp"
 #include "dds/node_entities.hpp"
+#include "dds/locators.hpp"
 #include "dds/participant_factory.hpp"
 #include "dds/stall.hpp"
 #include "dds/state_input.hpp"
@@ -1886,31 +1887,36 @@ TEST_CASE("participants are made while other sockets open and close (their ports
   // The kernel lists /proc/net/udp a page at a time: a reading taken while sockets open and close can
   // miss sockets bound all along, and the factory, reading the new participant's ports there, refused
   // it as one that found no free slot (integration.echo_sigterm_busy on a loaded host).
-  // A busy host's table: 300 sockets bound throughout, 2 x 50 opened and closed over and over.
-  const auto open_bound = [](std::vector<int>& fds, int n) {
+  // A busy host's table: 300 sockets bound throughout, 2 x 50 opened and closed over and over, and a
+  // third thread that opens and closes the ports of the domain's first two participant slots: a port
+  // this process held when the factory looked and let go before the participant bound it is the
+  // participant's all the same (the factory once refused such a participant as one with no free port).
+  auto cfg = loopback(test_domain(2));
+  const auto open_bound = [](std::vector<int>& fds, int n, std::uint32_t port) {
     for (int k = 0; k < n; ++k) {
       const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
       sockaddr_in a{};
       a.sin_family = AF_INET;
       a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+      a.sin_port = htons(static_cast<std::uint16_t>(port == 0 ? 0 : port + static_cast<std::uint32_t>(k)));
       if (fd >= 0 && ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0) fds.push_back(fd);
       else if (fd >= 0) ::close(fd);
     }
   };
   std::vector<int> held;
-  open_bound(held, 300);
+  open_bound(held, 300, 0);
   std::atomic<bool> stop{false};
   std::vector<std::thread> churn;
-  for (int t = 0; t < 2; ++t)
-    churn.emplace_back([&stop, &open_bound] {
+  for (int t = 0; t < 3; ++t)
+    churn.emplace_back([&stop, &open_bound, t, port0 = dds::metatraffic_unicast_port0(cfg.domain)] {
       std::vector<int> fds;
       while (!stop.load()) {
-        open_bound(fds, 50);
+        if (t < 2) open_bound(fds, 50, 0);
+        else open_bound(fds, 4, port0);  // slots 0 and 1: their metatraffic and user ports
         for (const int fd : fds) ::close(fd);
         fds.clear();
       }
     });
-  auto cfg = loopback(test_domain(2));
   int made = 0;
   std::string error;
   for (int k = 0; k < 100 && error.empty(); ++k) {
