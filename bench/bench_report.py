@@ -30,9 +30,9 @@ from bench_plan import (LARGE_MIN, LEVERS, MAIN_PRESET, NOTES, PRESETS, ROOT, SC
 # The simulator's throughput targets, Euler steps/s: N = 1000 on one core, N = 10000 on one core or both.
 SIM_TARGETS = {1000: 1000.0, 10000: 20.0}
 # Multiply-adds and multiplies per pair in the AVX-512 pair pass (common/core/batch_avx512.cpp), counted
-# in its compiled inner loop by bench/sim_loop_count.py (objdump of batch_avx512.cpp.o; the test
-# sim_loop_count fails while they differ). 2026-12-03, the software-pipelined loop: 50 vfmadd/vfnmadd/vmulpd
-# among 138 vector instructions per 16 pairs (2 rows x 8 lanes): the power 19 (the logarithm's reduction
+# in its compiled loops by bench/sim_loop_count.py (objdump of batch_avx512.cpp.o; the test
+# sim_loop_count fails while they differ). 2026-12-05, the three sweeps: 50 vfmadd/vfnmadd/vmulpd
+# among 125 vector instructions per 16 pairs (2 rows x 8 lanes): the power 19 (the logarithm's reduction
 # and degree-6 polynomial with its powers of r, the exponential's degree-5 polynomial, the table factor),
 # the squared distance 2, the four sums 4. The least time a pair can take on this core is that many over
 # the peak multiply-add rate.
@@ -103,28 +103,35 @@ def sim_line(sim: dict, r: dict, ref: dict) -> str:
             f"| {f_num(r.get('other_load'), '{:.2f}')} | {tgt} | {verdict} |\n")
 
 
-def sim_weight_text(sim: dict, template: str, rows: list, bound: float, peak: float) -> str:
+def row_peak(row: dict, peak: float) -> float:
+    """The peak multiply-add rate to set a simulator row against: the one measured beside its calls, else
+    the section's (results stored before rows carried their own)."""
+    return row.get("peak_fma_per_s") or peak
+
+
+def sim_weight_text(sim: dict, template: str, rows: list, peak: float) -> str:
     """What the weight costs of a pair: the paper's rows against the rows with beta = 0 (no weight), and
-    what a pair would take with the weight at the peak; "" without beta = 0 rows."""
+    what a pair would take with the weight at the peak (each row's own); "" without beta = 0 rows."""
     zero = {r["agents"]: r for r in sim.get("rows", [])
             if r["impl"] == "fast" and r.get("beta") == 0.0 and r.get("threads", 1) == 1 and r.get("simd") == "avx512"}
-    cases = [(n, r["ns_per_pair"], zero[n]["ns_per_pair"]) for n, r in rows
+    cases = [(n, r["ns_per_pair"], zero[n]["ns_per_pair"], row_peak(r, peak)) for n, r in rows
              if r and r.get("ns_per_pair") and n in zero and zero[n].get("ns_per_pair")]
     if not cases:
         return ""
-    at_peak = SIM_FMA_WEIGHT / peak * 1e9
-    each = lambda f: "; ".join(f"N = {n}: {f(paper, rest):.2f} ns" for n, paper, rest in cases)
+    each = lambda f: "; ".join(f"N = {n}: {f(paper, rest):.2f} ns" for n, paper, rest, _ in cases)
 
-    def floor(rest):
+    def floor(rest, pk):
+        at_peak, bound = SIM_FMA_WEIGHT / pk * 1e9, SIM_FMA_PER_PAIR / pk * 1e9
         x = (rest + at_peak) / bound
         reach = ("within the target only if the weight's other operations took no time" if x <= SIM_BOUND_TARGET
                  else "beyond the target even so")
         return f"{rest + at_peak:.2f} ns, x{x:.2f} the bound, {reach}"
 
+    pk = cases[-1][3]
     return template.format(rest=each(lambda paper, rest: rest), weight=each(lambda paper, rest: paper - rest),
-                           wfma=SIM_FMA_WEIGHT, wpeak=at_peak,
-                           floor="; ".join(f"N = {n}: {floor(rest)}" for n, _, rest in cases),
-                           factor=SIM_BOUND_TARGET, target=SIM_BOUND_TARGET * bound)
+                           wfma=SIM_FMA_WEIGHT, wpeak=SIM_FMA_WEIGHT / pk * 1e9,
+                           floor="; ".join(f"N = {n}: {floor(rest, p)}" for n, _, rest, p in cases),
+                           factor=SIM_BOUND_TARGET, target=SIM_BOUND_TARGET * SIM_FMA_PER_PAIR / pk * 1e9)
 
 
 def sim_section(sim: dict) -> str:
@@ -146,14 +153,19 @@ def sim_section(sim: dict) -> str:
         # The two sizes of the simulator's targets (1000 and 10000 agents), on one core with AVX-512, against the bound.
         bound = SIM_FMA_PER_PAIR / peak["avx512"] * 1e9 if "avx512" in peak else None
         rows = [(n, sim_best(sim, n, 1)) for n in (1000, 10000)]
-        measured = "; ".join(f"N = {n}: {r['ns_per_pair']:.2f} ns, x{r['ns_per_pair'] / bound:.1f} the bound"
-                             for n, r in rows
+
+        def against(r):
+            pk = row_peak(r, peak["avx512"])
+            own = f", its peak {pk / 1e9:.1f} G/s" if r.get("peak_fma_per_s") else ""
+            return f"{r['ns_per_pair']:.2f} ns, x{r['ns_per_pair'] / (SIM_FMA_PER_PAIR / pk * 1e9):.2f} the bound{own}"
+
+        measured = "; ".join(f"N = {n}: {against(r)}" for n, r in rows
                              if bound and r and r.get("simd") == "avx512" and r.get("ns_per_pair"))
         if measured:
             o.append(text["bound"].format(fma=SIM_FMA_PER_PAIR, bound=bound, measured=measured))
         o.append(text["limits"] + "\n\n")
         if measured:
-            weight = sim_weight_text(sim, text["weight"], rows, bound, peak["avx512"])
+            weight = sim_weight_text(sim, text["weight"], rows, peak["avx512"])
             o.append(weight + "\n\n" if weight else "")
     return "".join(o)
 

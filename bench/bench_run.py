@@ -412,8 +412,14 @@ def sim_row(exe: Path, spec: tuple, available: str | None, peak: dict, runs: int
     if beta is not None:
         args += ["--beta", f"{beta:g}"]
     cores = "0" if threads == 1 else ",".join(str(c) for c in range(threads))
-    results, error, busy = [], None, []
+    results, error, busy, peaks = [], None, [], []
     for _ in range(runs):
+        if simd:
+            # The core's peak right before the call: this host's speed drifts (by a third between hours),
+            # so the row is set against the peak of its own minutes.
+            p, _, _ = sim_call(exe, ["--peak", "--simd", simd], "0", before)
+            if p:
+                peaks.append(p["fma_per_s"])
         res, error, b = sim_call(exe, args, cores, before)
         if res is None:
             break
@@ -426,6 +432,8 @@ def sim_row(exe: Path, spec: tuple, available: str | None, peak: dict, runs: int
             row[k] = statistics.median(r[k] for r in results)
         if any(b is not None for b in busy):
             row["host_busy_before"] = max(b for b in busy if b is not None)
+        if peaks:
+            row["peak_fma_per_s"] = statistics.median(peaks)
     if error:
         row["error"] = error
     return row

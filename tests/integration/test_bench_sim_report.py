@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """The simulator's section of the benchmark report (bench/bench_report.py), from made-up results, without
-running anything: the bound from the peak, and what the weight costs from the rows with beta = 0.
+running anything: the bound from the peak (a row's own, measured beside its calls, where it has one), and
+what the weight costs from the rows with beta = 0.
 """
 import sys
 import unittest
@@ -28,7 +29,7 @@ class SimReportTest(unittest.TestCase):
         text = bench_report.sim_section(self.sim())
         # 25 multiply-adds per pair at 50 G/s: 0.5 ns; the paper's rows are 2 and 1.6 times that.
         self.assertIn("at least 0.50 ns", text)
-        self.assertIn("N = 1000: 1.00 ns, x2.0 the bound; N = 10000: 0.80 ns, x1.6 the bound", text)
+        self.assertIn("N = 1000: 1.00 ns, x2.00 the bound; N = 10000: 0.80 ns, x1.60 the bound", text)
         weight = text[text.index("**What the weight costs.**"):]
         self.assertIn("N = 1000: 0.40 ns; N = 10000: 0.30 ns per pair", weight)  # the beta = 0 rows
         self.assertIn("is the difference: N = 1000: 0.60 ns; N = 10000: 0.50 ns", weight)
@@ -41,6 +42,18 @@ class SimReportTest(unittest.TestCase):
         sim = self.sim()
         sim["rows"][-1]["ns_per_pair"] = 0.25
         self.assertIn("N = 10000: 0.63 ns, x1.26 the bound, within the target only if", bench_report.sim_section(sim))
+
+    def test_a_row_against_the_peak_measured_beside_it(self):
+        # The host ran a fifth slower during the N = 10000 row: its own peak, 40 G/s, makes the bound 0.625 ns.
+        sim = self.sim()
+        sim["rows"][1]["peak_fma_per_s"] = 40e9
+        text = bench_report.sim_section(sim)
+        self.assertIn("N = 1000: 1.00 ns, x2.00 the bound; N = 10000: 0.80 ns, x1.28 the bound, its peak 40.0 G/s",
+                      text)
+        weight = text[text.index("**What the weight costs.**"):]
+        # At 40 G/s the weight's 19 multiply-adds take 0.475 ns: 0.30 + 0.475 = 0.78 ns, x1.24 of 0.625 ns.
+        self.assertIn("N = 10000: 0.78 ns, x1.24 the bound, within the target only if", weight)
+        self.assertIn("1.3 times the bound, 0.81 ns", weight)
 
     def test_no_weight_paragraph_without_beta_zero_rows(self):
         text = bench_report.sim_section(self.sim(with_zero=False))
