@@ -180,8 +180,9 @@ struct PairKernel {
   /// block holding `from` counts its lanes from there. Whole blocks go in tiles of kTile agents j, in
   /// three sweeps over p.scratch (R weights' arguments per j): distances and nearest neighbours, then
   /// the weights' heads, then their tails and the sums. Each sweep keeps its constants in registers
-  /// and its dependency chains short, so it runs at the rate of its multiply-adds; the values and the
-  /// order of the sums are those of block.
+  /// and its dependency chains short: the heads' and the tails' sweeps run at about the rate of their
+  /// multiply-adds (docs/BENCHMARKS.md, Simulator). The values and the order of the sums are those of
+  /// block.
   template <int R, class Weight>
   static void rows(const PairPass& p, const Weight& weight, Rows<R>& rs, std::int64_t from) {
     constexpr std::int64_t kTile = kScratch / R;
@@ -245,10 +246,12 @@ struct PairKernel {
   template <class Weight>
   static void head_sweep(const Weight& weight, double* u, std::int64_t count) {
     const Weight w = weight;
-    for (std::int64_t k = 0; k < count; k += 2 * kW) {
+    std::int64_t k = 0;
+    for (; k + 2 * kW <= count; k += 2 * kW) {  // two independent chains per iteration
       Isa::store(u + k, w.head(Isa::load(u + k)));
       Isa::store(u + k + kW, w.head(Isa::load(u + k + kW)));
     }
+    if (k < count) Isa::store(u + k, w.head(Isa::load(u + k)));  // count is a multiple of kW
   }
 
   /// The third sweep: the weights' tails and the sums, the differences computed again (the same values).
