@@ -131,6 +131,26 @@ struct PairKernel {
     V x[R], y[R], self[R], ax[R], ay[R], best[R], best_j[R];
   };
 
+  /// Row r's pairs with one vector of agents j: the nearest-neighbour bookkeeping of both sides (jd, jid:
+  /// j's). Rows come in ascending id and only a strictly nearer one replaces: ties keep the lowest id.
+  template <int R>
+  static void nearest(Rows<R>& rs, int r, V d2, V jv, V& jd, V& jid) {
+    const M nearer = d2 < jd;
+    jd = nearer ? d2 : jd;
+    jid = nearer ? rs.self[r] : jid;
+    const M mine = d2 < rs.best[r];  // per lane, j ascends: ties keep the lowest id
+    rs.best[r] = mine ? d2 : rs.best[r];
+    rs.best_j[r] = mine ? jv : rs.best_j[r];
+  }
+  /// ... and their weights w into both sides' sums (sx, sy: j's).
+  template <int R>
+  static void add_sums(Rows<R>& rs, int r, V w, V dx, V dy, V& sx, V& sy) {
+    rs.ax[r] = Isa::fma(w, dx, rs.ax[r]);
+    rs.ay[r] = Isa::fma(w, dy, rs.ay[r]);
+    sx = Isa::fnma(w, dx, sx);  // j sees x_i - x_j = -(dx, dy)
+    sy = Isa::fnma(w, dy, sy);
+  }
+
   /// The pairs (rows' agent, j + lane) of one vector for R rows at once (consecutive agents i,
   /// i + 1, ... all below j + lane; jv: the lanes' j as doubles): j's outputs read and written once for
   /// all R, each row's kept in registers. With `tail`, only lanes in [begin, end) take part (the others'
@@ -151,17 +171,8 @@ struct PairKernel {
         w = valid ? w : V{};
         d2 = valid ? d2 : Isa::splat(__builtin_inf());
       }
-      rs.ax[r] = Isa::fma(w, dx, rs.ax[r]);
-      rs.ay[r] = Isa::fma(w, dy, rs.ay[r]);
-      sx = Isa::fnma(w, dx, sx);  // j sees x_i - x_j = -(dx, dy)
-      sy = Isa::fnma(w, dy, sy);
-      // Rows come in ascending id and only a strictly nearer one replaces: ties keep the lowest id.
-      const M nearer = d2 < jd;
-      jd = nearer ? d2 : jd;
-      jid = nearer ? rs.self[r] : jid;
-      const M mine = d2 < rs.best[r];  // per lane, j ascends: ties keep the lowest id
-      rs.best[r] = mine ? d2 : rs.best[r];
-      rs.best_j[r] = mine ? jv : rs.best_j[r];
+      add_sums(rs, r, w, dx, dy, sx, sy);
+      nearest(rs, r, d2, jv, jd, jid);
     }
     Isa::store(p.sx + j, sx);
     Isa::store(p.sy + j, sy);
@@ -228,12 +239,7 @@ struct PairKernel {
         const V dx = xj - rs.x[r], dy = yj - rs.y[r];
         const V d2 = dx * dx + dy * dy;  // as the per-agent law rounds it (no FMA): the same nearest neighbours
         Isa::store(u + r * kW, s2 + d2);
-        const M nearer = d2 < jd;  // as in block
-        jd = nearer ? d2 : jd;
-        jid = nearer ? rs.self[r] : jid;
-        const M mine = d2 < rs.best[r];
-        rs.best[r] = mine ? d2 : rs.best[r];
-        rs.best_j[r] = mine ? jv : rs.best_j[r];
+        nearest(rs, r, d2, jv, jd, jid);
       }
       Isa::store(p.nd2 + j, jd);
       Isa::store(p.nid + j, jid);
@@ -266,11 +272,7 @@ struct PairKernel {
 #pragma GCC unroll 4
       for (int r = 0; r < R; ++r) {
         const V dx = xj - rs.x[r], dy = yj - rs.y[r];
-        const V w = w8.tail(Isa::load(h + r * kW));
-        rs.ax[r] = Isa::fma(w, dx, rs.ax[r]);
-        rs.ay[r] = Isa::fma(w, dy, rs.ay[r]);
-        sx = Isa::fnma(w, dx, sx);  // j sees x_i - x_j = -(dx, dy)
-        sy = Isa::fnma(w, dy, sy);
+        add_sums(rs, r, w8.tail(Isa::load(h + r * kW)), dx, dy, sx, sy);
       }
       Isa::store(p.sx + j, sx);
       Isa::store(p.sy + j, sy);
